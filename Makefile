@@ -1,0 +1,136 @@
+# netcouple — top-level build.
+#
+#   make            build bin/fem_solver, bin/dem_solver, bin/coupler and the protocol library
+#   make test       install missing Debian packages (as root), build, run every test
+#   make bench      benchmarks (protocol latency, FEM, DEM, coupling overhead)
+#   make demo       run the default case and make its plots
+#   make fuzz       run the libFuzzer target of the protocol decoder (clang)
+#   make install PREFIX=/usr/local
+#   make SANITIZE=1 ...   the same with AddressSanitizer + UndefinedBehaviorSanitizer
+#
+# Layout: one folder per library/executable. Every `<module>/*.c` except `main.c` goes into
+# `build/.../lib<module>.a`; `<module>/main.c` becomes `bin/<module>`; every
+# `tests/<module>/test_*.c` becomes a test program linked against that module's library.
+
+PREFIX ?= /usr/local
+CC ?= cc
+ifeq ($(origin CC),default)
+CC := gcc
+endif
+
+ifeq ($(SANITIZE),1)
+BUILD := build/sanitize
+BIN := build/sanitize/bin
+SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+OPT := -O1 -g
+else
+BUILD := build/release
+BIN := bin
+SAN_FLAGS :=
+OPT := -O2 -g
+endif
+
+PKGS := libzmq hdf5 libcjson
+PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+# SuiteSparse ships no .pc file on Debian 12.
+SUITESPARSE_CFLAGS := -I/usr/include/suitesparse
+SUITESPARSE_LIBS := -lcholmod -lumfpack -lamd -lcolamd -lsuitesparseconfig
+
+CFLAGS_BASE := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) \
+  -Wall -Wextra -Werror -Wno-format-truncation -fopenmp $(SAN_FLAGS) -MMD -MP \
+  -Icommon -Iprotocol $(PKG_CFLAGS) $(SUITESPARSE_CFLAGS)
+CFLAGS += $(CFLAGS_BASE)
+LDLIBS := $(PKG_LIBS) $(SUITESPARSE_LIBS) -lm -lpthread
+LDFLAGS += -fopenmp $(SAN_FLAGS)
+
+MODULES := common protocol fem_solver dem_solver coupler
+PROGRAMS := fem_solver dem_solver coupler
+
+.PHONY: all test bench demo fuzz install clean deps check-deps
+all: check-deps programs
+
+# Build and run the whole test suite; the last line counts tests ("N passed, N failed").
+test: check-deps programs tests
+	@scripts/run_tests.sh "$(BUILD)/tests" "$(BIN)"
+
+check-deps:
+	@scripts/check_deps.sh >/dev/null 2>&1 || scripts/install_deps.sh
+
+deps:
+	scripts/install_deps.sh
+
+# ---- libraries -------------------------------------------------------------------------------
+define module_rules
+$(1)_SRC := $$(filter-out $(1)/main.c,$$(wildcard $(1)/*.c))
+$(1)_OBJ := $$(patsubst %.c,$(BUILD)/%.o,$$($(1)_SRC))
+$(BUILD)/lib$(1).a: $$($(1)_OBJ)
+	@mkdir -p $$(@D)
+	@rm -f $$@
+	$$(AR) rcs $$@ $$^
+endef
+$(foreach m,$(MODULES),$(eval $(call module_rules,$(m))))
+
+# The protocol library is self-contained for third-party solvers: it carries the error module.
+PROTOCOL_LIB := $(BUILD)/libnetcouple_protocol.a
+$(PROTOCOL_LIB): $(protocol_OBJ) $(BUILD)/common/nc_error.o
+	@mkdir -p $(@D)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+# Link order: module library, then shared ones.
+LINK_common := $(BUILD)/libcommon.a
+LINK_protocol := $(BUILD)/libprotocol.a $(LINK_common)
+LINK_fem_solver := $(BUILD)/libfem_solver.a $(LINK_protocol)
+LINK_dem_solver := $(BUILD)/libdem_solver.a $(LINK_protocol)
+LINK_coupler := $(BUILD)/libcoupler.a $(LINK_protocol)
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -c $< -o $@
+
+# ---- programs --------------------------------------------------------------------------------
+define program_rules
+$(BIN)/$(1): $(BUILD)/$(1)/main.o $$(LINK_$(1))
+	@mkdir -p $$(@D)
+	$$(CC) $$(LDFLAGS) -o $$@ $$^ $$(LDLIBS)
+endef
+$(foreach p,$(PROGRAMS),$(if $(wildcard $(p)/main.c),$(eval $(call program_rules,$(p)))))
+PROGRAM_BINS := $(foreach p,$(PROGRAMS),$(if $(wildcard $(p)/main.c),$(BIN)/$(p)))
+.PHONY: programs tests
+programs: $(PROGRAM_BINS) $(PROTOCOL_LIB)
+
+# ---- tests -----------------------------------------------------------------------------------
+# tests/<module>/test_*.c -> $(BUILD)/tests/<module>/test_*; helpers in tests/<module>/*.c
+# (not test_*) are linked into every test of that module.
+define test_rules
+$(1)_TEST_SRC := $$(wildcard tests/$(1)/test_*.c)
+$(1)_TEST_HELP := $$(patsubst %.c,$(BUILD)/%.o,$$(filter-out $$($(1)_TEST_SRC),$$(wildcard tests/$(1)/*.c)))
+$(1)_TEST_BINS := $$(patsubst %.c,$(BUILD)/%,$$($(1)_TEST_SRC))
+$(BUILD)/tests/$(1)/test_%: $(BUILD)/tests/$(1)/test_%.o $$($(1)_TEST_HELP) $$(LINK_$(1))
+	@mkdir -p $$(@D)
+	$$(CC) $$(LDFLAGS) -o $$@ $$^ $$(LDLIBS) -lcmocka
+TEST_BINS += $$($(1)_TEST_BINS)
+endef
+TEST_BINS :=
+$(foreach m,$(MODULES),$(eval $(call test_rules,$(m))))
+tests: $(TEST_BINS)
+
+# Per-module extra rules: each <module>/module.mk may add phony targets to BENCH_TARGETS
+# (run by `make bench`) and define its own helpers (fuzz target, demo, ...).
+BENCH_TARGETS :=
+-include $(wildcard */module.mk)
+
+bench: check-deps programs $(BENCH_TARGETS)
+
+# ---- install / clean -------------------------------------------------------------------------
+install: programs
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/netcouple
+	install -m 755 $(PROGRAM_BINS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 644 $(PROTOCOL_LIB) $(DESTDIR)$(PREFIX)/lib/
+	install -m 644 protocol/proto.h common/nc_error.h $(DESTDIR)$(PREFIX)/include/netcouple/
+
+clean:
+	rm -rf build bin
+
+-include $(shell find build -name '*.d' 2>/dev/null)

@@ -1,0 +1,182 @@
+/* nc_h5 — HDF5 helpers: create file, groups on demand, fixed datasets, growing series. */
+#include "nc_h5.h"
+
+#include <string.h>
+
+static hid_t mem_type(nc_h5_type type)
+{
+    return type == NC_H5_F64 ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32;
+}
+
+static hid_t file_type(nc_h5_type type)
+{
+    return type == NC_H5_F64 ? H5T_IEEE_F64LE : H5T_STD_I32LE;
+}
+
+void nc_h5_quiet(void)
+{
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+
+int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err)
+{
+    nc_h5_quiet();
+    memset(f, 0, sizeof *f);
+    f->file = H5I_INVALID_HID;
+    snprintf(f->path, sizeof f->path, "%s", path);
+    f->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (f->file < 0)
+        return nc_error_set(err, 1, "%s: cannot create HDF5 file (does the folder exist and is it writable?)", path);
+    return 0;
+}
+
+int nc_h5_flush(nc_h5_file *f, nc_error *err)
+{
+    if (f->file < 0) return 0;
+    if (H5Fflush(f->file, H5F_SCOPE_GLOBAL) < 0)
+        return nc_error_set(err, 1, "%s: cannot flush HDF5 file", f->path);
+    return 0;
+}
+
+void nc_h5_close(nc_h5_file *f)
+{
+    if (f && f->file > 0) {
+        H5Fclose(f->file);
+        f->file = H5I_INVALID_HID;
+    }
+}
+
+/* Creates every missing group on the way to the parent of `path` ("/a/b/data" -> /a, /a/b). */
+static int make_parents(nc_h5_file *f, const char *path, nc_error *err)
+{
+    char buf[512];
+    snprintf(buf, sizeof buf, "%s", path);
+    for (char *slash = strchr(buf + 1, '/'); slash; slash = strchr(slash + 1, '/')) {
+        *slash = '\0';
+        htri_t exists = H5Lexists(f->file, buf, H5P_DEFAULT);
+        if (exists < 0) return nc_error_set(err, 1, "%s: bad HDF5 path %s", f->path, buf);
+        if (!exists) {
+            hid_t group = H5Gcreate2(f->file, buf, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+            if (group < 0) return nc_error_set(err, 1, "%s: cannot create group %s", f->path, buf);
+            H5Gclose(group);
+        }
+        *slash = '/';
+    }
+    return 0;
+}
+
+int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                const hsize_t *dims, const void *data, nc_error *err)
+{
+    if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
+    if (make_parents(f, path, err)) return -1;
+    hid_t space = H5Screate_simple(rank, dims, NULL);
+    hid_t dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, H5P_DEFAULT,
+                               H5P_DEFAULT);
+    int rc = 0;
+    if (dataset < 0) {
+        rc = nc_error_set(err, 1, "%s: cannot create dataset %s", f->path, path);
+    } else {
+        hsize_t total = 1;
+        for (int i = 0; i < rank; i++) total *= dims[i];
+        if (total > 0 && H5Dwrite(dataset, mem_type(type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+            rc = nc_error_set(err, 1, "%s: cannot write dataset %s", f->path, path);
+        H5Dclose(dataset);
+    }
+    H5Sclose(space);
+    return rc;
+}
+
+static int write_attr(nc_h5_file *f, const char *object, const char *name, hid_t type,
+                      const void *value, nc_error *err)
+{
+    hid_t space = H5Screate(H5S_SCALAR);
+    if (H5Aexists_by_name(f->file, object, name, H5P_DEFAULT) > 0)
+        H5Adelete_by_name(f->file, object, name, H5P_DEFAULT);
+    hid_t attr = H5Acreate_by_name(f->file, object, name, type, space, H5P_DEFAULT, H5P_DEFAULT,
+                                   H5P_DEFAULT);
+    int rc = 0;
+    if (attr < 0 || H5Awrite(attr, type, value) < 0)
+        rc = nc_error_set(err, 1, "%s: cannot write attribute %s on %s", f->path, name, object);
+    if (attr >= 0) H5Aclose(attr);
+    H5Sclose(space);
+    return rc;
+}
+
+int nc_h5_attr_double(nc_h5_file *f, const char *object, const char *name, double value,
+                      nc_error *err)
+{
+    return write_attr(f, object, name, H5T_NATIVE_DOUBLE, &value, err);
+}
+
+int nc_h5_attr_string(nc_h5_file *f, const char *object, const char *name, const char *value,
+                      nc_error *err)
+{
+    hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, strlen(value) + 1);
+    H5Tset_strpad(type, H5T_STR_NULLTERM);
+    int rc = write_attr(f, object, name, type, value, err);
+    H5Tclose(type);
+    return rc;
+}
+
+int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                        int rank, const hsize_t *row_dims, nc_error *err)
+{
+    memset(s, 0, sizeof *s);
+    s->dataset = H5I_INVALID_HID;
+    if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
+    if (make_parents(f, path, err)) return -1;
+    s->type = type;
+    s->rank = rank;
+    s->owner = f;
+    snprintf(s->name, sizeof s->name, "%s", path);
+    hsize_t maxdims[3] = {H5S_UNLIMITED, 0, 0};
+    hsize_t chunk[3] = {1, 1, 1};
+    s->dims[0] = 0;
+    size_t row_values = 1;
+    for (int i = 1; i < rank; i++) {
+        s->dims[i] = maxdims[i] = chunk[i] = row_dims[i - 1] ? row_dims[i - 1] : 1;
+        row_values *= (size_t)s->dims[i];
+    }
+    /* Aim for chunks of a few hundred kB: many rows of a small series, one row of a big one. */
+    size_t rows = row_values >= 32768 ? 1 : 32768 / row_values;
+    if (rows > 1024) rows = 1024;
+    chunk[0] = rows;
+    if (row_values == 0) chunk[1] = 1;
+    hid_t space = H5Screate_simple(rank, s->dims, maxdims);
+    hid_t props = H5Pcreate(H5P_DATASET_CREATE);
+    for (int i = 1; i < rank; i++) if (chunk[i] == 0) chunk[i] = 1;
+    H5Pset_chunk(props, rank, chunk);
+    s->dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, props, H5P_DEFAULT);
+    H5Pclose(props);
+    H5Sclose(space);
+    if (s->dataset < 0) return nc_error_set(err, 1, "%s: cannot create dataset %s", f->path, path);
+    return 0;
+}
+
+int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
+{
+    hsize_t new_dims[3] = {s->dims[0] + 1, s->dims[1], s->dims[2]};
+    if (H5Dset_extent(s->dataset, new_dims) < 0)
+        return nc_error_set(err, 1, "%s: cannot extend %s", s->owner->path, s->name);
+    hid_t file_space = H5Dget_space(s->dataset);
+    hsize_t start[3] = {s->dims[0], 0, 0};
+    hsize_t count[3] = {1, s->dims[1], s->dims[2]};
+    H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, NULL, count, NULL);
+    hid_t mem_space = H5Screate_simple(s->rank, count, NULL);
+    herr_t rc = H5Dwrite(s->dataset, mem_type(s->type), mem_space, file_space, H5P_DEFAULT, row);
+    H5Sclose(mem_space);
+    H5Sclose(file_space);
+    if (rc < 0) return nc_error_set(err, 1, "%s: cannot write to %s", s->owner->path, s->name);
+    s->dims[0]++;
+    return 0;
+}
+
+void nc_h5_series_close(nc_h5_series *s)
+{
+    if (s && s->dataset > 0) {
+        H5Dclose(s->dataset);
+        s->dataset = H5I_INVALID_HID;
+    }
+}

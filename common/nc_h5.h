@@ -1,0 +1,56 @@
+/* nc_h5 — small HDF5 writing layer shared by the three programs.
+ *
+ * Files are created fresh (truncating), datasets are addressed by absolute paths whose
+ * parent groups are created on demand, and time series grow along their first dimension
+ * one row at a time. nc_h5_flush() after each output step keeps everything written so far
+ * readable if the process is later stopped or killed (the file stays in the default,
+ * pre-1.10 format, which has no "file open for writing" flag to clear after a crash).
+ */
+#ifndef NC_H5_H
+#define NC_H5_H
+
+#include <hdf5.h>
+#include <stddef.h>
+#include "nc_error.h"
+
+typedef struct nc_h5_file {
+    hid_t file;
+    char path[512];
+} nc_h5_file;
+
+typedef enum { NC_H5_F64, NC_H5_I32 } nc_h5_type;
+
+/* A dataset that grows along dimension 0: rank 1 (steps), 2 (steps × a) or 3 (steps × a × b). */
+typedef struct nc_h5_series {
+    hid_t dataset;
+    nc_h5_type type;
+    int rank;
+    hsize_t dims[3];
+    char name[256];
+    const nc_h5_file *owner;
+} nc_h5_series;
+
+int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
+int nc_h5_flush(nc_h5_file *f, nc_error *err);
+void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
+
+/* Fixed-size datasets: rank 1..3, dims[rank]. */
+int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                const hsize_t *dims, const void *data, nc_error *err);
+/* Scalar attribute on an existing object (group or dataset) or on "/" */
+int nc_h5_attr_double(nc_h5_file *f, const char *object, const char *name, double value,
+                      nc_error *err);
+int nc_h5_attr_string(nc_h5_file *f, const char *object, const char *name, const char *value,
+                      nc_error *err);
+
+/* row_dims has rank-1 entries (NULL for rank 1). */
+int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                        int rank, const hsize_t *row_dims, nc_error *err);
+/* Appends one row of prod(row_dims) values. */
+int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err);
+void nc_h5_series_close(nc_h5_series *s);
+
+/* Turns off HDF5's own error stack printing (messages go through nc_error instead). */
+void nc_h5_quiet(void);
+
+#endif

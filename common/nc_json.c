@@ -1,0 +1,346 @@
+/* nc_json — validated getters over cJSON trees (see nc_json.h). */
+#include "nc_json.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NC_JSON_MAX_FILE_BYTES (512L * 1024 * 1024)
+
+const char *nc_json_path(char *buf, size_t size, const char *where, const char *key)
+{
+    snprintf(buf, size, "%s%s%s", where, (where[0] && key[0]) ? "." : "", key);
+    return buf;
+}
+
+const char *nc_json_path_index(char *buf, size_t size, const char *where, const char *key,
+                               int index)
+{
+    snprintf(buf, size, "%s%s%s[%d]", where, (where[0] && key[0]) ? "." : "", key, index);
+    return buf;
+}
+
+/* Short text of a value for messages: the JSON itself, cut to a few dozen characters. */
+static void describe(const cJSON *item, char *out, size_t size)
+{
+    char *text = cJSON_PrintUnformatted(item);
+    if (!text) {
+        snprintf(out, size, "(unprintable)");
+        return;
+    }
+    if (strlen(text) > 40) strcpy(text + 37, "...");
+    snprintf(out, size, "%s", text);
+    cJSON_free(text);
+}
+
+static int wrong(nc_error *err, const char *where, const char *key, const char *expected,
+                 const cJSON *got)
+{
+    char shown[64];
+    describe(got, shown, sizeof shown);
+    char path[512];
+    return nc_error_set(err, 1, "%s: expected %s, got %s",
+                        nc_json_path(path, sizeof path, where, key), expected, shown);
+}
+
+static int missing(nc_error *err, const char *where, const char *key, const char *expected)
+{
+    char path[512];
+    return nc_error_set(err, 1, "%s: missing (expected %s)",
+                        nc_json_path(path, sizeof path, where, key), expected);
+}
+
+int nc_json_load_file(const char *path, cJSON **root, nc_error *err)
+{
+    *root = NULL;
+    FILE *file = fopen(path, "rb");
+    if (!file) return nc_error_set(err, 1, "%s: cannot open: %s", path, strerror(errno));
+    if (fseek(file, 0, SEEK_END) != 0) {
+        fclose(file);
+        return nc_error_set(err, 1, "%s: cannot read (not a regular file?)", path);
+    }
+    long size = ftell(file);
+    if (size < 0 || size > NC_JSON_MAX_FILE_BYTES) {
+        fclose(file);
+        return nc_error_set(err, 1, "%s: cannot read or larger than %ld bytes", path,
+                            NC_JSON_MAX_FILE_BYTES);
+    }
+    rewind(file);
+    char *text = malloc((size_t)size + 1);
+    if (!text) {
+        fclose(file);
+        return nc_error_set(err, 1, "%s: out of memory reading %ld bytes", path, size);
+    }
+    size_t got = fread(text, 1, (size_t)size, file);
+    fclose(file);
+    if (got != (size_t)size) {
+        free(text);
+        return nc_error_set(err, 1, "%s: short read", path);
+    }
+    text[size] = '\0';
+    const char *end = NULL;
+    cJSON *parsed = cJSON_ParseWithLengthOpts(text, (size_t)size, &end, 0);
+    if (!parsed) {
+        int line = 1, column = 1;
+        const char *stop = end ? end : text;
+        if (stop < text || stop > text + size) stop = text;
+        for (const char *c = text; c < stop; c++) {
+            if (*c == '\n') { line++; column = 1; } else column++;
+        }
+        free(text);
+        if (size == 0) return nc_error_set(err, 1, "%s: file is empty (expected JSON)", path);
+        return nc_error_set(err, 1, "%s:%d:%d: malformed JSON near this position", path, line,
+                            column);
+    }
+    free(text);
+    if (!cJSON_IsObject(parsed)) {
+        cJSON_Delete(parsed);
+        return nc_error_set(err, 1, "%s: expected a JSON object at top level", path);
+    }
+    *root = parsed;
+    return 0;
+}
+
+int nc_json_check_keys(const cJSON *obj, const char *where, const char *const *allowed,
+                       nc_error *err)
+{
+    const cJSON *item;
+    cJSON_ArrayForEach(item, obj) {
+        int known = 0;
+        for (const char *const *a = allowed; *a; a++) {
+            if (item->string && strcmp(item->string, *a) == 0) { known = 1; break; }
+        }
+        if (!known) {
+            char list[600] = "";
+            for (const char *const *a = allowed; *a; a++) {
+                size_t used = strlen(list);
+                snprintf(list + used, sizeof list - used, "%s%s", used ? ", " : "", *a);
+            }
+            char path[512];
+            return nc_error_set(err, 1, "%s: unknown key (allowed: %s)",
+                                nc_json_path(path, sizeof path, where,
+                                             item->string ? item->string : "?"), list);
+        }
+    }
+    return 0;
+}
+
+static int get_number(const cJSON *obj, const char *where, const char *key, int required,
+                      double fallback, double min, double max, double *out, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    char expected[128];
+    if (isfinite(min) && isfinite(max)) snprintf(expected, sizeof expected, "a number in [%g, %g]", min, max);
+    else if (isfinite(min)) snprintf(expected, sizeof expected, "a number >= %g", min);
+    else if (isfinite(max)) snprintf(expected, sizeof expected, "a number <= %g", max);
+    else snprintf(expected, sizeof expected, "a number");
+    if (!item || cJSON_IsNull(item)) {
+        if (required) return missing(err, where, key, expected);
+        *out = fallback;
+        return 0;
+    }
+    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble)) return wrong(err, where, key, expected, item);
+    double value = item->valuedouble;
+    if (value < min || value > max) return wrong(err, where, key, expected, item);
+    *out = value;
+    return 0;
+}
+
+int nc_json_number(const cJSON *obj, const char *where, const char *key, double *out,
+                   nc_error *err)
+{
+    return get_number(obj, where, key, 1, 0.0, -INFINITY, INFINITY, out, err);
+}
+
+int nc_json_number_opt(const cJSON *obj, const char *where, const char *key, double fallback,
+                       double *out, nc_error *err)
+{
+    return get_number(obj, where, key, 0, fallback, -INFINITY, INFINITY, out, err);
+}
+
+int nc_json_number_range(const cJSON *obj, const char *where, const char *key, double min,
+                         double max, double *out, nc_error *err)
+{
+    return get_number(obj, where, key, 1, 0.0, min, max, out, err);
+}
+
+int nc_json_number_range_opt(const cJSON *obj, const char *where, const char *key,
+                             double fallback, double min, double max, double *out,
+                             nc_error *err)
+{
+    return get_number(obj, where, key, 0, fallback, min, max, out, err);
+}
+
+int nc_json_positive(const cJSON *obj, const char *where, const char *key, double *out,
+                     nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item) return missing(err, where, key, "a number > 0");
+    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble) || !(item->valuedouble > 0.0))
+        return wrong(err, where, key, "a number > 0", item);
+    *out = item->valuedouble;
+    return 0;
+}
+
+static int get_int(const cJSON *obj, const char *where, const char *key, int required,
+                   long fallback, long min, long max, long *out, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    char expected[128];
+    snprintf(expected, sizeof expected, "a whole number in [%ld, %ld]", min, max);
+    if (!item || cJSON_IsNull(item)) {
+        if (required) return missing(err, where, key, expected);
+        *out = fallback;
+        return 0;
+    }
+    if (!cJSON_IsNumber(item)) return wrong(err, where, key, expected, item);
+    double value = item->valuedouble;
+    if (!isfinite(value) || value != floor(value) || value < (double)min || value > (double)max)
+        return wrong(err, where, key, expected, item);
+    *out = (long)value;
+    return 0;
+}
+
+int nc_json_int(const cJSON *obj, const char *where, const char *key, long min, long max,
+                long *out, nc_error *err)
+{
+    return get_int(obj, where, key, 1, 0, min, max, out, err);
+}
+
+int nc_json_int_opt(const cJSON *obj, const char *where, const char *key, long fallback,
+                    long min, long max, long *out, nc_error *err)
+{
+    return get_int(obj, where, key, 0, fallback, min, max, out, err);
+}
+
+int nc_json_bool_opt(const cJSON *obj, const char *where, const char *key, int fallback,
+                     int *out, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        *out = fallback;
+        return 0;
+    }
+    if (!cJSON_IsBool(item)) return wrong(err, where, key, "true or false", item);
+    *out = cJSON_IsTrue(item);
+    return 0;
+}
+
+int nc_json_string(const cJSON *obj, const char *where, const char *key, const char **out,
+                   nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item) return missing(err, where, key, "a string");
+    if (!cJSON_IsString(item) || !item->valuestring) return wrong(err, where, key, "a string", item);
+    *out = item->valuestring;
+    return 0;
+}
+
+int nc_json_string_opt(const cJSON *obj, const char *where, const char *key,
+                       const char *fallback, const char **out, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        *out = fallback;
+        return 0;
+    }
+    return nc_json_string(obj, where, key, out, err);
+}
+
+int nc_json_choice_opt(const cJSON *obj, const char *where, const char *key,
+                       const char *const *choices, int fallback_index, int *index,
+                       nc_error *err)
+{
+    char expected[400] = "one of";
+    for (const char *const *c = choices; *c; c++) {
+        size_t used = strlen(expected);
+        snprintf(expected + used, sizeof expected - used, "%s \"%s\"", c == choices ? "" : ",", *c);
+    }
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        if (fallback_index < 0) return missing(err, where, key, expected);
+        *index = fallback_index;
+        return 0;
+    }
+    if (!cJSON_IsString(item)) return wrong(err, where, key, expected, item);
+    for (int i = 0; choices[i]; i++) {
+        if (strcmp(item->valuestring, choices[i]) == 0) {
+            *index = i;
+            return 0;
+        }
+    }
+    return wrong(err, where, key, expected, item);
+}
+
+int nc_json_vec3(const cJSON *obj, const char *where, const char *key, double out[3],
+                 nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item) return missing(err, where, key, "[x, y, z]");
+    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
+        return wrong(err, where, key, "[x, y, z] (3 numbers)", item);
+    for (int i = 0; i < 3; i++) {
+        const cJSON *c = cJSON_GetArrayItem(item, i);
+        if (!cJSON_IsNumber(c) || !isfinite(c->valuedouble))
+            return wrong(err, where, key, "[x, y, z] (3 finite numbers)", item);
+        out[i] = c->valuedouble;
+    }
+    return 0;
+}
+
+int nc_json_vec3_opt(const cJSON *obj, const char *where, const char *key,
+                     const double fallback[3], double out[3], nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        for (int i = 0; i < 3; i++) out[i] = fallback[i];
+        return 0;
+    }
+    return nc_json_vec3(obj, where, key, out, err);
+}
+
+int nc_json_array(const cJSON *obj, const char *where, const char *key, const cJSON **arr,
+                  int *count, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item) return missing(err, where, key, "an array");
+    if (!cJSON_IsArray(item)) return wrong(err, where, key, "an array", item);
+    *arr = item;
+    *count = cJSON_GetArraySize(item);
+    return 0;
+}
+
+int nc_json_array_opt(const cJSON *obj, const char *where, const char *key, const cJSON **arr,
+                      int *count, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        *arr = NULL;
+        *count = 0;
+        return 0;
+    }
+    return nc_json_array(obj, where, key, arr, count, err);
+}
+
+int nc_json_object(const cJSON *obj, const char *where, const char *key, const cJSON **out,
+                   nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item) return missing(err, where, key, "an object {...}");
+    if (!cJSON_IsObject(item)) return wrong(err, where, key, "an object {...}", item);
+    *out = item;
+    return 0;
+}
+
+int nc_json_object_opt(const cJSON *obj, const char *where, const char *key,
+                       const cJSON **out, nc_error *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!item || cJSON_IsNull(item)) {
+        *out = NULL;
+        return 0;
+    }
+    return nc_json_object(obj, where, key, out, err);
+}
