@@ -85,9 +85,12 @@ LINK_fem_solver := $(BUILD)/libfem_solver.a $(LINK_protocol)
 LINK_dem_solver := $(BUILD)/libdem_solver.a $(LINK_protocol)
 LINK_coupler := $(BUILD)/libcoupler.a $(LINK_protocol)
 
+# V=1 shows full command lines.
+Q := $(if $(V),,@)
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -c $< -o $@
+	@$(if $(V),,echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 # ---- programs --------------------------------------------------------------------------------
 define program_rules

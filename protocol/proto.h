@@ -89,6 +89,7 @@ typedef struct proto_message {
 /* ---- message building / reading ------------------------------------------------------- */
 
 const char *proto_type_name(proto_msg_type type);   /* "hello", ... ; "invalid" */
+proto_msg_type proto_type_from_name(const char *name); /* PROTO_MSG_INVALID if unknown */
 
 /* Starts a message: zeroes the fields (keeps owned buffers), sets type and version. */
 void proto_message_init(proto_message *m, proto_msg_type type);
@@ -114,6 +115,8 @@ double proto_message_value(const proto_message *m, const char *name, double fall
 int proto_message_has_value(const proto_message *m, const char *name);
 
 /* ---- wire codec (transport independent; used by the endpoints and the fuzzer) ---------- */
+
+size_t proto_dtype_size(proto_dtype dtype);          /* 8 for f64, 4 for i32 */
 
 /* Encodes the header to JSON text (malloc'ed, caller frees). */
 int proto_encode_header(const proto_message *m, char **json, size_t *length, nc_error *err);

@@ -11,6 +11,7 @@ bin_dir=${2:?bin dir}
 filter=${3:-${TEST_FILTER:-}}
 root=$(cd "$(dirname "$0")/.." && pwd)
 PYTHON=/usr/bin/python3   # Debian's interpreter, which has python3-zmq/h5py/numpy
+mkdir -p "$bin_dir"
 export NC_BIN=$(cd "$bin_dir" && pwd)
 export NC_BUILD_TESTS=$(cd "$build_tests" 2>/dev/null && pwd || echo "$build_tests")
 export NC_ROOT=$root

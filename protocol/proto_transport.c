@@ -1,0 +1,468 @@
+/* proto_transport — the two ends of a coupling connection over ZeroMQ.
+ *
+ * The participant (a solver) binds a REP socket and answers one command at a time; the
+ * coupler holds one REQ socket per participant (relaxed + correlated, so a request that
+ * timed out does not wedge the socket). A socket monitor on the coupler side turns a peer
+ * that closes its connection (process died) into an immediate error instead of a timeout.
+ */
+#include "proto.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <zmq.h>
+
+#define RECEIVE_FRAMES_MAX (PROTO_MAX_ARRAYS + 1)
+
+/* One receive buffer set: frames stay allocated between messages. */
+typedef struct frame_buffer {
+    zmq_msg_t frames[RECEIVE_FRAMES_MAX];
+    int initialised;
+} frame_buffer;
+
+struct proto_participant {
+    void *context;
+    void *socket;
+    char endpoint[256];
+    char role[PROTO_NAME_MAX];
+    char name[PROTO_NAME_MAX];
+    char capabilities[PROTO_TEXT_MAX];
+    proto_options options;
+    int awaiting_reply;
+    proto_message last_command;  /* header fields only (arrays are not kept) */
+    proto_message hello_reply;
+    frame_buffer buffer;
+};
+
+struct proto_peer {
+    void *context;
+    void *socket;
+    void *monitor;
+    int connected;
+    char name[PROTO_NAME_MAX];
+    char endpoint[256];
+    char last_sent[160];
+    proto_options options;
+    frame_buffer buffer;
+};
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return 1e3 * (double)ts.tv_sec + 1e-6 * (double)ts.tv_nsec;
+}
+
+void proto_options_default(proto_options *options)
+{
+    options->timeout_ms = PROTO_DEFAULT_TIMEOUT_MS;
+    options->idle_timeout_ms = PROTO_DEFAULT_IDLE_TIMEOUT_MS;
+    options->max_bytes = PROTO_DEFAULT_MAX_BYTES;
+}
+
+static void buffer_init(frame_buffer *b)
+{
+    for (int i = 0; i < RECEIVE_FRAMES_MAX; i++) zmq_msg_init(&b->frames[i]);
+    b->initialised = 1;
+}
+
+static void buffer_close(frame_buffer *b)
+{
+    if (!b->initialised) return;
+    for (int i = 0; i < RECEIVE_FRAMES_MAX; i++) zmq_msg_close(&b->frames[i]);
+    b->initialised = 0;
+}
+
+static void describe(const proto_message *m, char *out, size_t size)
+{
+    if (m->type == PROTO_MSG_BEGIN_STEP || m->type == PROTO_MSG_SOLVE ||
+        m->type == PROTO_MSG_ACCEPT_STEP)
+        snprintf(out, size, "%s (step %ld, iteration %d, t = %.6g s)", proto_type_name(m->type),
+                 m->step, m->iteration, m->time_s);
+    else
+        snprintf(out, size, "%s", proto_type_name(m->type));
+}
+
+/* Sends header + array frames. */
+static int send_message(void *socket, const proto_message *m, const char *peer, nc_error *err)
+{
+    char *header = NULL;
+    size_t header_length = 0;
+    if (proto_encode_header(m, &header, &header_length, err)) return -1;
+    int more = m->n_arrays ? ZMQ_SNDMORE : 0;
+    int rc = zmq_send(socket, header, header_length, more);
+    free(header);
+    if (rc < 0) goto failed;
+    for (size_t i = 0; i < m->n_arrays; i++) {
+        const proto_array *a = &m->arrays[i];
+        size_t bytes = a->count * proto_dtype_size(a->dtype);
+        int flags = i + 1 < m->n_arrays ? ZMQ_SNDMORE : 0;
+        const uint16_t probe = 1;
+        if (*(const uint8_t *)&probe == 1) {
+            rc = zmq_send(socket, a->data, bytes, flags);
+        } else { /* big-endian host: the wire is little-endian */
+            uint8_t *copy = malloc(bytes ? bytes : 1);
+            if (!copy) return nc_error_set(err, PROTO_ERR_TRANSPORT, "out of memory sending to %s", peer);
+            memcpy(copy, a->data, bytes);
+            size_t item = proto_dtype_size(a->dtype);
+            for (size_t k = 0; k < a->count; k++)
+                for (size_t x = 0, y = item - 1; x < y; x++, y--) {
+                    uint8_t t = copy[k * item + x];
+                    copy[k * item + x] = copy[k * item + y];
+                    copy[k * item + y] = t;
+                }
+            rc = zmq_send(socket, copy, bytes, flags);
+            free(copy);
+        }
+        if (rc < 0) goto failed;
+    }
+    return 0;
+failed:
+    if (errno == EAGAIN)
+        return nc_error_set(err, PROTO_ERR_TIMEOUT, "cannot send %s to %s: not reachable in time",
+                            proto_type_name(m->type), peer);
+    return nc_error_set(err, PROTO_ERR_TRANSPORT, "cannot send %s to %s: %s",
+                        proto_type_name(m->type), peer, zmq_strerror(errno));
+}
+
+/* Receives one multipart message (already signalled readable) and decodes it. */
+static int receive_message(void *socket, frame_buffer *b, proto_message *m, size_t max_bytes,
+                           const char *peer, nc_error *err)
+{
+    size_t n = 0;
+    int more = 1, too_many = 0;
+    while (more) {
+        zmq_msg_t *frame = &b->frames[n < RECEIVE_FRAMES_MAX ? n : RECEIVE_FRAMES_MAX - 1];
+        if (zmq_msg_recv(frame, socket, 0) < 0)
+            return nc_error_set(err, PROTO_ERR_TRANSPORT, "receiving from %s: %s", peer,
+                                zmq_strerror(errno));
+        more = zmq_msg_more(frame);
+        if (n < RECEIVE_FRAMES_MAX) n++;
+        else too_many = 1; /* drain the rest so the socket stays in step */
+    }
+    if (too_many)
+        return nc_error_set(err, PROTO_ERR_DECODE, "message from %s has more than %d frames", peer,
+                            RECEIVE_FRAMES_MAX);
+    const void *frames[RECEIVE_FRAMES_MAX];
+    size_t lengths[RECEIVE_FRAMES_MAX];
+    for (size_t i = 1; i < n; i++) {
+        frames[i - 1] = zmq_msg_data(&b->frames[i]);
+        lengths[i - 1] = zmq_msg_size(&b->frames[i]);
+    }
+    return proto_decode(m, zmq_msg_data(&b->frames[0]), zmq_msg_size(&b->frames[0]), frames,
+                        lengths, n - 1, max_bytes, err);
+}
+
+static void set_common_options(void *socket, const proto_options *options, int linger_ms)
+{
+    int64_t max = (int64_t)options->max_bytes;
+    zmq_setsockopt(socket, ZMQ_MAXMSGSIZE, &max, sizeof max);
+    zmq_setsockopt(socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms);
+}
+
+/* ---- participant ----------------------------------------------------------------------- */
+
+int proto_participant_open(proto_participant **out, const char *endpoint, const char *role,
+                           const char *name, const char *capabilities,
+                           const proto_options *options, nc_error *err)
+{
+    *out = NULL;
+    proto_participant *p = calloc(1, sizeof *p);
+    if (!p) return nc_error_set(err, PROTO_ERR_TRANSPORT, "out of memory");
+    if (options) p->options = *options;
+    else proto_options_default(&p->options);
+    snprintf(p->role, sizeof p->role, "%s", role ? role : "participant");
+    snprintf(p->name, sizeof p->name, "%s", name ? name : "");
+    snprintf(p->capabilities, sizeof p->capabilities, "%s", capabilities ? capabilities : "");
+    buffer_init(&p->buffer);
+    p->context = zmq_ctx_new();
+    p->socket = p->context ? zmq_socket(p->context, ZMQ_REP) : NULL;
+    if (!p->socket) {
+        nc_error_set(err, PROTO_ERR_TRANSPORT, "cannot create a ZeroMQ socket: %s", zmq_strerror(errno));
+        proto_participant_close(p);
+        return -1;
+    }
+    set_common_options(p->socket, &p->options, 2000); /* let the last reply go out on close */
+    if (zmq_bind(p->socket, endpoint) != 0) {
+        nc_error_set(err, PROTO_ERR_TRANSPORT, "cannot bind %s: %s", endpoint, zmq_strerror(errno));
+        proto_participant_close(p);
+        return -1;
+    }
+    size_t size = sizeof p->endpoint;
+    if (zmq_getsockopt(p->socket, ZMQ_LAST_ENDPOINT, p->endpoint, &size) != 0)
+        snprintf(p->endpoint, sizeof p->endpoint, "%s", endpoint);
+    *out = p;
+    return 0;
+}
+
+const char *proto_participant_endpoint(const proto_participant *p)
+{
+    return p->endpoint;
+}
+
+static int participant_send(proto_participant *p, proto_message *reply, nc_error *err)
+{
+    reply->is_reply = 1;
+    p->awaiting_reply = 0;
+    return send_message(p->socket, reply, "the coupler", err);
+}
+
+int proto_participant_reply_error(proto_participant *p, const char *reason, nc_error *err)
+{
+    if (!p->awaiting_reply)
+        return nc_error_set(err, PROTO_ERR_USAGE, "reply without a pending command");
+    proto_message m;
+    memset(&m, 0, sizeof m);
+    proto_message_init(&m, PROTO_MSG_ERROR);
+    m.step = p->last_command.step;
+    m.iteration = p->last_command.iteration;
+    m.time_s = p->last_command.time_s;
+    m.dt_s = p->last_command.dt_s;
+    snprintf(m.role, sizeof m.role, "%s", p->role);
+    snprintf(m.name, sizeof m.name, "%s", p->name);
+    snprintf(m.text, sizeof m.text, "%s", reason ? reason : "unspecified error");
+    return participant_send(p, &m, err);
+}
+
+int proto_participant_receive(proto_participant *p, proto_message *command, nc_error *err)
+{
+    if (p->awaiting_reply) { /* keep REP in step: the previous command gets an error */
+        char what[200];
+        describe(&p->last_command, what, sizeof what);
+        char reason[300];
+        snprintf(reason, sizeof reason, "participant did not answer %s", what);
+        if (proto_participant_reply_error(p, reason, err)) return -1;
+    }
+    for (;;) {
+        zmq_pollitem_t item = {p->socket, 0, ZMQ_POLLIN, 0};
+        long timeout = p->options.idle_timeout_ms > 0 ? p->options.idle_timeout_ms : -1;
+        int ready = zmq_poll(&item, 1, timeout);
+        if (ready < 0) {
+            if (errno == EINTR)
+                return nc_error_set(err, PROTO_ERR_TRANSPORT, "interrupted while waiting for the coupler");
+            return nc_error_set(err, PROTO_ERR_TRANSPORT, "waiting for the coupler: %s", zmq_strerror(errno));
+        }
+        if (ready == 0)
+            return nc_error_set(err, PROTO_ERR_IDLE,
+                                "no command from the coupler for %.1f s (idle timeout) on %s; "
+                                "the coupler has probably gone away",
+                                p->options.idle_timeout_ms / 1000.0, p->endpoint);
+        nc_error decode_error;
+        nc_error_clear(&decode_error);
+        int rc = receive_message(p->socket, &p->buffer, command, p->options.max_bytes,
+                                 "the coupler", &decode_error);
+        p->awaiting_reply = 1;
+        if (rc != 0) {
+            if (decode_error.code == PROTO_ERR_TRANSPORT) {
+                p->awaiting_reply = 0;
+                if (err) *err = decode_error;
+                return -1;
+            }
+            char reason[PROTO_TEXT_MAX];
+            snprintf(reason, sizeof reason, "%s: malformed command: %s", p->role, decode_error.message);
+            memset(&p->last_command, 0, sizeof p->last_command);
+            proto_participant_reply_error(p, reason, NULL);
+            if (err) *err = decode_error;
+            return nc_error_prefix(err, "malformed command from the coupler (answered with an error)");
+        }
+        p->last_command.type = command->type;
+        p->last_command.step = command->step;
+        p->last_command.iteration = command->iteration;
+        p->last_command.time_s = command->time_s;
+        p->last_command.dt_s = command->dt_s;
+        if (command->is_reply || command->type == PROTO_MSG_ERROR) {
+            proto_participant_reply_error(p, "expected a command, got a reply", NULL);
+            return nc_error_set(err, PROTO_ERR_DECODE, "the coupler sent a reply (%s) instead of a command",
+                                proto_type_name(command->type));
+        }
+        if (command->type == PROTO_MSG_HELLO) {
+            proto_message *r = &p->hello_reply;
+            proto_message_init(r, PROTO_MSG_HELLO);
+            snprintf(r->role, sizeof r->role, "%s", p->role);
+            snprintf(r->name, sizeof r->name, "%s", p->name);
+            snprintf(r->text, sizeof r->text, "%s", p->capabilities);
+            if (participant_send(p, r, err)) return -1;
+            continue;
+        }
+        return 0;
+    }
+}
+
+int proto_participant_reply(proto_participant *p, proto_message *reply, nc_error *err)
+{
+    if (!p->awaiting_reply)
+        return nc_error_set(err, PROTO_ERR_USAGE, "reply without a pending command");
+    if (reply->step < 0) reply->step = p->last_command.step;
+    if (reply->iteration == 0) reply->iteration = p->last_command.iteration;
+    if (reply->time_s == 0.0) reply->time_s = p->last_command.time_s;
+    if (reply->dt_s == 0.0) reply->dt_s = p->last_command.dt_s;
+    return participant_send(p, reply, err);
+}
+
+void proto_participant_close(proto_participant *p)
+{
+    if (!p) return;
+    buffer_close(&p->buffer);
+    proto_message_free(&p->hello_reply);
+    if (p->socket) zmq_close(p->socket);
+    if (p->context) zmq_ctx_term(p->context);
+    free(p);
+}
+
+/* ---- coupler side (peer) ---------------------------------------------------------------- */
+
+int proto_peer_open(proto_peer **out, const char *peer_name, const char *endpoint,
+                    const proto_options *options, nc_error *err)
+{
+    *out = NULL;
+    proto_peer *peer = calloc(1, sizeof *peer);
+    if (!peer) return nc_error_set(err, PROTO_ERR_TRANSPORT, "out of memory");
+    if (options) peer->options = *options;
+    else proto_options_default(&peer->options);
+    snprintf(peer->name, sizeof peer->name, "%s", peer_name);
+    snprintf(peer->endpoint, sizeof peer->endpoint, "%s", endpoint);
+    snprintf(peer->last_sent, sizeof peer->last_sent, "nothing yet");
+    buffer_init(&peer->buffer);
+    peer->context = zmq_ctx_new();
+    peer->socket = peer->context ? zmq_socket(peer->context, ZMQ_REQ) : NULL;
+    if (!peer->socket) {
+        nc_error_set(err, PROTO_ERR_TRANSPORT, "cannot create a ZeroMQ socket: %s", zmq_strerror(errno));
+        proto_peer_close(peer);
+        return -1;
+    }
+    set_common_options(peer->socket, &peer->options, 0);
+    int on = 1;
+    zmq_setsockopt(peer->socket, ZMQ_REQ_RELAXED, &on, sizeof on);
+    zmq_setsockopt(peer->socket, ZMQ_REQ_CORRELATE, &on, sizeof on);
+    int send_timeout = peer->options.timeout_ms;
+    zmq_setsockopt(peer->socket, ZMQ_SNDTIMEO, &send_timeout, sizeof send_timeout);
+    char monitor_endpoint[64];
+    snprintf(monitor_endpoint, sizeof monitor_endpoint, "inproc://proto-monitor-%p", (void *)peer);
+    if (zmq_socket_monitor(peer->socket, monitor_endpoint,
+                           ZMQ_EVENT_CONNECTED | ZMQ_EVENT_DISCONNECTED) == 0) {
+        peer->monitor = zmq_socket(peer->context, ZMQ_PAIR);
+        if (peer->monitor && zmq_connect(peer->monitor, monitor_endpoint) != 0) {
+            zmq_close(peer->monitor);
+            peer->monitor = NULL;
+        }
+    }
+    if (zmq_connect(peer->socket, endpoint) != 0) {
+        nc_error_set(err, PROTO_ERR_TRANSPORT, "participant '%s': cannot connect to %s: %s",
+                     peer_name, endpoint, zmq_strerror(errno));
+        proto_peer_close(peer);
+        return -1;
+    }
+    *out = peer;
+    return 0;
+}
+
+const char *proto_peer_name(const proto_peer *peer) { return peer->name; }
+const char *proto_peer_endpoint(const proto_peer *peer) { return peer->endpoint; }
+
+/* Reads pending monitor events; returns 1 if the peer's connection was closed. */
+static int peer_lost(proto_peer *peer)
+{
+    int lost = 0;
+    for (;;) {
+        zmq_msg_t event, address;
+        zmq_msg_init(&event);
+        if (zmq_msg_recv(&event, peer->monitor, ZMQ_DONTWAIT) < 0) {
+            zmq_msg_close(&event);
+            break;
+        }
+        uint16_t id = 0;
+        if (zmq_msg_size(&event) >= 2) memcpy(&id, zmq_msg_data(&event), sizeof id);
+        int more = zmq_msg_more(&event);
+        zmq_msg_close(&event);
+        if (more) { /* second frame: the address */
+            zmq_msg_init(&address);
+            zmq_msg_recv(&address, peer->monitor, 0);
+            zmq_msg_close(&address);
+        }
+        if (id == ZMQ_EVENT_CONNECTED) peer->connected = 1;
+        if (id == ZMQ_EVENT_DISCONNECTED && peer->connected) {
+            peer->connected = 0;
+            lost = 1;
+        }
+    }
+    return lost;
+}
+
+int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
+                       nc_error *err)
+{
+    char label[PROTO_NAME_MAX + 300];
+    snprintf(label, sizeof label, "participant '%s' at %s", peer->name, peer->endpoint);
+    describe(request, peer->last_sent, sizeof peer->last_sent);
+    if (peer->monitor) peer_lost(peer); /* forget events from before this request */
+    if (send_message(peer->socket, request, label, err)) {
+        if (err && err->code == PROTO_ERR_TIMEOUT)
+            return nc_error_set(err, PROTO_ERR_TIMEOUT,
+                                "%s: not reachable within %.1f s (is it running?); last message: %s",
+                                label, peer->options.timeout_ms / 1000.0, peer->last_sent);
+        return -1;
+    }
+    double started_ms = now_ms();
+    for (;;) {
+        zmq_pollitem_t items[2] = {{peer->socket, 0, ZMQ_POLLIN, 0}, {peer->monitor, 0, ZMQ_POLLIN, 0}};
+        int n_items = peer->monitor ? 2 : 1;
+        long slice = peer->options.timeout_ms - (long)(now_ms() - started_ms);
+        if (slice < 0) slice = 0;
+        int ready = zmq_poll(items, n_items, slice);
+        if (ready < 0) {
+            if (errno == EINTR)
+                return nc_error_set(err, PROTO_ERR_TRANSPORT, "%s: interrupted while waiting for the reply to %s",
+                                    label, peer->last_sent);
+            return nc_error_set(err, PROTO_ERR_TRANSPORT, "%s: %s", label, zmq_strerror(errno));
+        }
+        if (items[0].revents & ZMQ_POLLIN) break;
+        if (n_items == 2 && (items[1].revents & ZMQ_POLLIN) && peer_lost(peer))
+            return nc_error_set(err, PROTO_ERR_PEER,
+                                "%s closed the connection while handling %s (did the process exit?)",
+                                label, peer->last_sent);
+        if (ready == 0 || now_ms() - started_ms >= peer->options.timeout_ms) {
+            return nc_error_set(err, PROTO_ERR_TIMEOUT, "%s did not answer within %.1f s; last message: %s",
+                                label, peer->options.timeout_ms / 1000.0, peer->last_sent);
+        }
+        /* a monitor event that was not a loss: keep waiting for the rest of the budget */
+    }
+    nc_error decode_error;
+    nc_error_clear(&decode_error);
+    if (receive_message(peer->socket, &peer->buffer, reply, peer->options.max_bytes, label,
+                        &decode_error)) {
+        if (err) *err = decode_error;
+        return nc_error_prefix(err, "%s sent a bad reply to %s", label, peer->last_sent);
+    }
+    if (reply->type == PROTO_MSG_ERROR)
+        return nc_error_set(err, PROTO_ERR_PEER, "%s reported an error for %s: %s", label,
+                            peer->last_sent, reply->text[0] ? reply->text : "(no reason given)");
+    if (reply->type != request->type)
+        return nc_error_set(err, PROTO_ERR_DECODE, "%s answered %s with '%s'", label,
+                            peer->last_sent, proto_type_name(reply->type));
+    return 0;
+}
+
+int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err)
+{
+    proto_message hello;
+    memset(&hello, 0, sizeof hello);
+    proto_message_init(&hello, PROTO_MSG_HELLO);
+    snprintf(hello.role, sizeof hello.role, "coupler");
+    snprintf(hello.name, sizeof hello.name, "netcouple coupler");
+    return proto_peer_request(peer, &hello, reply, err);
+}
+
+void proto_peer_close(proto_peer *peer)
+{
+    if (!peer) return;
+    buffer_close(&peer->buffer);
+    if (peer->monitor) {
+        zmq_socket_monitor(peer->socket, NULL, 0);
+        zmq_close(peer->monitor);
+    }
+    if (peer->socket) zmq_close(peer->socket);
+    if (peer->context) zmq_ctx_term(peer->context);
+    free(peer);
+}
