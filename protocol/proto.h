@@ -1,14 +1,16 @@
 /* proto — the netcouple coupling protocol: message model, wire codec and ZeroMQ endpoints.
  *
- * A message is a multipart ZeroMQ message: frame 0 is a UTF-8 JSON header (type, version,
- * step, iteration, time, dt, status, array descriptors, named scalar values, text fields),
- * frames 1..n are the raw little-endian bytes of the arrays the header describes, in order.
+ * A message is a multipart ZeroMQ message: frames 1..n are the raw little-endian bytes of the
+ * arrays, and the LAST frame is a UTF-8 JSON header (type, version, step, iteration, time,
+ * dt, status, descriptors of the arrays in frame order, named scalar values, text fields).
  * The coupler sends a command, the participant (FEM, DEM or any third-party solver) replies.
  * The full specification is protocol/README.md; this header is the C binding.
  *
- * Memory: a proto_message owns its array buffers and reuses them from one receive to the
- * next (no allocation in a steady exchange). Arrays added with proto_message_add_* point to
- * the caller's memory, which must stay valid until the message is sent.
+ * Memory: arrays of a message received through an endpoint point into that endpoint's
+ * receive buffers (no copy) and stay valid until the next receive or request on the same
+ * endpoint; copy what must live longer. proto_decode() instead copies into buffers the
+ * message owns and reuses (no allocation in a steady exchange). Arrays added with
+ * proto_message_add_* point to the caller's memory, which must stay valid until sent.
  * Errors follow nc_error.h: 0 on success, -1 with a message.
  */
 #ifndef PROTO_H
@@ -127,6 +129,12 @@ int proto_encode_header(const proto_message *m, char **json, size_t *length, nc_
 int proto_decode(proto_message *m, const void *header, size_t header_length,
                  const void *const *frames, const size_t *frame_lengths, size_t n_frames,
                  size_t max_bytes, nc_error *err);
+
+/* The same checks, but aligned little-endian frames are used in place (arrays point into
+ * `frames`, which must outlive the message's use); misaligned ones are copied. */
+int proto_decode_borrowed(proto_message *m, const void *header, size_t header_length,
+                          const void *const *frames, const size_t *frame_lengths,
+                          size_t n_frames, size_t max_bytes, nc_error *err);
 
 /* ---- endpoints ------------------------------------------------------------------------ */
 

@@ -239,9 +239,25 @@ static int decode_descriptor(const cJSON *item, size_t index, proto_array *a, nc
     return 0;
 }
 
-int proto_decode(proto_message *m, const void *header, size_t header_length,
-                 const void *const *frames, const size_t *frame_lengths, size_t n_frames,
-                 size_t max_bytes, nc_error *err)
+/* Index of the first non-finite value, or count if all are finite. The fast pass uses that
+ * x - x is 0 for finite x and NaN for NaN or ±Inf; eight independent sums keep the FPU busy.
+ * Only an array that fails is searched again for the position. */
+static size_t first_non_finite(const double *values, size_t count)
+{
+    double s[8] = {0};
+    size_t k = 0;
+    for (; k + 8 <= count; k += 8)
+        for (int j = 0; j < 8; j++) s[j] += values[k + j] - values[k + j];
+    for (; k < count; k++) s[0] += values[k] - values[k];
+    if (s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7] == 0.0) return count;
+    for (k = 0; k < count; k++)
+        if (!isfinite(values[k])) return k;
+    return count;
+}
+
+static int decode(proto_message *m, const void *header, size_t header_length,
+                  const void *const *frames, const size_t *frame_lengths, size_t n_frames,
+                  size_t max_bytes, int borrow, nc_error *err)
 {
     proto_message_init(m, PROTO_MSG_INVALID);
     if (!header || header_length == 0)
@@ -307,6 +323,10 @@ int proto_decode(proto_message *m, const void *header, size_t header_length,
                          bytes, i + 1, frame_lengths[i]);
             goto done;
         }
+        int aligned = ((uintptr_t)frames[i] % item_size) == 0;
+        if (borrow && aligned && host_is_little_endian()) {
+            a->data = frames[i];
+        } else {
         if (bytes > m->storage_capacity[i]) {
             void *grown = realloc(m->storage[i], bytes);
             if (!grown) {
@@ -320,15 +340,15 @@ int proto_decode(proto_message *m, const void *header, size_t header_length,
         if (bytes) memcpy(m->storage[i], frames[i], bytes);
         if (!host_is_little_endian()) swap_bytes(m->storage[i], a->count, item_size);
         a->data = m->storage[i];
+        }
         if (a->dtype == PROTO_F64) {
             const double *values = a->data;
-            for (size_t k = 0; k < a->count; k++) {
-                if (!isfinite(values[k])) {
-                    nc_error_set(err, PROTO_ERR_DECODE,
-                                 "array '%s': value %zu (row %zu, column %zu) is %s", a->name, k,
-                                 k / a->shape[1], k % a->shape[1], isnan(values[k]) ? "NaN" : "infinite");
-                    goto done;
-                }
+            size_t k = first_non_finite(values, a->count);
+            if (k < a->count) {
+                nc_error_set(err, PROTO_ERR_DECODE,
+                             "array '%s': value %zu (row %zu, column %zu) is %s", a->name, k,
+                             k / a->shape[1], k % a->shape[1], isnan(values[k]) ? "NaN" : "infinite");
+                goto done;
             }
         }
         m->n_arrays = i + 1;
@@ -338,4 +358,18 @@ done:
     cJSON_Delete(root);
     if (rc) m->n_arrays = 0;
     return rc;
+}
+
+int proto_decode(proto_message *m, const void *header, size_t header_length,
+                 const void *const *frames, const size_t *frame_lengths, size_t n_frames,
+                 size_t max_bytes, nc_error *err)
+{
+    return decode(m, header, header_length, frames, frame_lengths, n_frames, max_bytes, 0, err);
+}
+
+int proto_decode_borrowed(proto_message *m, const void *header, size_t header_length,
+                          const void *const *frames, const size_t *frame_lengths,
+                          size_t n_frames, size_t max_bytes, nc_error *err)
+{
+    return decode(m, header, header_length, frames, frame_lengths, n_frames, max_bytes, 1, err);
 }

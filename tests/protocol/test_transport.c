@@ -329,9 +329,10 @@ static void test_participant_rejects_garbage(void **state)
         int matched = 0;
         double nan_frame[3] = {0.0, NAN, 1.0};
         for (int i = 0; i < 4; i++) {
-            zmq_send(socket, bad[i], strlen(bad[i]), i >= 2 ? ZMQ_SNDMORE : 0);
-            if (i == 2) zmq_send(socket, nan_frame, 16, 0);
-            if (i == 3) zmq_send(socket, nan_frame, 24, 0);
+            /* array frames first, the header last */
+            if (i == 2) zmq_send(socket, nan_frame, 16, ZMQ_SNDMORE);
+            if (i == 3) zmq_send(socket, nan_frame, 24, ZMQ_SNDMORE);
+            zmq_send(socket, bad[i], strlen(bad[i]), 0);
             char buffer[2048] = {0};
             int n = zmq_recv(socket, buffer, sizeof buffer - 1, 0);
             if (n > 0 && strstr(buffer, "\"error\"") && strstr(buffer, expect[i])) matched++;
