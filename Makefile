@@ -54,6 +54,10 @@ all: check-deps programs
 test: check-deps programs tests
 	@scripts/run_tests.sh "$(BUILD)/tests" "$(BIN)"
 
+# Runs the default case and writes its plots (scripts/demo.sh says where everything is).
+demo: check-deps programs
+	@scripts/demo.sh
+
 check-deps:
 	@scripts/check_deps.sh >/dev/null 2>&1 || scripts/install_deps.sh
 

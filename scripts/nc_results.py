@@ -1,0 +1,84 @@
+"""Reading netcouple results (fem.h5, dem.h5, coupling.h5) for plots and checks.
+
+Only the dataset names that the programs document as stable are used:
+fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3)
+coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact}
+             /iterations/{step,iteration,residual,alpha,contact_force}
+"""
+import os
+
+import h5py
+import numpy as np
+
+
+class Monitor:
+    """Displacement history of the FEM monitor nodes."""
+
+    def __init__(self, time, node_ids, displacement):
+        self.time = time
+        self.node_ids = list(node_ids)
+        self.displacement = displacement  # steps x nodes x 3
+
+    def node(self, node_id, component=2):
+        if node_id not in self.node_ids:
+            raise KeyError("node %d is not a monitor node (monitor nodes: %s)" % (node_id, self.node_ids))
+        return self.displacement[:, self.node_ids.index(node_id), component]
+
+
+def load_monitor(results_dir):
+    path = os.path.join(results_dir, "fem.h5")
+    with h5py.File(path, "r") as f:
+        return Monitor(np.array(f["/monitor/time"]), np.array(f["/monitor/node_ids"]),
+                       np.array(f["/monitor/displacement"]))
+
+
+class Coupling:
+    """Per-step and per-iteration history of a coupled run."""
+
+    def __init__(self, path):
+        with h5py.File(path, "r") as f:
+            steps = f["/steps"]
+            self.time = np.array(steps["time"])
+            self.dt = np.array(steps["dt"])
+            self.iterations = np.array(steps["iterations"])
+            self.residual = np.array(steps["residual"])
+            self.converged = np.array(steps["converged"])
+            self.contact_force = np.array(steps["contact_force"])
+            self.in_contact = np.array(steps["in_contact"])
+            it = f["/iterations"]
+            self.it_step = np.array(it["step"])
+            self.it_iteration = np.array(it["iteration"])
+            self.it_residual = np.array(it["residual"])
+            self.it_alpha = np.array(it["alpha"])
+            self.it_contact_force = np.array(it["contact_force"])
+
+    @property
+    def end_time(self):
+        return self.time + self.dt
+
+    def force_magnitude(self):
+        return np.linalg.norm(self.contact_force, axis=1)
+
+    def total_iterations(self):
+        return int(self.iterations.sum())
+
+    def iterations_of_step(self, step):
+        mask = self.it_step == step
+        return self.it_iteration[mask], np.linalg.norm(self.it_contact_force[mask], axis=1)
+
+
+def load_coupling(results_dir):
+    return Coupling(os.path.join(results_dir, "coupling.h5"))
+
+
+def contact_lost_and_regained(coupling, threshold=1e-9):
+    """True if the contact force drops to zero after a first contact and returns later."""
+    force = coupling.force_magnitude()
+    touching = force > threshold
+    if not touching.any():
+        return False
+    first = int(np.argmax(touching))
+    after = touching[first:]
+    # a gap: some False after the first True, followed by True again
+    gaps = np.where(~after)[0]
+    return bool(len(gaps) and after[gaps[0]:].any())
