@@ -1,0 +1,275 @@
+#!/usr/bin/python3
+"""Parameter studies of the paper (section 7) and their figures.
+
+    scripts/study.py STUDY [--out DIR] [--jobs N] [--end-time T]
+    scripts/study.py --list
+
+Each study runs a case several times through scripts/run_case.sh with --set overrides (no
+copied case folders), at most N runs at a time (default 2, one per core), then draws the
+paper's figure(s) as PNG into DIR/STUDY/ and prints a summary table. Runs already finished
+in DIR are reused, so an interrupted study continues where it stopped (delete DIR/STUDY to
+start afresh). --end-time shortens every run (quick looks, tests).
+"""
+import argparse
+import concurrent.futures
+import json
+import os
+import subprocess
+import sys
+import time
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import nc_results  # noqa: E402
+
+POINT_A = 1  # node at x = 1 m in the cable cases
+
+
+def run(case, label, sets, out_dir, end_time=None):
+    """Runs one case variant unless its results are complete; returns (label, dir, seconds, ok)."""
+    run_dir = os.path.join(out_dir, label)
+    done = os.path.join(run_dir, "done.json")
+    if os.path.exists(done):
+        with open(done) as f:
+            info = json.load(f)
+        return label, run_dir, info["seconds"], info["ok"]
+    args = [os.path.join(HERE, "run_case.sh"), os.path.join(ROOT, "cases", case), "--out", run_dir, "--quiet"]
+    for s in sets + ([("coupler.end_time=%g" % end_time)] if end_time else []):
+        args += ["--set", s]
+    start = time.monotonic()
+    result = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    seconds = time.monotonic() - start
+    ok = result.returncode == 0
+    os.makedirs(run_dir, exist_ok=True)
+    with open(os.path.join(run_dir, "study.log"), "w") as f:
+        f.write(result.stdout)
+    with open(done, "w") as f:
+        json.dump({"seconds": seconds, "ok": ok, "sets": sets}, f)
+    return label, run_dir, seconds, ok
+
+
+def run_all(case, variants, out_dir, jobs, end_time):
+    os.makedirs(out_dir, exist_ok=True)
+    results = {}
+    with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(run, case, label, sets, out_dir, end_time) for label, sets in variants]
+        for future in concurrent.futures.as_completed(futures):
+            label, run_dir, seconds, ok = future.result()
+            print("  %-28s %6.1f s  %s" % (label, seconds, "ok" if ok else "FAILED (see %s)" % run_dir))
+            results[label] = (run_dir, seconds, ok)
+    return results
+
+
+def static_solution(case, out_dir):
+    """Point A of the FEM static solve for the particle's weight (eq. 43)."""
+    static_dir = os.path.join(out_dir, "static")
+    if not os.path.exists(os.path.join(static_dir, "fem.h5")):
+        os.makedirs(static_dir, exist_ok=True)
+        binary = os.path.join(os.environ.get("NC_BIN", os.path.join(ROOT, "bin")), "fem_solver")
+        subprocess.run([binary, os.path.join(ROOT, "cases", case, "static.json"), "--output", static_dir],
+                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return nc_results.load_monitor(static_dir).node(POINT_A)[-1]
+
+
+def save(fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    print("  wrote", path)
+
+
+def plot_point_a(results, labels, path, title, static=None):
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for label in labels:
+        run_dir, _, ok = results[label]
+        try:
+            m = nc_results.load_monitor(run_dir)
+        except (OSError, KeyError):
+            continue
+        ax.plot(m.time, m.node(POINT_A), label=label + ("" if ok else " (failed)"), lw=1)
+    if static is not None:
+        ax.axhline(static, color="k", ls="--", lw=1, label="static (eq. 43)")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("Point A vertical displacement [m]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, path)
+
+
+def plot_iterations(results, labels, path, title):
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for label in labels:
+        run_dir, _, _ = results[label]
+        try:
+            c = nc_results.load_coupling(run_dir)
+        except (OSError, KeyError):
+            continue
+        ax.step(c.end_time, c.iterations, where="post", label=label, lw=1)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("interface iterations per step")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, path)
+
+
+def summary(results, labels, static=None):
+    print("  %-28s %8s %10s %10s %12s %12s" % ("run", "wall[s]", "steps", "iterations", "A at end[m]", "A min[m]"))
+    rows = {}
+    for label in labels:
+        run_dir, seconds, ok = results[label]
+        try:
+            c = nc_results.load_coupling(run_dir)
+            m = nc_results.load_monitor(run_dir)
+            a = m.node(POINT_A)
+            rows[label] = dict(seconds=seconds, steps=len(c.iterations), iterations=c.total_iterations(),
+                               a_end=float(a[-1]), a_min=float(a.min()), ok=ok,
+                               unconverged=int((c.converged == 0).sum()))
+            print("  %-28s %8.1f %10d %10d %12.4f %12.4f%s" % (
+                label, seconds, len(c.iterations), c.total_iterations(), a[-1], a.min(),
+                "" if ok else "  FAILED"))
+        except (OSError, KeyError) as e:
+            print("  %-28s no results (%s)" % (label, e))
+    if static is not None:
+        print("  static Point A: %.4f m" % static)
+    return rows
+
+
+# ---- the studies -------------------------------------------------------------------------
+
+def study_timestep(out, jobs, end_time):
+    """7.2, fig. 12 and 13: weak vs strong at several dt against the static solution."""
+    variants = [("weak_dt1e-3", ["coupler.scheme=weak", "coupler.dt=1e-3"]),
+                ("weak_dt1e-2", ["coupler.scheme=weak", "coupler.dt=1e-2"]),
+                ("strong_dt1e-2", ["coupler.scheme=strong", "coupler.dt=1e-2"]),
+                ("strong_dt3e-2", ["coupler.scheme=strong", "coupler.dt=3e-2"]),
+                ("strong_dt1e-2_force", ["coupler.scheme=strong", "coupler.dt=1e-2",
+                                         "coupler.relaxed_quantity=force"]),
+                ("strong_dt3e-2_force", ["coupler.scheme=strong", "coupler.dt=3e-2",
+                                         "coupler.relaxed_quantity=force"])]
+    results = run_all("rest_position", variants, out, jobs, end_time)
+    static = static_solution("rest_position", out)
+    labels = [v[0] for v in variants]
+    plot_point_a(results, labels[:4], os.path.join(out, "fig12_point_a_vs_static.png"),
+                 "rest position (7.2): weak and strong coupling vs the static solution", static)
+    plot_iterations(results, ["strong_dt1e-2", "strong_dt3e-2"], os.path.join(out, "fig13a_iterations_displacement.png"),
+                    "interface iterations, relaxed displacements and velocities")
+    plot_iterations(results, ["strong_dt1e-2_force", "strong_dt3e-2_force"],
+                    os.path.join(out, "fig13b_iterations_force.png"), "interface iterations, relaxed forces")
+    summary(results, labels, static)
+
+
+def study_relaxation(out, jobs, end_time):
+    """7.3, Table 1 and fig. 14: constant alpha vs Aitken (displacement relaxation, COR 1)."""
+    alphas = ["0.1", "0.2", "0.5", "0.7", "1.0"]
+    variants = [("alpha_" + a, ["coupler.relaxation.method=constant", "coupler.relaxation.alpha=" + a,
+                                "dem.materials.0.restitution=1.0", "coupler.on_max_iterations=accept"])
+                for a in alphas]
+    variants.append(("aitken", ["coupler.relaxation.method=aitken", "dem.materials.0.restitution=1.0"]))
+    results = run_all("rest_position", variants, out, jobs, end_time)
+    static = static_solution("rest_position", out)
+    labels = [v[0] for v in variants]
+    plot_point_a(results, labels, os.path.join(out, "fig14_relaxation.png"),
+                 "relaxation factor (7.3)", static)
+    rows = summary(results, labels, static)
+    base = rows.get("alpha_0.1")
+    print("\n  Table 1 — computation time relative to alpha = 0.1 (paper: 100, 54.1, 20.4, 28.5, -, Aitken 18.7)")
+    print("  %-12s %14s %14s %14s" % ("relaxation", "time [%]", "iterations [%]", "unconverged"))
+    for label in labels:
+        r = rows.get(label)
+        if r and base:
+            print("  %-12s %14.1f %14.1f %14d" % (label, 100 * r["seconds"] / base["seconds"],
+                                                   100 * r["iterations"] / base["iterations"], r["unconverged"]))
+
+
+def study_restitution(out, jobs, end_time):
+    """7.4, fig. 16 and 17: COR sweep, weak and strong at a fixed dt."""
+    cors = ["1.0", "0.8", "0.5", "0.2", "0.1"]
+    variants = []
+    for scheme in ("weak", "strong"):
+        for cor in cors:
+            variants.append(("%s_cor%s" % (scheme, cor), ["coupler.scheme=" + scheme,
+                                                           "dem.materials.0.restitution=" + cor]))
+    results = run_all("rest_position", variants, out, jobs, end_time)
+    static = static_solution("rest_position", out)
+    plot_point_a(results, ["weak_cor" + c for c in cors], os.path.join(out, "fig16a_weak_cor.png"),
+                 "coefficient of restitution (7.4), weak coupling", static)
+    plot_point_a(results, ["strong_cor" + c for c in cors], os.path.join(out, "fig16b_strong_cor.png"),
+                 "coefficient of restitution (7.4), strong coupling", static)
+    plot_iterations(results, ["strong_cor" + c for c in cors], os.path.join(out, "fig17_iterations_cor.png"),
+                    "interface iterations per step (7.4)")
+    summary(results, [v[0] for v in variants], static)
+
+
+def study_cable_impact(out, jobs, end_time):
+    """7.1, fig. 9 and 11: weak at 1e-3 and 1e-2, strong at 1e-2."""
+    variants = [("weak_dt1e-3", ["coupler.scheme=weak", "coupler.dt=1e-3"]),
+                ("weak_dt1e-2", ["coupler.scheme=weak", "coupler.dt=1e-2"]),
+                ("strong_dt1e-2", ["coupler.scheme=strong", "coupler.dt=1e-2"])]
+    results = run_all("cable_impact", variants, out, jobs, end_time)
+    labels = [v[0] for v in variants]
+    plot_point_a(results, labels, os.path.join(out, "fig9_point_a.png"), "impact on a compliant cable (7.1)")
+    run_dir = results["strong_dt1e-2"][0]
+    try:
+        c = nc_results.load_coupling(run_dir)
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+        contact_steps = np.where(c.iterations > 1)[0]
+        if len(contact_steps):
+            step = int(contact_steps[np.argmax(c.iterations[contact_steps])])
+            its, force = c.iterations_of_step(step)
+            axes[0].plot(its, force, "o-")
+            axes[0].set_title("contact force over the iterations of step %d (t = %.3g s)" % (step, c.end_time[step]))
+            axes[0].set_xlabel("interface iteration")
+            axes[0].set_ylabel("contact force [N]")
+            axes[0].grid(True, alpha=0.3)
+            print("  first-iteration force / converged force at that step: %.2f" % (force[0] / max(force[-1], 1e-30)))
+        axes[1].step(c.end_time, c.iterations, where="post")
+        axes[1].set_xlabel("time [s]")
+        axes[1].set_ylabel("interface iterations per step")
+        axes[1].grid(True, alpha=0.3)
+        save(fig, os.path.join(out, "fig11_iterations.png"))
+    except (OSError, KeyError) as e:
+        print("  no coupling history for fig. 11:", e)
+    for label in labels:
+        try:
+            c = nc_results.load_coupling(results[label][0])
+            print("  %-16s contact lost and regained: %s" % (label, nc_results.contact_lost_and_regained(c)))
+        except (OSError, KeyError):
+            pass
+    summary(results, labels)
+
+
+STUDIES = {
+    "timestep": study_timestep,
+    "relaxation": study_relaxation,
+    "restitution": study_restitution,
+    "cable_impact": study_cable_impact,
+}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("study", nargs="?", choices=sorted(STUDIES))
+    parser.add_argument("--out", default=os.path.join(ROOT, "results", "studies"))
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--end-time", type=float, help="shorten every run to this end time [s]")
+    parser.add_argument("--list", action="store_true", help="list the studies")
+    args = parser.parse_args()
+    if args.list or not args.study:
+        for name, fn in sorted(STUDIES.items()):
+            print("%-14s %s" % (name, fn.__doc__.strip().splitlines()[0]))
+        return
+    out = os.path.join(args.out, args.study)
+    print("study %s -> %s" % (args.study, out))
+    STUDIES[args.study](out, args.jobs, args.end_time)
+
+
+if __name__ == "__main__":
+    main()
