@@ -37,7 +37,8 @@ enum {
     PROTO_ERR_PEER = 13,     /* peer replied with an error message */
     PROTO_ERR_TRANSPORT = 14,/* ZeroMQ failure */
     PROTO_ERR_IDLE = 15,     /* participant: no command within the idle time */
-    PROTO_ERR_USAGE = 16     /* wrong use of the API (missing array, bad shape, ...) */
+    PROTO_ERR_USAGE = 16,    /* wrong use of the API (missing array, bad shape, ...) */
+    PROTO_ERR_DISCONNECTED = 17 /* peer closed its connection (process exited?) */
 };
 
 typedef enum {
@@ -176,7 +177,8 @@ int proto_peer_open(proto_peer **peer, const char *peer_name, const char *endpoi
 int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err);
 /* Sends `request`, waits up to timeout_ms for the reply. An error reply from the peer
  * returns -1 with PROTO_ERR_PEER and the peer's reason; a timeout returns PROTO_ERR_TIMEOUT
- * with a message naming the peer, its endpoint and the last message sent. */
+ * with a message naming the peer, its endpoint and the last message sent; a peer whose
+ * connection closed (before or during the request) returns PROTO_ERR_DISCONNECTED at once. */
 int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
                        nc_error *err);
 const char *proto_peer_name(const proto_peer *peer);

@@ -41,7 +41,8 @@ struct proto_peer {
     void *context;
     void *socket;
     void *monitor;
-    int connected;
+    int connected;        /* a connection to the peer is up (from the socket monitor) */
+    int ever_connected;   /* it has been up once: losing it now means the peer went away */
     char name[PROTO_NAME_MAX];
     char endpoint[256];
     char last_sent[160];
@@ -389,7 +390,7 @@ static int peer_lost(proto_peer *peer)
             zmq_msg_recv(&address, peer->monitor, 0);
             zmq_msg_close(&address);
         }
-        if (id == ZMQ_EVENT_CONNECTED) peer->connected = 1;
+        if (id == ZMQ_EVENT_CONNECTED) peer->connected = peer->ever_connected = 1;
         if (id == ZMQ_EVENT_DISCONNECTED && peer->connected) {
             peer->connected = 0;
             lost = 1;
@@ -404,7 +405,11 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
     char label[PROTO_NAME_MAX + 300];
     snprintf(label, sizeof label, "participant '%s' at %s", peer->name, peer->endpoint);
     describe(request, peer->last_sent, sizeof peer->last_sent);
-    if (peer->monitor) peer_lost(peer); /* forget events from before this request */
+    /* a peer that went away between two requests is reported now, not after the timeout */
+    if (peer->monitor && (peer_lost(peer) || (peer->ever_connected && !peer->connected)))
+        return nc_error_set(err, PROTO_ERR_DISCONNECTED,
+                            "%s closed the connection before %s (did the process exit?)", label,
+                            peer->last_sent);
     if (send_message(peer->socket, request, label, err)) {
         if (err && err->code == PROTO_ERR_TIMEOUT)
             return nc_error_set(err, PROTO_ERR_TIMEOUT,
@@ -427,8 +432,8 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
             return nc_error_prefix(err, "%s sent a bad reply to %s", label, peer->last_sent);
         }
         if (peer->monitor && peer_lost(peer))
-            return nc_error_set(err, PROTO_ERR_PEER,
-                                "%s closed the connection while handling %s (did the process exit?)",
+            return nc_error_set(err, PROTO_ERR_DISCONNECTED,
+                                "%s closed the connection while handling %s (did the process exit, or was the message over its size limit?)",
                                 label, peer->last_sent);
         if (now_ms() - started_ms >= peer->options.timeout_ms)
             return nc_error_set(err, PROTO_ERR_TIMEOUT, "%s did not answer within %.1f s; last message: %s",

@@ -21,7 +21,7 @@
 
 #define N_NODES 50
 
-typedef enum { SERVE_ECHO, SERVE_SILENT, SERVE_DIE, SERVE_ERROR } serve_mode;
+typedef enum { SERVE_ECHO, SERVE_SILENT, SERVE_DIE, SERVE_ERROR, SERVE_EXIT_AFTER_BEGIN } serve_mode;
 
 static double now_s(void)
 {
@@ -88,6 +88,10 @@ static int serve(const char *endpoint, int endpoint_pipe, serve_mode mode, int d
         proto_message_init(&reply, command.type);
         proto_participant_reply(p, &reply, &err);
         if (command.type == PROTO_MSG_SHUTDOWN) break;
+        if (command.type == PROTO_MSG_BEGIN_STEP && mode == SERVE_EXIT_AFTER_BEGIN) {
+            proto_participant_close(p); /* lets the reply out, then the process is gone */
+            _exit(0);
+        }
     }
     proto_message_free(&command);
     proto_participant_close(p);
@@ -240,10 +244,43 @@ static void test_peer_dies_is_reported_before_timeout(void **state)
     nc_error err;
     double elapsed;
     solve_expecting_error(SERVE_DIE, 20000, &err, &elapsed);
-    assert_int_equal(err.code, PROTO_ERR_PEER);
+    assert_int_equal(err.code, PROTO_ERR_DISCONNECTED);
     assert_non_null(strstr(err.message, "participant 'dem'"));
     assert_non_null(strstr(err.message, "closed the connection while handling solve (step 3"));
     assert_true(elapsed < 10.0); /* far less than the 20 s timeout */
+}
+
+static void test_peer_gone_between_requests_is_reported_at_once(void **state)
+{
+    (void)state;
+    char bound[256];
+    pid_t child = start_child("tcp://127.0.0.1:*", bound, sizeof bound, SERVE_EXIT_AFTER_BEGIN, 0);
+    proto_peer *peer;
+    nc_error err;
+    proto_options options;
+    proto_options_default(&options);
+    options.timeout_ms = 20000;
+    assert_int_equal(proto_peer_open(&peer, "fem", bound, &options, &err), 0);
+    proto_message request, reply;
+    memset(&request, 0, sizeof request);
+    memset(&reply, 0, sizeof reply);
+    if (proto_peer_hello(peer, &reply, &err)) fail_msg("%s", err.message);
+    proto_message_init(&request, PROTO_MSG_BEGIN_STEP);
+    request.step = 7;
+    assert_int_equal(proto_peer_request(peer, &request, &reply, &err), 0);
+    assert_int_equal(wait_child(child), 0); /* the participant has exited */
+    usleep(200 * 1000);                     /* let the monitor see the closed connection */
+    proto_message_init(&request, PROTO_MSG_SOLVE);
+    request.step = 7;
+    request.iteration = 1;
+    double start = now_s();
+    assert_int_equal(proto_peer_request(peer, &request, &reply, &err), -1);
+    assert_true(now_s() - start < 5.0); /* not the 20 s timeout */
+    assert_int_equal(err.code, PROTO_ERR_DISCONNECTED);
+    assert_non_null(strstr(err.message, "participant 'fem'"));
+    assert_non_null(strstr(err.message, "solve (step 7, iteration 1"));
+    proto_message_free(&reply);
+    proto_peer_close(peer);
 }
 
 static void test_error_reply_carries_reason(void **state)
@@ -374,6 +411,7 @@ int main(void)
         cmocka_unit_test(test_ipc_exchange_participant_starts_late),
         cmocka_unit_test(test_peer_never_answers_times_out),
         cmocka_unit_test(test_peer_dies_is_reported_before_timeout),
+        cmocka_unit_test(test_peer_gone_between_requests_is_reported_at_once),
         cmocka_unit_test(test_error_reply_carries_reason),
         cmocka_unit_test(test_unreachable_peer_times_out),
         cmocka_unit_test(test_participant_idle_timeout),
