@@ -1,0 +1,130 @@
+/* fem_bench — timings of the FEM solver on square cable nets (`make bench`): static Newton
+ * under a centre point load and a 200-step dynamic run, per Newton iteration split into
+ * assembly and factorisation (+ solve), for 41x41, 81x81 and 161x161 nodes. */
+#include "../fem_analysis.h"
+#include "nc_log.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static int build_net(fem_model *m, int count, nc_error *err)
+{
+    fem_model_init(m, "bench-net");
+    /* 3 m x 3 m net of the paper's prestressed cable (section 7.2 properties) */
+    fem_element_set set = {"net", 1e9, 1.26e-4, 7850, 1e6, FEM_CABLE};
+    if (fem_model_add_set(m, &set, err) < 0) return -1;
+    double o[3] = {0, 0, 0}, e1[3] = {3, 0, 0}, e2[3] = {0, 3, 0};
+    if (fem_model_generate_net(m, o, e1, e2, count, count, 0, err)) return -1;
+    const fem_node_set *b = fem_model_find_node_set(m, "boundary");
+    for (int i = 0; i < b->count; i++)
+        for (int c = 0; c < 3; c++) m->fixed[3 * b->nodes[i] + c] = 1;
+    int centre = count / 2 + count * (count / 2);
+    m->f_point[3 * centre + 2] = -2000.0;
+    m->tau_per_s = 5.0;
+    return fem_model_finalize(m, err);
+}
+
+typedef struct result {
+    int count, elements, dofs, nnz;
+    double setup_s, static_s, static_iter, asm_ms, fact_ms, solve_ms;
+    double dyn_s, dyn_iter, dyn_asm_ms, dyn_fact_ms, static_facs, dyn_facs, dyn_cg;
+    double w_centre;
+} result;
+
+static int run(int count, int dynamic, result *r, nc_error *err)
+{
+    memset(r, 0, sizeof *r);
+    fem_model m;
+    fem_solver s;
+    memset(&s, 0, sizeof s);
+    double t0 = nc_now_s();
+    if (build_net(&m, count, err) || fem_solver_init(&s, &m, err)) return -1;
+    r->setup_s = nc_now_s() - t0;
+    r->count = count;
+    r->elements = m.n_elements;
+    r->dofs = s.neq;
+    r->nnz = s.K.nnz;
+    m.settings.type = FEM_STATIC;
+    t0 = nc_now_s();
+    if (fem_solver_static(&s, 1.0, err)) return -1;
+    r->static_s = nc_now_s() - t0;
+    fem_stats st = s.stats;
+    r->static_iter = st.iterations;
+    r->asm_ms = 1e3 * st.assembly_s / st.assemblies;
+    r->fact_ms = 1e3 * st.factor_s / st.factorizations;
+    r->solve_ms = 1e3 * st.solve_s / st.solves;
+    r->static_facs = st.factorizations;
+    r->w_centre = -s.cur.u[3 * (count / 2 + count * (count / 2)) + 2];
+    if (dynamic) {
+        /* from the reference state, 200 steps of 1 ms */
+        fem_solver_free(&s);
+        m.settings.type = FEM_DYNAMIC;
+        m.self_weight = 1;
+        m.settings.load_ramp_s = 0.05;   /* load and self-weight ramped over the first 50 ms */
+        if (fem_solver_init(&s, &m, err) || fem_solver_initial_acceleration(&s, err)) return -1;
+        memset(&s.stats, 0, sizeof s.stats);
+        t0 = nc_now_s();
+        long iters = 0;
+        for (int k = 0; k < 200; k++) {
+            if (fem_solver_step(&s, 1e-3, err)) return -1;
+            iters += s.stats.iterations;
+        }
+        r->dyn_s = nc_now_s() - t0;
+        r->dyn_iter = iters;
+        r->dyn_asm_ms = 1e3 * s.stats.assembly_s / s.stats.assemblies;
+        r->dyn_fact_ms = 1e3 * s.stats.factor_s / s.stats.factorizations;
+        r->dyn_facs = s.stats.factorizations;
+        r->dyn_cg = s.stats.pcg_solves ? (double)s.stats.pcg_iterations / s.stats.pcg_solves : 0;
+    }
+    fem_solver_free(&s);
+    fem_model_free(&m);
+    return 0;
+}
+
+int main(void)
+{
+    int counts[3] = {41, 81, 161};
+    result r[3];
+    nc_error err;
+    printf("fem_bench: square 3 m x 3 m cable net, edges fixed, E = 1e9 Pa, A = 1.26e-4 m^2, "
+           "S_pre = 1e6 Pa, 2 kN centre load\n");
+    printf("times per call: asm_ms = one assembly (residual + tangent), fac_ms = one numeric "
+           "factorisation, sol_ms = one linear solve (triangular solves, or CG preconditioned by a "
+           "kept factorisation); iters = Newton iterations (linear "
+           "solves), facs = factorisations (modified Newton keeps a factorisation and uses it to "
+           "precondition CG on the current tangent)\n");
+    printf("%9s %8s %8s %9s | %8s %5s %5s %9s %8s %8s %8s | %8s %6s %5s %8s %8s\n", "net", "elements",
+           "dofs", "nnz(K)", "setup_s", "iters", "facs", "static_s", "asm_ms", "fac_ms",
+           "sol_ms", "dyn200_s", "iters", "facs", "asm_ms", "fac_ms");
+    for (int i = 0; i < 3; i++) {
+        /* the 200-step dynamic run for 41x41 and 81x81 (161x161 would take minutes) */
+        if (run(counts[i], i < 2, &r[i], &err)) {
+            fprintf(stderr, "fem_bench: %s\n", err.message);
+            return 1;
+        }
+        printf("%4dx%-4d %8d %8d %9d | %8.3f %5.0f %5.0f %9.3f %8.2f %8.2f %8.2f | %8.2f %6.0f %5.0f %8.2f %8.2f\n",
+               r[i].count, r[i].count, r[i].elements, r[i].dofs, r[i].nnz, r[i].setup_s,
+               r[i].static_iter, r[i].static_facs, r[i].static_s, r[i].asm_ms, r[i].fact_ms,
+               r[i].solve_ms, r[i].dyn_s, r[i].dyn_iter, r[i].dyn_facs, r[i].dyn_asm_ms,
+               r[i].dyn_fact_ms);
+        fflush(stdout);
+    }
+    printf("dynamic: mean CG iterations per preconditioned Newton step: %.1f (41), %.1f (81)\n",
+           r[0].dyn_cg, r[1].dyn_cg);
+    printf("centre deflection (static): %.4f m (41), %.4f m (81), %.4f m (161)\n", r[0].w_centre,
+           r[1].w_centre, r[2].w_centre);
+    for (int i = 1; i < 3; i++) {
+        double ne = (double)r[i].elements / r[i - 1].elements;
+        printf("growth %dx%d -> %dx%d: elements x%.2f, assembly x%.2f, factorisation x%.2f, "
+               "solve x%.2f, static solve x%.2f",
+               counts[i - 1], counts[i - 1], counts[i], counts[i], ne, r[i].asm_ms / r[i - 1].asm_ms,
+               r[i].fact_ms / r[i - 1].fact_ms, r[i].solve_ms / r[i - 1].solve_ms,
+               r[i].static_s / r[i - 1].static_s);
+        if (r[i].dyn_s > 0) printf(", 200 dynamic steps x%.2f", r[i].dyn_s / r[i - 1].dyn_s);
+        printf("\n");
+    }
+    printf("target: 81x81 static solve well under 1 s -> %.3f s (%s)\n", r[1].static_s,
+           r[1].static_s < 1.0 ? "met" : "NOT met");
+    return 0;
+}

@@ -1,0 +1,594 @@
+/* fem_analysis — assembly, Newton-Raphson, static load steps and implicit time stepping
+ * of the cable net (see fem_analysis.h).
+ *
+ * One residual/tangent form serves every analysis. With the generalized-alpha weights
+ * (alpha_m, alpha_f; Newmark: 0, 0; Bossak: alpha_f = 0) the step equation is
+ *   r = F_ext - M (a_am + tau v_af) - (1 - alpha_f) [F_int(u) + kappa K_T(u) v] - alpha_f fd_n
+ * with a_am = (1-alpha_m) a_{n+1} + alpha_m a_n, v_af likewise, and the Newmark relations
+ * for a_{n+1}, v_{n+1} as functions of u_{n+1}. Its tangent is c_m M + c_k K_T with
+ *   c_m = (1-alpha_m)/(beta dt^2) + tau (1-alpha_f) gamma/(beta dt),
+ *   c_k = (1-alpha_f) (1 + kappa gamma/(beta dt)).
+ * The statics is the same with no inertia (c_m = 0, c_k = 1). The kappa term uses the
+ * current tangent K_T(u) (eq. 12) and its derivative with respect to u is left out of the
+ * Newton matrix (exact for a linear system; kappa = 0 in all paper cases). F_ext is taken
+ * at the end of the step for every method (model loads at the ramp value of t_{n+1};
+ * coupling forces are constant over the step anyway).
+ */
+#include "fem_analysis.h"
+#include "fem_element_cable.h"
+#include "nc_log.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *dof_name(int d)
+{
+    return d == 0 ? "x" : d == 1 ? "y" : "z";
+}
+
+static int state_alloc(fem_state *st, int ndof)
+{
+    memset(st, 0, sizeof *st);
+    st->u = calloc((size_t)ndof, sizeof(double));
+    st->v = calloc((size_t)ndof, sizeof(double));
+    st->a = calloc((size_t)ndof, sizeof(double));
+    st->fd = calloc((size_t)ndof, sizeof(double));
+    return (st->u && st->v && st->a && st->fd) ? 0 : -1;
+}
+
+static void state_free(fem_state *st)
+{
+    free(st->u); free(st->v); free(st->a); free(st->fd);
+    memset(st, 0, sizeof *st);
+}
+
+static void state_copy(fem_state *dst, const fem_state *src, int ndof)
+{
+    size_t bytes = (size_t)ndof * sizeof(double);
+    dst->time_s = src->time_s;
+    dst->step = src->step;
+    memcpy(dst->u, src->u, bytes);
+    memcpy(dst->v, src->v, bytes);
+    memcpy(dst->a, src->a, bytes);
+    memcpy(dst->fd, src->fd, bytes);
+}
+
+int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
+{
+    memset(s, 0, sizeof *s);
+    s->m = m;
+    s->ndof = 3 * m->n_nodes;
+    size_t nd = (size_t)s->ndof, ne = (size_t)m->n_elements;
+    s->eq = malloc(nd * sizeof *s->eq);
+    s->dof_of_eq = malloc(nd * sizeof *s->dof_of_eq);
+    s->slot = malloc(36 * ne * sizeof *s->slot);
+    int *elem_eq = malloc(6 * ne * sizeof *elem_eq);
+    s->f_model = calloc(nd, sizeof(double));
+    s->f_coupling = calloc(nd, sizeof(double));
+    s->r = calloc(nd, sizeof(double));
+    s->w = calloc(nd, sizeof(double));
+    s->rhs = calloc(nd, sizeof(double));
+    s->du = calloc(nd, sizeof(double));
+    s->u0 = calloc(nd, sizeof(double));
+    s->cg_r = calloc(nd, sizeof(double));
+    s->cg_z = calloc(nd, sizeof(double));
+    s->cg_p = calloc(nd, sizeof(double));
+    s->cg_q = calloc(nd, sizeof(double));
+    s->axial = calloc(ne, sizeof(double));
+    if (!s->eq || !s->dof_of_eq || !s->slot || !elem_eq || !s->f_model || !s->f_coupling ||
+        !s->r || !s->w || !s->rhs || !s->du || !s->u0 || !s->cg_r || !s->cg_z ||
+        !s->cg_p || !s->cg_q || !s->axial || state_alloc(&s->cur, s->ndof) ||
+        state_alloc(&s->start, s->ndof) || state_alloc(&s->saved, s->ndof)) {
+        free(elem_eq);
+        return nc_error_set(err, 1, "%s: out of memory for %d dofs", m->source, s->ndof);
+    }
+    /* Supported dofs are not unknowns: the pattern holds only free equations, so it never
+     * changes whatever the supports do. */
+    s->neq = 0;
+    for (int i = 0; i < s->ndof; i++) {
+        s->eq[i] = m->fixed[i] ? -1 : s->neq;
+        if (!m->fixed[i]) s->dof_of_eq[s->neq++] = i;
+    }
+    for (int e = 0; e < m->n_elements; e++)
+        for (int c = 0; c < 3; c++) {
+            elem_eq[6 * e + c] = s->eq[3 * m->conn[2 * e] + c];
+            elem_eq[6 * e + 3 + c] = s->eq[3 * m->conn[2 * e + 1] + c];
+        }
+    int rc = fem_sparse_build(&s->K, s->neq, m->n_elements, elem_eq, s->slot,
+                              m->settings.factorization, err);
+    free(elem_eq);
+    if (rc) return nc_error_prefix(err, "%s", m->source);
+    /* model loads at full scale: point loads + self-weight (half of rho A L g per node, which
+     * is also the consistent load of a linear element) */
+    memcpy(s->f_model, m->f_point, nd * sizeof(double));
+    if (m->self_weight)
+        for (int e = 0; e < m->n_elements; e++) {
+            double half = 0.5 * m->rhoA[e] * m->L0[e];
+            for (int c = 0; c < 3; c++) {
+                s->f_model[3 * m->conn[2 * e] + c] += half * m->gravity[c];
+                s->f_model[3 * m->conn[2 * e + 1] + c] += half * m->gravity[c];
+            }
+        }
+    fem_solver_update_axial(s);
+    return 0;
+}
+
+void fem_solver_free(fem_solver *s)
+{
+    if (!s) return;
+    fem_sparse_free(&s->K);
+    state_free(&s->cur); state_free(&s->start); state_free(&s->saved);
+    free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->f_model); free(s->f_coupling);
+    free(s->r); free(s->w); free(s->rhs); free(s->du); free(s->u0);
+    free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
+    memset(s, 0, sizeof *s);
+}
+
+double fem_solver_load_factor(const fem_solver *s, double time_s)
+{
+    double ramp = s->m->settings.load_ramp_s;
+    if (ramp <= 0) return 1.0;
+    return time_s >= ramp ? 1.0 : (time_s <= 0 ? 0.0 : time_s / ramp);
+}
+
+/* Residual r (all dofs; meaningful on free ones) and, with matrix != 0, the tangent
+ * c_m M + c_k K_T into the fixed pattern. w is the mass-term vector, v the velocity used
+ * by the kappa term, wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial.
+ * Returns the force scale used by the relative tolerance. */
+static double assemble(fem_solver *s, double lambda, double c_m, double c_k, const double *w,
+                       const double *v, double wf, const double *fd_n, int matrix)
+{
+    const fem_model *m = s->m;
+    double t0 = nc_now_s();
+    const double *u = s->cur.u;
+    double *fd = s->cur.fd;
+    double *x = s->K.x;
+    const double kappa = m->kappa_s;
+    if (matrix) memset(x, 0, (size_t)s->K.nnz * sizeof *x);
+    memset(fd, 0, (size_t)s->ndof * sizeof *fd);
+    double scale2 = 0, fext2 = 0;
+    for (int i = 0; i < s->ndof; i++) {
+        s->r[i] = lambda * s->f_model[i] + s->f_coupling[i];
+        fext2 += s->r[i] * s->r[i];
+    }
+    int slack_count = 0;
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double d[3], f[3], Kb[9];
+        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
+        int slack;
+        s->axial[e] = fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb,
+                                         &slack);
+        slack_count += slack;
+        if (kappa != 0.0 && v) {
+            /* stiffness-proportional damping force kappa K_T (v_l - v_k) */
+            for (int i = 0; i < 3; i++) {
+                double kv = 0;
+                for (int j = 0; j < 3; j++) kv += Kb[3 * i + j] * (v[l + j] - v[k + j]);
+                f[i] += kappa * kv;
+            }
+        }
+        for (int c = 0; c < 3; c++) {
+            fd[l + c] += f[c];
+            fd[k + c] -= f[c];
+            scale2 += 2 * f[c] * f[c];
+        }
+        double m11 = 0, m12 = 0;
+        if (c_m != 0.0 || w) fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        if (w)
+            for (int c = 0; c < 3; c++) {
+                s->r[k + c] -= m11 * w[k + c] + m12 * w[l + c];
+                s->r[l + c] -= m12 * w[k + c] + m11 * w[l + c];
+            }
+        if (matrix) {
+            /* 6x6 element matrix [c_k Kb + c_m m11 I, -c_k Kb + c_m m12 I; ...], scattered
+             * through the precomputed slot map (entries with slot -1 are not stored) */
+            const int *sl = s->slot + 36 * e;
+            for (int a = 0; a < 6; a++)
+                for (int b = 0; b < 6; b++) {
+                    int slot = sl[6 * a + b];
+                    if (slot < 0) continue;
+                    int same = (a < 3) == (b < 3);
+                    double val = c_k * Kb[3 * (a % 3) + (b % 3)] * (same ? 1.0 : -1.0);
+                    if (a % 3 == b % 3) val += c_m * (same ? m11 : m12);
+                    x[slot] += val;
+                }
+        }
+    }
+    for (int i = 0; i < s->ndof; i++) {
+        s->r[i] -= wf * fd[i] + (fd_n ? (1.0 - wf) * fd_n[i] : 0.0);
+    }
+    s->stats.slack_elements = slack_count;
+    s->stats.assemblies++;
+    s->stats.assembly_s += nc_now_s() - t0;
+    return sqrt(scale2) + sqrt(fext2);
+}
+
+static double residual_norm(const fem_solver *s)
+{
+    double r2 = 0;
+    for (int q = 0; q < s->neq; q++) {
+        double r = s->r[s->dof_of_eq[q]];
+        r2 += r * r;
+    }
+    return sqrt(r2);
+}
+
+/* Factorises and solves K du = r on the free equations; names the node when singular. */
+static int linear_solve(fem_solver *s, int reuse, nc_error *err)
+{
+    double t0 = nc_now_s();
+    int bad = -1;
+    if (!reuse && fem_sparse_factorize(&s->K, &bad, err)) {
+        if (bad >= 0 && bad < s->neq) {
+            int dof = s->dof_of_eq[bad];
+            nc_error_prefix(err, "node %d (dof %s)", dof / 3, dof_name(dof % 3));
+            size_t len = strlen(err->message);
+            snprintf(err->message + len, sizeof err->message - len,
+                     ": nothing holds this node in that direction (only slack cables, or a flat "
+                     "net without prestress in a static analysis?)");
+        }
+        return -1;
+    }
+    if (!reuse) {
+        s->stats.factorizations++;
+        if (s->K.use_lu) s->stats.lu_factorizations++;
+    }
+    s->stats.solves++;
+    double t1 = nc_now_s();
+    s->stats.factor_s += t1 - t0;
+    for (int q = 0; q < s->neq; q++) s->rhs[q] = s->r[s->dof_of_eq[q]];
+    if (fem_sparse_solve(&s->K, s->rhs, s->du, err)) return -1;
+    s->stats.solve_s += nc_now_s() - t1;
+    return 0;
+}
+
+/* Inexact Newton step with a kept factorisation: conjugate gradients on the current
+ * matrix, preconditioned by the kept (slightly outdated) Cholesky factor, until
+ * |b - K du| <= FEM_PCG_TOL |b| (an inexact Newton step: the outer iteration still reaches
+ * the full Newton tolerance). Returns 0 when converged, 1 when it did not within
+ * FEM_PCG_MAX_IT iterations or the matrix is not positive definite along the search
+ * direction (the caller then refactorises), -1 on error. */
+#define FEM_PCG_TOL 1e-4    /* forcing term of the inexact Newton step */
+#define FEM_PCG_MAX_IT 25
+#define FEM_PCG_CHEAP 6     /* more CG iterations than this: refactorise next time (measured
+                               on the 81x81 benchmark: 6 balances CG cost and factorisations) */
+
+static double dot(const double *a, const double *b, int n)
+{
+    double sum = 0;
+    for (int i = 0; i < n; i++) sum += a[i] * b[i];
+    return sum;
+}
+
+static int pcg_solve(fem_solver *s, nc_error *err)
+{
+    double t0 = nc_now_s();
+    int n = s->neq;
+    double *x = s->du, *r = s->cg_r, *z = s->cg_z, *p = s->cg_p, *q = s->cg_q;
+    for (int i = 0; i < n; i++) {
+        s->rhs[i] = s->r[s->dof_of_eq[i]];
+        r[i] = s->rhs[i];
+        x[i] = 0.0;
+    }
+    double bnorm = sqrt(dot(r, r, n));
+    if (fem_sparse_solve(&s->K, r, z, err)) return -1;
+    memcpy(p, z, (size_t)n * sizeof *p);
+    double rz = dot(r, z, n);
+    int rc = 1, k;
+    for (k = 1; k <= FEM_PCG_MAX_IT; k++) {
+        fem_sparse_matvec(&s->K, p, q);
+        double pq = dot(p, q, n);
+        if (!(pq > 0) || !(rz > 0)) break;
+        double alpha = rz / pq;
+        for (int i = 0; i < n; i++) {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+        }
+        if (sqrt(dot(r, r, n)) <= FEM_PCG_TOL * bnorm) {
+            rc = 0;
+            break;
+        }
+        if (fem_sparse_solve(&s->K, r, z, err)) return -1;
+        double rz_new = dot(r, z, n);
+        double beta = rz_new / rz;
+        rz = rz_new;
+        for (int i = 0; i < n; i++) p[i] = z[i] + beta * p[i];
+    }
+    s->stats.pcg_solves++;
+    s->stats.pcg_iterations += k > FEM_PCG_MAX_IT ? FEM_PCG_MAX_IT : k;
+    if (rc) s->stats.pcg_failures++;
+    s->stats.solves++;
+    s->stats.solve_s += nc_now_s() - t0;
+    return rc;
+}
+
+/* Newmark kinematics of every dof from u_{n+1} and the start state. */
+static void update_kinematics(fem_solver *s, double dt, double beta, double gamma)
+{
+    const fem_state *n = &s->start;
+    fem_state *c = &s->cur;
+    double c0 = 1.0 / (beta * dt * dt), c2 = 1.0 / (2.0 * beta) - 1.0;
+    for (int i = 0; i < s->ndof; i++) {
+        double a = c0 * (c->u[i] - n->u[i] - dt * n->v[i]) - c2 * n->a[i];
+        c->a[i] = a;
+        c->v[i] = n->v[i] + dt * ((1.0 - gamma) * n->a[i] + gamma * a);
+    }
+}
+
+typedef struct newton_setup {
+    int dynamic;
+    double dt, beta, gamma, alpha_m, alpha_f, lambda;
+} newton_setup;
+
+/* Kinematics, residual and tangent at the current iterate; returns the residual norm and
+ * sets *tol from the force scale. */
+static double evaluate(fem_solver *s, const newton_setup *ns, double c_m, double c_k, double wf,
+                       double *tol)
+{
+    const fem_model *m = s->m;
+    const double *w = NULL, *vk = NULL;
+    if (ns->dynamic) {
+        update_kinematics(s, ns->dt, ns->beta, ns->gamma);
+        for (int i = 0; i < s->ndof; i++) {
+            double a_am = (1.0 - ns->alpha_m) * s->cur.a[i] + ns->alpha_m * s->start.a[i];
+            double v_af = (1.0 - ns->alpha_f) * s->cur.v[i] + ns->alpha_f * s->start.v[i];
+            s->w[i] = a_am + m->tau_per_s * v_af;
+        }
+        w = s->w;
+        vk = s->cur.v;
+    }
+    double scale = assemble(s, ns->lambda, c_m, c_k, w, vk, wf,
+                            ns->dynamic && ns->alpha_f != 0.0 ? s->start.fd : NULL, 1);
+    *tol = fmax(m->settings.residual_tol_n, m->settings.relative_tol * scale);
+    return residual_norm(s);
+}
+
+static void set_free_u(fem_solver *s, double alpha)
+{
+    for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = s->u0[q] + alpha * s->du[q];
+}
+
+/* Newton iterations for the current step; cur holds the predictor on entry.
+ * Converged when the residual norm is below max(residual_tolerance_n, relative_tolerance *
+ * force scale) and the last increment's max-norm below displacement_tolerance_m. When only
+ * the increment criterion is pending (residual already small) the previous factorisation is
+ * reused for that confirming solve. A full step that increases the residual (cables going
+ * slack and taut again can make plain Newton cycle) is halved up to 4 times and the best
+ * of the tried steps is taken. */
+static int newton(fem_solver *s, const newton_setup *ns, nc_error *err)
+{
+    const fem_model *m = s->m;
+    const fem_settings *set = &m->settings;
+    double c_m = 0, c_k = 1, wf = 1;
+    if (ns->dynamic) {
+        double bdt = ns->beta * ns->dt;
+        c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
+        c_k = (1.0 - ns->alpha_f) * (1.0 + m->kappa_s * ns->gamma / bdt);
+        wf = 1.0 - ns->alpha_f;
+    }
+    double tol, dunorm = 0;
+    double rnorm = evaluate(s, ns, c_m, c_k, wf, &tol);
+    /* a factorisation of the same matrix form kept from an earlier step (modified Newton) */
+    int factorized = set->modified_newton && s->K.have_factor && s->factor_cm == c_m &&
+                     s->factor_ck == c_k;
+    int it, refresh = !factorized;
+    for (it = 1; it <= set->max_iterations + 1 && isfinite(rnorm); it++) {
+        if (rnorm <= tol && (it == 1 || dunorm <= set->displacement_tol_m)) {
+            s->stats.iterations = it - 1;
+            s->stats.residual_norm = rnorm;
+            s->stats.increment_norm = dunorm;
+            return 0;
+        }
+        if (it > set->max_iterations) break;
+        /* Full Newton refactorises every iteration. Modified Newton keeps the last
+         * factorisation (also from earlier steps, when the matrix form c_m, c_k is the same)
+         * and uses it to precondition CG on the current tangent, so the steps are (nearly)
+         * exact Newton steps; it refactorises when CG needs too many iterations, after a
+         * line-search cut, when the residual contracts too slowly, and in the second half of
+         * the iteration budget. Save and restore keep the factorisation with the state, so
+         * a repeated step is bit-identical. */
+        /* 0: factorise and solve; 1: solve with the kept factorisation (only an increment
+         * check is pending); 2: CG preconditioned by the kept factorisation */
+        int mode;
+        if (!factorized) mode = 0;
+        else if (rnorm <= tol) mode = 1;
+        else if (set->modified_newton && !refresh) mode = s->K.use_lu ? 1 : 2;
+        else mode = 0;
+        int cg_slow = 0;
+        if (mode == 2) {
+            long before = s->stats.pcg_iterations;
+            int rc = pcg_solve(s, err);
+            cg_slow = s->stats.pcg_iterations - before > FEM_PCG_CHEAP;
+            if (rc < 0) return -1;
+            if (rc == 1) mode = 0;   /* the kept factor is too far off: refactorise */
+        }
+        if (mode != 2 && linear_solve(s, mode == 1, err)) return -1;
+        if (mode == 0) {
+            s->factor_cm = c_m;
+            s->factor_ck = c_k;
+        }
+        factorized = 1;
+        double r_before = rnorm;
+        double dmax = 0;
+        for (int q = 0; q < s->neq; q++) {
+            s->u0[q] = s->cur.u[s->dof_of_eq[q]];
+            dmax = fmax(dmax, fabs(s->du[q]));
+        }
+        if (!isfinite(dmax)) { rnorm = NAN; break; }
+        double alpha = 1.0, best_alpha = 1.0, best = INFINITY, trial_tol = tol;
+        for (int ls = 0; ls <= 4; ls++) {
+            set_free_u(s, alpha);
+            double r = evaluate(s, ns, c_m, c_k, wf, &trial_tol);
+            if (r < best) { best = r; best_alpha = alpha; }
+            if (r < rnorm || r <= trial_tol) break;
+            alpha *= 0.5;
+        }
+        if (best_alpha != alpha) {   /* the last trial was not the best one: go back to it */
+            set_free_u(s, best_alpha);
+            best = evaluate(s, ns, c_m, c_k, wf, &trial_tol);
+        }
+        s->stats.line_search_cuts += best_alpha < 1.0;
+        /* refresh when the kept factorisation stops contracting fast, after a line-search cut,
+         * and always in the second half of the iteration budget (full Newton) */
+        refresh = cg_slow || best_alpha < 1.0 || best > set->contraction * r_before ||
+                  2 * it >= set->max_iterations;
+        rnorm = best;
+        tol = trial_tol;
+        dunorm = best_alpha * dmax;
+    }
+    s->stats.iterations = it - 1;
+    s->stats.residual_norm = rnorm;
+    return nc_error_set(err, 3, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m)",
+                        set->max_iterations, rnorm, tol, dunorm);
+}
+
+/* prescribed displacements at load factor lambda */
+static void apply_supports(fem_solver *s, double lambda)
+{
+    for (int i = 0; i < s->ndof; i++)
+        if (s->m->fixed[i]) s->cur.u[i] = lambda * s->m->u_prescribed[i];
+}
+
+int fem_solver_static(fem_solver *s, double lambda, nc_error *err)
+{
+    state_copy(&s->start, &s->cur, s->ndof);
+    apply_supports(s, lambda);
+    newton_setup ns = {0, 0, 0.25, 0.5, 0, 0, lambda};
+    if (newton(s, &ns, err)) {
+        state_copy(&s->cur, &s->start, s->ndof);
+        fem_solver_update_axial(s);
+        return nc_error_prefix(err, "%s: static load factor %g", s->m->source, lambda);
+    }
+    memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
+    memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+    s->cur.step++;
+    s->cur.time_s = lambda;
+    return 0;
+}
+
+static void method_weights(const fem_settings *set, double *beta, double *gamma, double *am,
+                           double *af)
+{
+    switch (set->integrator) {
+    case FEM_GENERALIZED_ALPHA: {
+        double r = set->rho_inf;   /* Chung & Hulbert (1993) */
+        *am = (2.0 * r - 1.0) / (r + 1.0);
+        *af = r / (r + 1.0);
+        *gamma = 0.5 - *am + *af;
+        *beta = 0.25 * (1.0 - *am + *af) * (1.0 - *am + *af);
+        break;
+    }
+    case FEM_BOSSAK:               /* Wood, Bossak & Zienkiewicz (1980) */
+        *am = set->alpha_b;
+        *af = 0.0;
+        *gamma = 0.5 - *am;
+        *beta = 0.25 * (1.0 - *am) * (1.0 - *am);
+        break;
+    default:
+        *am = *af = 0.0;
+        *beta = set->beta;
+        *gamma = set->gamma;
+    }
+}
+
+int fem_solver_initial_acceleration(fem_solver *s, nc_error *err)
+{
+    const fem_model *m = s->m;
+    double lambda = fem_solver_load_factor(s, s->cur.time_s);
+    apply_supports(s, lambda);
+    /* matrix = M (c_m = 1, c_k = 0); residual without inertia */
+    s->factor_cm = 1.0;
+    s->factor_ck = 0.0;
+    double tau = m->tau_per_s;
+    for (int i = 0; i < s->ndof; i++) s->w[i] = tau * s->cur.v[i];
+    assemble(s, lambda, 1.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1);
+    if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
+    memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+    for (int q = 0; q < s->neq; q++) s->cur.a[s->dof_of_eq[q]] = s->du[q];
+    return 0;
+}
+
+int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
+{
+    const fem_settings *set = &s->m->settings;
+    state_copy(&s->start, &s->cur, s->ndof);
+    newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
+    method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
+    double t1 = s->cur.time_s + dt_s;
+    ns.lambda = fem_solver_load_factor(s, t1);
+    /* predictor: the start-of-step displacement (for these stiff, strongly nonlinear nets it
+     * did better than the constant-acceleration predictor), supports at their end value */
+    apply_supports(s, ns.lambda);
+    if (newton(s, &ns, err)) {
+        /* leave the state as it was before the call */
+        state_copy(&s->cur, &s->start, s->ndof);
+        fem_solver_update_axial(s);
+        return nc_error_prefix(err, "%s: step %ld (t = %g s -> %g s)", s->m->source,
+                               s->start.step, s->start.time_s, t1);
+    }
+    s->cur.time_s = t1;
+    s->cur.step = s->start.step + 1;
+    return 0;
+}
+
+int fem_solver_save(fem_solver *s, nc_error *err)
+{
+    state_copy(&s->saved, &s->cur, s->ndof);
+    s->has_saved = 1;
+    s->saved_factor_cm = s->factor_cm;
+    s->saved_factor_ck = s->factor_ck;
+    return fem_sparse_save_factor(&s->K, err);
+}
+
+int fem_solver_restore(fem_solver *s, nc_error *err)
+{
+    if (!s->has_saved) return nc_error_set(err, 1, "restore requested but no start-of-step state was saved");
+    state_copy(&s->cur, &s->saved, s->ndof);
+    fem_solver_update_axial(s);
+    s->factor_cm = s->saved_factor_cm;
+    s->factor_ck = s->saved_factor_ck;
+    return fem_sparse_restore_factor(&s->K, err);
+}
+
+void fem_solver_update_axial(fem_solver *s)
+{
+    const fem_model *m = s->m;
+    int slack = 0;
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double d[3], f[3], Kb[9];
+        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + s->cur.u[l + c] - m->X[k + c] - s->cur.u[k + c];
+        int sl;
+        s->axial[e] = fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb, &sl);
+        slack += sl;
+    }
+    s->stats.slack_elements = slack;
+}
+
+double fem_solver_energy(const fem_solver *s, double *kinetic, double *strain)
+{
+    const fem_model *m = s->m;
+    double T = 0, W = 0;
+    const double *u = s->cur.u, *v = s->cur.v;
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double m11, m12, l2 = 0;
+        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        for (int c = 0; c < 3; c++) {
+            T += 0.5 * (m11 * (v[k + c] * v[k + c] + v[l + c] * v[l + c]) + 2.0 * m12 * v[k + c] * v[l + c]);
+            double d = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
+            l2 += d * d;
+        }
+        double L2 = m->L0[e] * m->L0[e];
+        double AS_tot = m->EA[e] * (l2 - L2) / (2.0 * L2) + m->AS[e];
+        if (m->is_cable[e] && AS_tot < 0) AS_tot = 0;
+        /* W = A L int S dE = L ((A S_tot)^2 - (A S_pre)^2) / (2 E A) */
+        if (m->EA[e] > 0) W += m->L0[e] * (AS_tot * AS_tot - m->AS[e] * m->AS[e]) / (2.0 * m->EA[e]);
+    }
+    if (kinetic) *kinetic = T;
+    if (strain) *strain = W;
+    return T + W;
+}

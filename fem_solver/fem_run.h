@@ -1,0 +1,41 @@
+/* fem_run — the two ways the FEM program runs: standalone (static load steps or a dynamic
+ * run to end_time with the model's own loads) and coupled (serving the netcouple protocol
+ * as participant "fem").
+ *
+ * Both write DIR/fem.h5 + DIR/fem.xdmf (fem_output.h), check *stop between steps (set by
+ * the program's signal handler) and then finish cleanly: the results written so far are
+ * flushed and closed. Return 0 on success, 1 when stopped by *stop, -1 on error (err).
+ */
+#ifndef FEM_RUN_H
+#define FEM_RUN_H
+
+#include <signal.h>
+#include "fem_model.h"
+#include "fem_analysis.h"
+
+typedef struct fem_run_summary {
+    long steps;                 /* steps or load increments done */
+    long newton_iterations;     /* total */
+    long output_steps;
+    double final_time_s;
+    double max_displacement_m;  /* largest nodal displacement magnitude at the end */
+    double wall_s;
+    int failed_solves;          /* coupled: SOLVE commands answered with an error */
+    fem_stats stats;
+} fem_run_summary;
+
+int fem_run_standalone(const fem_model *m, const char *output_dir,
+                       const volatile sig_atomic_t *stop, fem_run_summary *summary,
+                       nc_error *err);
+
+typedef struct fem_coupled_options {
+    const char *endpoint;
+    const char *endpoint_file;  /* NULL or a file to write the bound endpoint into */
+    int idle_timeout_ms;        /* <= 0 waits forever */
+} fem_coupled_options;
+
+int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_coupled_options *opt,
+                    const volatile sig_atomic_t *stop, fem_run_summary *summary,
+                    nc_error *err);
+
+#endif

@@ -1,0 +1,8 @@
+# fem_solver/module.mk — `make bench` target of the FEM solver (included by the top Makefile).
+BENCH_TARGETS += bench-fem
+.PHONY: bench-fem
+$(BUILD)/bench/fem_bench: $(BUILD)/fem_solver/bench/fem_bench.o $(LINK_fem_solver)
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+bench-fem: $(BUILD)/bench/fem_bench
+	$<

@@ -1,0 +1,47 @@
+/* fem_test_util — helpers linked into every fem_solver test (see fem_test_util.h). */
+#include "fem_test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+void fem_test_line(fem_model *m, int n_el, double length, double E, double A, double rho,
+                   double S_pre, fem_behaviour behaviour, int fix_ends)
+{
+    nc_error err;
+    fem_model_init(m, "test-line");
+    fem_model_alloc(m, n_el + 1, n_el, &err);
+    for (int i = 0; i <= n_el; i++) m->X[3 * i] = length * i / n_el;
+    for (int e = 0; e < n_el; e++) {
+        m->conn[2 * e] = e;
+        m->conn[2 * e + 1] = e + 1;
+    }
+    fem_element_set set;
+    memset(&set, 0, sizeof set);
+    snprintf(set.name, sizeof set.name, "line");
+    set.youngs_modulus_pa = E;
+    set.area_m2 = A;
+    set.density_kg_m3 = rho;
+    set.prestress_pa = S_pre;
+    set.behaviour = behaviour;
+    fem_model_add_set(m, &set, &err);
+    if (fix_ends)
+        for (int c = 0; c < 3; c++) m->fixed[c] = m->fixed[3 * n_el + c] = 1;
+}
+
+const char *fem_test_write(const char *name, const char *text)
+{
+    static char paths[8][512];
+    static int next = 0;
+    char *path = paths[next++ % 8];
+    const char *dir = getenv("NC_TMP");
+    if (!dir || !*dir) dir = "/tmp";
+    snprintf(path, 512, "%s/%d-%s", dir, (int)getpid(), name);
+    FILE *f = fopen(path, "w");
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+    return path;
+}

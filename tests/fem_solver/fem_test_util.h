@@ -1,0 +1,16 @@
+/* fem_test_util — shared helpers of the fem_solver tests: small models built in code and
+ * scratch files. */
+#ifndef FEM_TEST_UTIL_H
+#define FEM_TEST_UTIL_H
+
+#include "../../fem_solver/fem_model.h"
+
+/* A straight line of n_el equal elements from (0,0,0) to (length,0,0), one element set;
+ * with fix_ends the two end nodes are fixed in x, y, z. The model is NOT finalised. */
+void fem_test_line(fem_model *m, int n_el, double length, double E, double A, double rho,
+                   double S_pre, fem_behaviour behaviour, int fix_ends);
+
+/* Writes text to NC_TMP/name (or /tmp) and returns the path (static buffer per call slot). */
+const char *fem_test_write(const char *name, const char *text);
+
+#endif

@@ -1,0 +1,317 @@
+/* test_coupled — plays the coupler against the real program ($NC_BIN/fem_solver
+ * --endpoint): HELLO, INTERFACE arrays, BEGIN_STEP / SOLVE (repeated iterations restore the
+ * start of the step: bit-identical replies) / ACCEPT_STEP, an error reply for a bad force
+ * shape while the solver keeps serving, SHUTDOWN, the HDF5 monitor rows, and the exit on
+ * idle timeout. The replies are compared with the same model solved in-process. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <hdf5.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../../fem_solver/fem_analysis.h"
+#include "../../fem_solver/fem_input.h"
+#include "fem_test_util.h"
+#include "proto.h"
+
+static const char *cable_json =
+    "{\"nodes\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]], \"elements\": [[0,1],[1,2],[2,3]],\n"
+    " \"element_sets\": [{\"name\": \"c\", \"youngs_modulus_pa\": 1e9, \"area_m2\": 1.26e-4,\n"
+    "   \"density_kg_m3\": 7850, \"prestress_pa\": 1e6}],\n"
+    " \"supports\": [{\"nodes\": [0, 3]}], \"rayleigh\": {\"tau_per_s\": 5},\n"
+    " \"monitor_nodes\": [1], \"output\": {\"interval_steps\": 5},\n"
+    " \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 0.001}}\n";
+
+static pid_t spawn(const char *json, const char *outdir, const char *epfile, const char *idle)
+{
+    const char *bin = getenv("NC_BIN");
+    char prog[1024];
+    snprintf(prog, sizeof prog, "%s/fem_solver", bin);
+    pid_t pid = fork();
+    if (pid == 0) {
+        freopen("/dev/null", "w", stdout);
+        execl(prog, prog, json, "--endpoint", "tcp://127.0.0.1:*", "--endpoint-file", epfile,
+              "--output", outdir, "--idle-timeout", idle, (char *)NULL);
+        _exit(127);
+    }
+    return pid;
+}
+
+static int read_endpoint(const char *file, char *ep, size_t size)
+{
+    for (int i = 0; i < 300; i++) {   /* up to 30 s (sanitizer builds start slowly) */
+        FILE *f = fopen(file, "r");
+        if (f) {
+            int ok = fgets(ep, (int)size, f) != NULL;
+            fclose(f);
+            if (ok) {
+                ep[strcspn(ep, "\n")] = '\0';
+                return 0;
+            }
+        }
+        usleep(100000);
+    }
+    return -1;
+}
+
+static int wait_exit(pid_t pid, double timeout_s)
+{
+    for (int i = 0; i < (int)(timeout_s * 10); i++) {
+        int status;
+        if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+        usleep(100000);
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, NULL, 0);
+    return -1;
+}
+
+static void paths(const char *tag, char *dir, char *epfile, size_t size)
+{
+    const char *tmp = getenv("NC_TMP");
+    if (!tmp || !*tmp) tmp = "/tmp";
+    snprintf(dir, size, "%s/%d-%s-out", tmp, (int)getpid(), tag);
+    snprintf(epfile, size, "%s/%d-%s-endpoint", tmp, (int)getpid(), tag);
+    unlink(epfile);
+}
+
+static long h5_rows(const char *file, const char *dataset)
+{
+    hid_t f = H5Fopen(file, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) return -1;
+    hid_t d = H5Dopen2(f, dataset, H5P_DEFAULT);
+    long rows = -1;
+    if (d >= 0) {
+        hid_t sp = H5Dget_space(d);
+        hsize_t dims[3];
+        H5Sget_simple_extent_dims(sp, dims, NULL);
+        rows = (long)dims[0];
+        H5Sclose(sp);
+        H5Dclose(d);
+    }
+    H5Fclose(f);
+    return rows;
+}
+
+static void test_protocol_session(void **state)
+{
+    (void)state;
+    if (!getenv("NC_BIN")) skip();
+    const char *json = fem_test_write("coupled.json", cable_json);
+    char dir[600], epfile[600], ep[256];
+    paths("session", dir, epfile, sizeof dir);
+    pid_t pid = spawn(json, dir, epfile, "30");
+    assert_true(pid > 0);
+    if (read_endpoint(epfile, ep, sizeof ep)) {
+        kill(pid, SIGKILL);
+        fail_msg("fem_solver did not write its endpoint file");
+    }
+    nc_error err;
+    proto_options opt;
+    proto_options_default(&opt);
+    opt.timeout_ms = 30000;
+    proto_peer *peer;
+    assert_int_equal(proto_peer_open(&peer, "fem", ep, &opt, &err), 0);
+    proto_message req, rep;
+    memset(&req, 0, sizeof req);
+    memset(&rep, 0, sizeof rep);
+    if (proto_peer_hello(peer, &rep, &err)) fail_msg("%s", err.message);
+    assert_string_equal(rep.role, "fem");
+
+    proto_message_init(&req, PROTO_MSG_INTERFACE);
+    if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    const int32_t *ids, *elems;
+    const double *X;
+    size_t n = 0, m = 0;
+    assert_int_equal(proto_message_get_i32(&rep, "node_ids", 0, 0, &ids, &n, &err), 0);
+    assert_int_equal(n, 4);
+    for (int i = 0; i < 4; i++) assert_int_equal(ids[i], i);
+    assert_int_equal(proto_message_get_f64(&rep, "coordinates", 4, 3, &X, NULL, &err), 0);
+    assert_true(X[3 * 3] == 3.0);
+    assert_int_equal(proto_message_get_i32(&rep, "elements", 0, 2, &elems, &m, &err), 0);
+    assert_int_equal(m, 3);
+    assert_int_equal(elems[2], 1);
+    assert_int_equal(elems[3], 2);
+
+    /* the same model in-process, for comparison */
+    fem_model model;
+    assert_int_equal(fem_input_load(json, &model, &err), 0);
+    fem_solver ref;
+    assert_int_equal(fem_solver_init(&ref, &model, &err), 0);
+    assert_int_equal(fem_solver_initial_acceleration(&ref, &err), 0);
+
+    const double dt = 1e-3;
+    double force[12] = {0}, u1[12], v1[12];
+    const int steps = 12;
+    for (int k = 0; k < steps; k++) {
+        proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
+        req.step = k;
+        req.time_s = k * dt;
+        req.dt_s = dt;
+        if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+        force[3 * 1 + 2] = force[3 * 2 + 2] = -100.0 * (k + 1);
+        for (int it = 1; it <= 3; it++) {
+            proto_message_init(&req, PROTO_MSG_SOLVE);
+            req.step = k;
+            req.iteration = it;
+            req.time_s = k * dt;
+            req.dt_s = dt;
+            /* iteration 2 uses another force; 1 and 3 the same one */
+            double f2[12];
+            memcpy(f2, force, sizeof f2);
+            if (it == 2) f2[5] *= 3;
+            assert_int_equal(proto_message_add_f64(&req, "force", f2, 4, 3, &err), 0);
+            if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("step %d: %s", k, err.message);
+            const double *u, *v;
+            assert_int_equal(proto_message_get_f64(&rep, "displacement", 4, 3, &u, NULL, &err), 0);
+            assert_int_equal(proto_message_get_f64(&rep, "velocity", 4, 3, &v, NULL, &err), 0);
+            assert_true(proto_message_has_value(&rep, "newton_iterations"));
+            assert_true(proto_message_value(&rep, "residual_norm", -1) >= 0);
+            if (it == 1) {
+                memcpy(u1, u, sizeof u1);
+                memcpy(v1, v, sizeof v1);
+            } else if (it == 3) {
+                assert_memory_equal(u1, u, sizeof u1);   /* restore: bit for bit */
+                assert_memory_equal(v1, v, sizeof v1);
+            }
+        }
+        /* in-process reference; same code, same operations: identical to the last bit */
+        for (int i = 0; i < 12; i++) ref.f_coupling[i] = force[i];
+        assert_int_equal(fem_solver_step(&ref, dt, &err), 0);
+        assert_memory_equal(ref.cur.u, u1, sizeof u1);
+        proto_message_init(&req, PROTO_MSG_ACCEPT_STEP);
+        req.step = k;
+        if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    }
+    assert_true(u1[3 * 1 + 2] < -1e-4);   /* the loaded cable moved down */
+
+    /* a SOLVE with a wrong force shape: error reply, the solver keeps serving */
+    proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
+    req.step = steps;
+    req.time_s = steps * dt;
+    req.dt_s = dt;
+    assert_int_equal(proto_peer_request(peer, &req, &rep, &err), 0);
+    proto_message_init(&req, PROTO_MSG_SOLVE);
+    req.iteration = 1;
+    req.dt_s = dt;
+    assert_int_equal(proto_message_add_f64(&req, "force", force, 3, 3, &err), 0);
+    assert_int_equal(proto_peer_request(peer, &req, &rep, &err), -1);
+    assert_int_equal(err.code, PROTO_ERR_PEER);
+    print_message("expected error reply: %s\n", err.message);
+    assert_non_null(strstr(err.message, "force"));
+
+    proto_message_init(&req, PROTO_MSG_SHUTDOWN);
+    if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    int code = wait_exit(pid, 30);
+    assert_int_equal(code, 1);   /* a command failed during the run: non-zero after SHUTDOWN */
+    char h5[700];
+    snprintf(h5, sizeof h5, "%s/fem.h5", dir);
+    assert_int_equal(h5_rows(h5, "/monitor/time"), steps + 1);
+    assert_int_equal(h5_rows(h5, "/monitor/displacement"), steps + 1);
+    assert_true(h5_rows(h5, "/output/time") >= 3);   /* t = 0, steps 5, 10, last */
+    proto_message_free(&req);
+    proto_message_free(&rep);
+    proto_peer_close(peer);
+    fem_solver_free(&ref);
+    fem_model_free(&model);
+}
+
+/* Newton failure (max_iterations = 1, a large force): an error reply naming Newton and the
+ * step; the solver rolls back and keeps serving: the same step with no force then succeeds
+ * from the untouched start state (cable at rest: zero displacement). */
+static void test_newton_failure(void **state)
+{
+    (void)state;
+    if (!getenv("NC_BIN")) skip();
+    char text[2048];
+    const char *at = strstr(cable_json, "\"dt_s\"");
+    assert_non_null(at);
+    snprintf(text, sizeof text, "%.*s\"max_iterations\": 1, %s", (int)(at - cable_json),
+             cable_json, at);
+    const char *json = fem_test_write("newton.json", text);
+    char dir[600], epfile[600], ep[256];
+    paths("newton", dir, epfile, sizeof dir);
+    pid_t pid = spawn(json, dir, epfile, "30");
+    assert_int_equal(read_endpoint(epfile, ep, sizeof ep), 0);
+    nc_error err;
+    proto_options opt;
+    proto_options_default(&opt);
+    opt.timeout_ms = 30000;
+    proto_peer *peer;
+    assert_int_equal(proto_peer_open(&peer, "fem", ep, &opt, &err), 0);
+    proto_message req, rep;
+    memset(&req, 0, sizeof req);
+    memset(&rep, 0, sizeof rep);
+    assert_int_equal(proto_peer_hello(peer, &rep, &err), 0);
+    proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
+    req.step = 0;
+    req.dt_s = 1e-3;
+    assert_int_equal(proto_peer_request(peer, &req, &rep, &err), 0);
+    double force[12] = {0};
+    force[3 * 1 + 2] = -1e6;
+    for (int it = 1; it <= 2; it++) {
+        proto_message_init(&req, PROTO_MSG_SOLVE);
+        req.step = 0;
+        req.iteration = it;
+        req.dt_s = 1e-3;
+        if (it == 2) force[3 * 1 + 2] = 0.0;
+        assert_int_equal(proto_message_add_f64(&req, "force", force, 4, 3, &err), 0);
+        int rc = proto_peer_request(peer, &req, &rep, &err);
+        if (it == 1) {
+            assert_int_equal(rc, -1);
+            print_message("expected error reply: %s\n", err.message);
+            assert_non_null(strstr(err.message, "Newton did not converge"));
+            assert_non_null(strstr(err.message, "step 0"));
+        } else {
+            if (rc) fail_msg("%s", err.message);
+            const double *u;
+            assert_int_equal(proto_message_get_f64(&rep, "displacement", 4, 3, &u, NULL, &err), 0);
+            for (int i = 0; i < 12; i++) assert_true(u[i] == 0.0);
+        }
+    }
+    proto_message_init(&req, PROTO_MSG_SHUTDOWN);
+    assert_int_equal(proto_peer_request(peer, &req, &rep, &err), 0);
+    assert_int_equal(wait_exit(pid, 30), 1);
+    proto_message_free(&req);
+    proto_message_free(&rep);
+    proto_peer_close(peer);
+}
+
+/* No command within --idle-timeout: the solver exits non-zero with its results closed. */
+static void test_idle_timeout(void **state)
+{
+    (void)state;
+    if (!getenv("NC_BIN")) skip();
+    const char *json = fem_test_write("idle.json", cable_json);
+    char dir[600], epfile[600], ep[256];
+    paths("idle", dir, epfile, sizeof dir);
+    pid_t pid = spawn(json, dir, epfile, "1");
+    assert_int_equal(read_endpoint(epfile, ep, sizeof ep), 0);
+    int code = wait_exit(pid, 30);
+    assert_int_equal(code, 1);
+    char h5[700];
+    snprintf(h5, sizeof h5, "%s/fem.h5", dir);
+    assert_int_equal(h5_rows(h5, "/monitor/time"), 1);
+}
+
+int main(void)
+{
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_protocol_session),
+        cmocka_unit_test(test_newton_failure),
+        cmocka_unit_test(test_idle_timeout),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
