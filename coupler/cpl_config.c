@@ -1,0 +1,200 @@
+/* cpl_config — coupler.json: scheme, time, tolerances, relaxation, efficiency options,
+ * participants, timeouts and output settings. */
+#include "cpl_config.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "nc_json.h"
+
+void cpl_config_default(cpl_config *c)
+{
+    memset(c, 0, sizeof *c);
+    cpl_loop_settings_default(&c->loop);
+    c->connect_timeout_s = 30.0;
+    c->reply_timeout_s = 300.0;
+    c->shutdown_timeout_s = 5.0;
+    c->write_iterations = 1;
+    c->progress_interval_s = 10.0;
+}
+
+static int parse_participant(const cJSON *root, const char *where, const char *key,
+                             const char *base_dir, cpl_endpoint_config *out, nc_error *err)
+{
+    char path[512];
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, key, &obj, err)) return -1;
+    if (!obj) return 0;   /* may come from the command line */
+    nc_json_path(path, sizeof path, where, key);
+    static const char *const keys[] = {"endpoint", "endpoint_file", NULL};
+    if (nc_json_check_keys(obj, path, keys, err)) return -1;
+    const char *endpoint = NULL, *file = NULL;
+    if (nc_json_string_opt(obj, path, "endpoint", NULL, &endpoint, err) ||
+        nc_json_string_opt(obj, path, "endpoint_file", NULL, &file, err))
+        return -1;
+    if (endpoint && file)
+        return nc_error_set(err, 1, "%s: give either endpoint or endpoint_file, not both", path);
+    if (endpoint) snprintf(out->endpoint, sizeof out->endpoint, "%s", endpoint);
+    if (file) {
+        if (file[0] == '/' || !base_dir || !base_dir[0])
+            snprintf(out->endpoint_file, sizeof out->endpoint_file, "%s", file);
+        else
+            snprintf(out->endpoint_file, sizeof out->endpoint_file, "%s/%s", base_dir, file);
+    }
+    return 0;
+}
+
+static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_settings *r,
+                            nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "relaxation", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "relaxation");
+    static const char *const keys[] = {"method", "alpha", "first_iteration_cap", "alpha_min",
+                                       "alpha_max", "filter", "reuse_steps", "max_columns",
+                                       NULL};
+    static const char *const methods[] = {"none", "constant", "aitken", "iqn-ils", NULL};
+    int method = 0;
+    long reuse = r->iqn_reuse_steps, cols = r->iqn_max_columns;
+    if (nc_json_check_keys(obj, path, keys, err) ||
+        nc_json_choice_opt(obj, path, "method", methods, 0, &method, err) ||
+        nc_json_number_range_opt(obj, path, "alpha", r->alpha, 1e-12, 2.0, &r->alpha, err) ||
+        nc_json_number_range_opt(obj, path, "first_iteration_cap", r->first_cap, 1e-12, 2.0,
+                                 &r->first_cap, err) ||
+        nc_json_number_range_opt(obj, path, "alpha_min", r->alpha_min, -2.0, 2.0,
+                                 &r->alpha_min, err) ||
+        nc_json_number_range_opt(obj, path, "alpha_max", r->alpha_max, -2.0, 10.0,
+                                 &r->alpha_max, err) ||
+        nc_json_number_range_opt(obj, path, "filter", r->iqn_filter, 1e-16, 0.5,
+                                 &r->iqn_filter, err) ||
+        nc_json_int_opt(obj, path, "reuse_steps", reuse, 0, 100, &reuse, err) ||
+        nc_json_int_opt(obj, path, "max_columns", cols, 0, 100000, &cols, err))
+        return -1;
+    r->method = (cpl_relax_method)method;
+    r->iqn_reuse_steps = (int)reuse;
+    r->iqn_max_columns = (int)cols;
+    if (!(r->alpha_min < r->alpha_max))
+        return nc_error_set(err, 1, "%s: alpha_min (%g) must be smaller than alpha_max (%g)",
+                            path, r->alpha_min, r->alpha_max);
+    return 0;
+}
+
+static int parse_efficiency(const cJSON *root, const char *where, cpl_loop_settings *s,
+                            nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "efficiency", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "efficiency");
+    static const char *const keys[] = {"far_step", "far_step_factor",
+                                       "skip_fem_without_contact", "contact_force_threshold",
+                                       NULL};
+    return nc_json_check_keys(obj, path, keys, err) ||
+           nc_json_bool_opt(obj, path, "far_step", s->far_step, &s->far_step, err) ||
+           nc_json_number_range_opt(obj, path, "far_step_factor", s->far_step_factor, 1.0,
+                                    1e6, &s->far_step_factor, err) ||
+           nc_json_bool_opt(obj, path, "skip_fem_without_contact",
+                            s->skip_fem_without_contact, &s->skip_fem_without_contact, err) ||
+           nc_json_number_range_opt(obj, path, "contact_force_threshold",
+                                    s->contact_force_threshold_n, 0.0, INFINITY,
+                                    &s->contact_force_threshold_n, err)
+               ? -1 : 0;
+}
+
+static int parse_timeouts(const cJSON *root, const char *where, cpl_config *c, nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "timeouts", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "timeouts");
+    static const char *const keys[] = {"connect", "reply", "shutdown", NULL};
+    return nc_json_check_keys(obj, path, keys, err) ||
+           nc_json_number_range_opt(obj, path, "connect", c->connect_timeout_s, 0.1, 1e6,
+                                    &c->connect_timeout_s, err) ||
+           nc_json_number_range_opt(obj, path, "reply", c->reply_timeout_s, 0.1, 1e6,
+                                    &c->reply_timeout_s, err) ||
+           nc_json_number_range_opt(obj, path, "shutdown", c->shutdown_timeout_s, 0.1, 1e6,
+                                    &c->shutdown_timeout_s, err)
+               ? -1 : 0;
+}
+
+static int parse_output(const cJSON *root, const char *where, cpl_config *c, nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "output", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "output");
+    static const char *const keys[] = {"iterations", "progress_interval", NULL};
+    return nc_json_check_keys(obj, path, keys, err) ||
+           nc_json_bool_opt(obj, path, "iterations", c->write_iterations, &c->write_iterations,
+                            err) ||
+           nc_json_number_range_opt(obj, path, "progress_interval", c->progress_interval_s,
+                                    0.0, 1e6, &c->progress_interval_s, err)
+               ? -1 : 0;
+}
+
+int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const char *base_dir,
+                     nc_error *err)
+{
+    static const char *const keys[] = {
+        "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
+        "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
+        "relaxed_quantity", "predictor", "efficiency", "timeouts", "output", "comment", NULL};
+    static const char *const schemes[] = {"weak", "strong", NULL};
+    static const char *const policies[] = {"accept", "stop", NULL};
+    static const char *const quantities[] = {"displacement_velocity", "force", NULL};
+    static const char *const predictors[] = {"constant", "linear", NULL};
+    cpl_loop_settings *s = &c->loop;
+    int scheme = s->scheme, policy = s->on_max_iterations, quantity = s->relaxed,
+        predictor = s->predictor;
+    long max_it = s->max_iterations, max_steps = s->max_steps;
+    if (nc_json_check_keys(root, where, keys, err) ||
+        parse_participant(root, where, "fem", base_dir, &c->fem, err) ||
+        parse_participant(root, where, "dem", base_dir, &c->dem, err) ||
+        nc_json_choice_opt(root, where, "scheme", schemes, -1, &scheme, err) ||
+        nc_json_positive(root, where, "dt", &s->dt_s, err) ||
+        nc_json_number_opt(root, where, "start_time", 0.0, &s->start_time_s, err) ||
+        nc_json_number(root, where, "end_time", &s->end_time_s, err) ||
+        nc_json_int_opt(root, where, "max_steps", 0, 0, 1000000000L, &max_steps, err) ||
+        nc_json_number_range_opt(root, where, "tolerance", s->tol_abs, 1e-300, INFINITY,
+                                 &s->tol_abs, err) ||
+        nc_json_number_range_opt(root, where, "relative_tolerance", s->tol_rel, 0.0, 1.0,
+                                 &s->tol_rel, err) ||
+        nc_json_int_opt(root, where, "max_iterations", max_it, 1, 100000, &max_it, err) ||
+        nc_json_choice_opt(root, where, "on_max_iterations", policies, policy, &policy, err) ||
+        nc_json_choice_opt(root, where, "relaxed_quantity", quantities, quantity, &quantity,
+                           err) ||
+        nc_json_choice_opt(root, where, "predictor", predictors, predictor, &predictor, err) ||
+        parse_relaxation(root, where, &s->relax, err) ||
+        parse_efficiency(root, where, s, err) ||
+        parse_timeouts(root, where, c, err) ||
+        parse_output(root, where, c, err))
+        return -1;
+    s->scheme = (cpl_scheme)scheme;
+    s->on_max_iterations = (cpl_maxit_policy)policy;
+    s->relaxed = (cpl_relaxed_quantity)quantity;
+    s->predictor = (cpl_predictor)predictor;
+    s->max_iterations = (int)max_it;
+    s->max_steps = max_steps;
+    return cpl_loop_settings_check(s, where, err);
+}
+
+int cpl_config_load(cpl_config *c, const char *path, nc_error *err)
+{
+    cJSON *root = NULL;
+    if (nc_json_load_file(path, &root, err)) return -1;
+    char base[CPL_PATH_MAX];
+    snprintf(base, sizeof base, "%s", path);
+    char *slash = strrchr(base, '/');
+    if (slash) *slash = '\0';
+    else snprintf(base, sizeof base, ".");
+    int rc = cpl_config_parse(c, root, path, base, err);
+    cJSON_Delete(root);
+    return rc;
+}

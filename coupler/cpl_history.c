@@ -1,0 +1,127 @@
+/* cpl_history — coupling.h5 and iterations.log, written step by step and flushed. */
+#include "cpl_history.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+static int series(cpl_history *h, nc_h5_series *s, const char *path, nc_h5_type type, int cols,
+                  nc_error *err)
+{
+    hsize_t row[1] = {(hsize_t)cols};
+    return nc_h5_series_create(&h->h5, s, path, type, cols > 1 ? 2 : 1, cols > 1 ? row : NULL,
+                               err);
+}
+
+int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s,
+                     int write_iterations, nc_error *err)
+{
+    memset(h, 0, sizeof *h);
+    char path[2048];
+    snprintf(path, sizeof path, "%s/coupling.h5", dir);
+    if (nc_h5_create(&h->h5, path, err)) return -1;
+    h->open = 1;
+    h->write_iterations = write_iterations;
+    if (series(h, &h->s_time, "/steps/time", NC_H5_F64, 1, err) ||
+        series(h, &h->s_dt, "/steps/dt", NC_H5_F64, 1, err) ||
+        series(h, &h->s_iterations, "/steps/iterations", NC_H5_I32, 1, err) ||
+        series(h, &h->s_residual, "/steps/residual", NC_H5_F64, 1, err) ||
+        series(h, &h->s_converged, "/steps/converged", NC_H5_I32, 1, err) ||
+        series(h, &h->s_force, "/steps/contact_force", NC_H5_F64, 3, err) ||
+        series(h, &h->s_contact, "/steps/in_contact", NC_H5_I32, 1, err) ||
+        series(h, &h->s_near, "/steps/near_interface", NC_H5_I32, 1, err) ||
+        series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, err))
+        goto fail;
+    if (write_iterations &&
+        (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, err) ||
+         series(h, &h->i_iteration, "/iterations/iteration", NC_H5_I32, 1, err) ||
+         series(h, &h->i_residual, "/iterations/residual", NC_H5_F64, 1, err) ||
+         series(h, &h->i_alpha, "/iterations/alpha", NC_H5_F64, 1, err) ||
+         series(h, &h->i_force, "/iterations/contact_force", NC_H5_F64, 3, err) ||
+         series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, err)))
+        goto fail;
+    if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
+        nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_method_name(s->relax.method), err) ||
+        nc_h5_attr_string(&h->h5, "/", "relaxed_quantity",
+                          s->relaxed == CPL_RELAX_FORCE ? "force" : "displacement_velocity", err) ||
+        nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||
+        nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
+        nc_h5_flush(&h->h5, err))
+        goto fail;
+    snprintf(path, sizeof path, "%s/iterations.log", dir);
+    h->log = fopen(path, "w");
+    if (!h->log) {
+        nc_error_set(err, 1, "%s: cannot create the iterations log", path);
+        goto fail;
+    }
+    fprintf(h->log, "# step time iterations converged residual\n");
+    fflush(h->log);
+    return 0;
+fail:
+    cpl_history_close(h, NULL);
+    return -1;
+}
+
+int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_error *err)
+{
+    if (!h->open || !h->write_iterations) return 0;
+    int32_t step = (int32_t)rec->step, it = rec->iteration, solved = rec->fem_solved;
+    return nc_h5_series_append(&h->i_step, &step, err) ||
+           nc_h5_series_append(&h->i_iteration, &it, err) ||
+           nc_h5_series_append(&h->i_residual, &rec->residual, err) ||
+           nc_h5_series_append(&h->i_alpha, &rec->alpha, err) ||
+           nc_h5_series_append(&h->i_force, rec->contact_force, err) ||
+           nc_h5_series_append(&h->i_fem_solved, &solved, err)
+               ? -1 : 0;
+}
+
+int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err)
+{
+    if (!h->open) return 0;
+    int32_t its = rec->iterations, conv = rec->converged, contact = rec->in_contact,
+            near = rec->near_interface;
+    if (nc_h5_series_append(&h->s_time, &rec->time_s, err) ||
+        nc_h5_series_append(&h->s_dt, &rec->dt_s, err) ||
+        nc_h5_series_append(&h->s_iterations, &its, err) ||
+        nc_h5_series_append(&h->s_residual, &rec->residual, err) ||
+        nc_h5_series_append(&h->s_converged, &conv, err) ||
+        nc_h5_series_append(&h->s_force, rec->contact_force, err) ||
+        nc_h5_series_append(&h->s_contact, &contact, err) ||
+        nc_h5_series_append(&h->s_near, &near, err) ||
+        nc_h5_series_append(&h->s_gap, &rec->min_gap_m, err) ||
+        nc_h5_flush(&h->h5, err))
+        return -1;
+    fprintf(h->log, "%ld %.9g %d %d %.6e\n", rec->step, rec->time_s, rec->iterations,
+            rec->converged, rec->residual);
+    if (fflush(h->log) != 0)
+        return nc_error_set(err, 1, "iterations.log: write failed (disk full?)");
+    return 0;
+}
+
+void cpl_history_close(cpl_history *h, const cpl_timing *t)
+{
+    if (!h->open) return;
+    if (t) {
+        /* best effort: a failure here must not hide the run's own error */
+        hsize_t one = 1;
+        double total = t->total_s;
+        if (nc_h5_write(&h->h5, "/timing/total", NC_H5_F64, 1, &one, &total, NULL) == 0) {
+            nc_h5_attr_double(&h->h5, "/timing/total", "wait_fem_s", t->wait_fem_s, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "wait_dem_s", t->wait_dem_s, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "solver_fem_s", t->solver_fem_s, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "solver_dem_s", t->solver_dem_s, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "steps", (double)t->steps, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "iterations", (double)t->iterations, NULL);
+        }
+    }
+    nc_h5_series *all[] = {&h->s_time, &h->s_dt, &h->s_iterations, &h->s_residual,
+                           &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,
+                           &h->i_step, &h->i_iteration, &h->i_residual, &h->i_alpha,
+                           &h->i_force, &h->i_fem_solved};
+    for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
+    nc_h5_flush(&h->h5, NULL);
+    nc_h5_close(&h->h5);
+    if (h->log) fclose(h->log);
+    h->log = NULL;
+    h->open = 0;
+}

@@ -1,0 +1,444 @@
+/* cpl_loop — weak and strong coupling loops (algorithms 1–3 and 5–7 of the paper). */
+#include "cpl_loop.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cpl_interface.h"
+#include "cpl_residual.h"
+#include "nc_log.h"
+
+struct cpl_loop {
+    cpl_loop_settings s;
+    size_t n3;              /* interface dofs per field: 3 × nodes */
+    size_t nx;              /* length of the relaxed vector: 6n ([u; Δt·u̇]) or 3n (F) */
+    cpl_relax *relax;
+    double time_s;
+    long step;
+    int last_near;          /* DEM's near_interface of the last accepted step, -1 unknown */
+    double *u, *v, *f;      /* accepted state: u, u̇ at the start of the step, last force on
+                               the structure */
+    double *u_in, *v_in;    /* DEM input of the current iteration */
+    double *f_dem;          /* DEM output */
+    double *f_in;           /* FEM input */
+    double *u_out, *v_out;  /* FEM output */
+    double *x_in, *x_out, *r;
+    cpl_timing timing;
+};
+
+void cpl_loop_settings_default(cpl_loop_settings *s)
+{
+    memset(s, 0, sizeof *s);
+    s->scheme = CPL_SCHEME_STRONG;
+    s->start_time_s = 0.0;
+    s->end_time_s = 1.0;
+    s->dt_s = 1e-3;
+    s->tol_abs = 1e-6;
+    s->tol_rel = 0.0;
+    s->max_iterations = 50;
+    s->on_max_iterations = CPL_MAXIT_ACCEPT;
+    s->relaxed = CPL_RELAX_DISPLACEMENT_VELOCITY;
+    cpl_relax_settings_default(&s->relax);
+    s->predictor = CPL_PREDICT_LINEAR;
+    s->far_step = 0;
+    s->far_step_factor = 100.0;
+    s->skip_fem_without_contact = 0;
+    s->contact_force_threshold_n = 0.0;
+    s->max_steps = 0;
+}
+
+int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_error *err)
+{
+    if (!(s->dt_s > 0.0) || !isfinite(s->dt_s))
+        return nc_error_set(err, 1, "%s: dt must be a finite number > 0, got %g", where, s->dt_s);
+    if (!(s->end_time_s > s->start_time_s))
+        return nc_error_set(err, 1, "%s: end_time (%g s) must be after the start time (%g s)",
+                            where, s->end_time_s, s->start_time_s);
+    if (!(s->tol_abs > 0.0))
+        return nc_error_set(err, 1, "%s: tolerance must be > 0, got %g", where, s->tol_abs);
+    if (s->tol_rel < 0.0)
+        return nc_error_set(err, 1, "%s: relative_tolerance must be >= 0, got %g", where,
+                            s->tol_rel);
+    if (s->max_iterations < 1)
+        return nc_error_set(err, 1, "%s: max_iterations must be >= 1, got %d", where,
+                            s->max_iterations);
+    if (s->far_step && !(s->far_step_factor >= 1.0))
+        return nc_error_set(err, 1, "%s: far_step_factor must be >= 1, got %g", where,
+                            s->far_step_factor);
+    const cpl_relax_settings *r = &s->relax;
+    if (r->method != CPL_RELAX_NONE && !(r->alpha > 0.0 && r->alpha <= 2.0))
+        return nc_error_set(err, 1, "%s: relaxation.alpha must be in (0, 2], got %g", where,
+                            r->alpha);
+    if (r->method == CPL_RELAX_AITKEN) {
+        if (!(r->alpha_min < r->alpha_max))
+            return nc_error_set(err, 1, "%s: relaxation.alpha_min (%g) must be < alpha_max (%g)",
+                                where, r->alpha_min, r->alpha_max);
+        if (!(r->first_cap > 0.0))
+            return nc_error_set(err, 1, "%s: relaxation.first_iteration_cap must be > 0, got %g",
+                                where, r->first_cap);
+    }
+    if (r->method == CPL_RELAX_IQN_ILS && !(r->iqn_filter > 0.0 && r->iqn_filter < 1.0))
+        return nc_error_set(err, 1, "%s: relaxation.filter must be in (0, 1), got %g", where,
+                            r->iqn_filter);
+    return 0;
+}
+
+int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
+                    const double *u0, const double *v0, nc_error *err)
+{
+    *out = NULL;
+    if (cpl_loop_settings_check(s, "coupling settings", err)) return -1;
+    if (n_nodes == 0) return nc_error_set(err, 1, "coupling loop: interface without nodes");
+    cpl_loop *L = calloc(1, sizeof *L);
+    if (!L) return nc_error_set(err, 1, "coupling loop: out of memory");
+    L->s = *s;
+    L->n3 = 3 * n_nodes;
+    L->nx = s->relaxed == CPL_RELAX_FORCE ? L->n3 : 2 * L->n3;
+    L->time_s = s->start_time_s;
+    L->last_near = -1;
+    double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
+                          &L->u_out, &L->v_out, &L->r};
+    for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
+        *vectors[i] = calloc(L->n3, sizeof(double));
+        if (!*vectors[i]) goto oom;
+    }
+    L->x_in = calloc(L->nx, sizeof(double));
+    L->x_out = calloc(L->nx, sizeof(double));
+    if (!L->x_in || !L->x_out) goto oom;
+    if (u0) memcpy(L->u, u0, L->n3 * sizeof(double));
+    if (v0) memcpy(L->v, v0, L->n3 * sizeof(double));
+    if (s->scheme == CPL_SCHEME_STRONG &&
+        cpl_relax_create(&L->relax, &s->relax, L->nx,
+                         s->relaxed == CPL_RELAX_FORCE ? 1 : 2, err)) {
+        cpl_loop_free(L);
+        return -1;
+    }
+    L->timing.solver_fem_s = NAN;
+    L->timing.solver_dem_s = NAN;
+    *out = L;
+    return 0;
+oom:
+    cpl_loop_free(L);
+    return nc_error_set(err, 1, "coupling loop: out of memory for %zu interface nodes", n_nodes);
+}
+
+void cpl_loop_free(cpl_loop *L)
+{
+    if (!L) return;
+    cpl_relax_free(L->relax);
+    free(L->u);
+    free(L->v);
+    free(L->f);
+    free(L->u_in);
+    free(L->v_in);
+    free(L->f_dem);
+    free(L->f_in);
+    free(L->u_out);
+    free(L->v_out);
+    free(L->r);
+    free(L->x_in);
+    free(L->x_out);
+    free(L);
+}
+
+const cpl_timing *cpl_loop_timing(const cpl_loop *L) { return &L->timing; }
+const double *cpl_loop_displacement(const cpl_loop *L) { return L->u; }
+const double *cpl_loop_velocity(const cpl_loop *L) { return L->v; }
+const double *cpl_loop_force(const cpl_loop *L) { return L->f; }
+double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
+
+/* ---- calls into the participants: timing, interruption, error context ----------------- */
+
+typedef struct run_ctx {
+    cpl_loop *L;
+    const cpl_participant *fem, *dem;
+    const cpl_observer *obs;
+    volatile sig_atomic_t *stop;
+    cpl_failure *failure;
+    nc_error *err;
+} run_ctx;
+
+static int fail(run_ctx *c, const cpl_participant *p, const cpl_call *call, const char *command)
+{
+    c->failure->participant = p;
+    c->failure->step = call->step;
+    c->failure->iteration = call->iteration;
+    c->failure->command = command;
+    if (call->iteration > 0)
+        return nc_error_prefix(c->err, "%s: step %ld (t = %.6g s), iteration %d, %s",
+                               p ? p->name : "coupler", call->step, call->time_s,
+                               call->iteration, command);
+    return nc_error_prefix(c->err, "%s: step %ld (t = %.6g s), %s", p ? p->name : "coupler",
+                           call->step, call->time_s, command);
+}
+
+static int check_stop(run_ctx *c, const cpl_call *call)
+{
+    if (c->stop && *c->stop) {
+        c->failure->participant = NULL;
+        c->failure->step = call->step;
+        c->failure->iteration = call->iteration;
+        c->failure->command = "interrupted";
+        return nc_error_set(c->err, CPL_ERR_INTERRUPTED,
+                            "interrupted by a signal at step %ld (t = %.6g s), iteration %d",
+                            call->step, call->time_s, call->iteration);
+    }
+    return 0;
+}
+
+static double *wait_of(run_ctx *c, const cpl_participant *p)
+{
+    return p == c->fem ? &c->L->timing.wait_fem_s : &c->L->timing.wait_dem_s;
+}
+
+static int do_begin(run_ctx *c, const cpl_participant *p, const cpl_call *call)
+{
+    if (check_stop(c, call)) return -1;
+    double t0 = nc_now_s();
+    int rc = p->begin_step(p->ctx, call, c->err);
+    *wait_of(c, p) += nc_now_s() - t0;
+    return rc ? fail(c, p, call, "begin_step") : 0;
+}
+
+static int do_accept(run_ctx *c, const cpl_participant *p, const cpl_call *call)
+{
+    if (check_stop(c, call)) return -1;
+    double t0 = nc_now_s();
+    int rc = p->accept(p->ctx, call, c->err);
+    *wait_of(c, p) += nc_now_s() - t0;
+    return rc ? fail(c, p, call, "accept_step") : 0;
+}
+
+static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
+                    const double *in0, const double *in1, double *out0, double *out1,
+                    cpl_solve_info *info)
+{
+    if (check_stop(c, call)) return -1;
+    info->near_interface = 1;
+    info->min_gap_m = INFINITY;
+    info->contacts = 0.0;
+    info->solver_time_s = NAN;
+    double t0 = nc_now_s();
+    int rc = p->solve(p->ctx, call, in0, in1, out0, out1, info, c->err);
+    *wait_of(c, p) += nc_now_s() - t0;
+    if (rc) return fail(c, p, call, "solve");
+    size_t n = c->L->n3;
+    const double *outs[2] = {out0, out1};
+    for (int o = 0; o < 2; o++)
+        if (outs[o])
+            for (size_t i = 0; i < n; i++)
+                if (!isfinite(outs[o][i])) {
+                    nc_error_set(c->err, CPL_ERR_PARTICIPANT,
+                                 "reply contains a non-finite value at node %zu", i / 3);
+                    return fail(c, p, call, "solve");
+                }
+    cpl_timing *t = &c->L->timing;
+    if (p == c->fem) {
+        t->fem_solves++;
+        if (isfinite(info->solver_time_s))
+            t->solver_fem_s = (isnan(t->solver_fem_s) ? 0.0 : t->solver_fem_s) + info->solver_time_s;
+    } else {
+        t->dem_solves++;
+        if (isfinite(info->solver_time_s))
+            t->solver_dem_s = (isnan(t->solver_dem_s) ? 0.0 : t->solver_dem_s) + info->solver_time_s;
+    }
+    return 0;
+}
+
+/* FEM solve, or efficiency option (ii): while no contact force acts and the structure has
+ * not been solved in this step, it stays where it is (valid only when it is otherwise
+ * unloaded and at rest). Returns 1 when solved, 0 when skipped, -1 on failure. */
+static int fem_solve_or_skip(run_ctx *c, const cpl_call *call, const double *force,
+                             int solved_before)
+{
+    cpl_loop *L = c->L;
+    if (L->s.skip_fem_without_contact) {
+        if (!solved_before && cpl_max_abs(force, L->n3) <= L->s.contact_force_threshold_n) {
+            memcpy(L->u_out, L->u, L->n3 * sizeof(double));
+            memcpy(L->v_out, L->v, L->n3 * sizeof(double));
+            return 0;
+        }
+        /* with this option the FEM's step begins only when it is first solved: a skipped
+         * step is not a step for it at all (no BEGIN_STEP, no ACCEPT_STEP) */
+        if (!solved_before && do_begin(c, c->fem, call)) return -1;
+    }
+    cpl_solve_info info;
+    if (do_solve(c, c->fem, call, force, NULL, L->u_out, L->v_out, &info)) return -1;
+    return 1;
+}
+
+/* x = [u; Δt_nominal · u̇]: both halves in metres, so IQN's least squares is balanced. */
+static void pack(const cpl_loop *L, double *x, const double *u, const double *v)
+{
+    memcpy(x, u, L->n3 * sizeof(double));
+    for (size_t i = 0; i < L->n3; i++) x[L->n3 + i] = L->s.dt_s * v[i];
+}
+
+static void unpack(const cpl_loop *L, const double *x, double *u, double *v)
+{
+    memcpy(u, x, L->n3 * sizeof(double));
+    for (size_t i = 0; i < L->n3; i++) v[i] = x[L->n3 + i] / L->s.dt_s;
+}
+
+static double choose_dt(const cpl_loop *L)
+{
+    double dt = L->s.dt_s;
+    if (L->s.far_step && L->last_near == 0) dt *= L->s.far_step_factor;   /* algorithm 1, l. 3–6 */
+    double remaining = L->s.end_time_s - L->time_s;
+    if (dt > remaining || remaining - dt < 1e-6 * L->s.dt_s) dt = remaining;   /* no sliver */
+    return dt;
+}
+
+static int report_iteration(run_ctx *c, const cpl_call *call, double residual, double alpha,
+                            int fem_solved)
+{
+    if (!c->obs || !c->obs->on_iteration) return 0;
+    cpl_iteration_record rec = {.step = call->step, .iteration = call->iteration,
+                                .time_s = call->time_s, .dt_s = call->dt_s,
+                                .residual = residual, .alpha = alpha, .fem_solved = fem_solved};
+    cpl_total_force(c->L->f_dem, c->L->n3 / 3, rec.contact_force);
+    if (c->obs->on_iteration(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
+    return 0;
+}
+
+/* Residual of algorithm 2: max(r_u, r_u̇) (35); convergence needs both fields (27). */
+static double residual_uv(cpl_loop *L, int *converged)
+{
+    double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
+    double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
+    *converged = cpl_converged(ru, cpl_scaled_norm(L->u_out, L->n3), L->s.tol_abs, L->s.tol_rel) &&
+                 cpl_converged(rv, cpl_scaled_norm(L->v_out, L->n3), L->s.tol_abs, L->s.tol_rel);
+    return fmax(ru, rv);
+}
+
+static int run_step(run_ctx *c)
+{
+    cpl_loop *L = c->L;
+    const int strong = L->s.scheme == CPL_SCHEME_STRONG;
+    const int force_mode = strong && L->s.relaxed == CPL_RELAX_FORCE;
+    const size_t n3 = L->n3;
+    cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = choose_dt(L)};
+
+    const int lazy_fem = L->s.skip_fem_without_contact;
+    if ((!lazy_fem && do_begin(c, c->fem, &call)) || do_begin(c, c->dem, &call)) return -1;
+    if (strong) cpl_relax_begin_step(L->relax);
+
+    /* first guess of the end-of-step interface position for the DEM (the DEM moves its wall
+     * from where it was to this position during the step): u + Δt u̇ by default; the last
+     * accepted u alone makes the wall lag a further half step behind the structure */
+    for (size_t i = 0; i < n3; i++) {
+        L->u_in[i] = L->u[i] + (L->s.predictor == CPL_PREDICT_LINEAR ? call.dt_s * L->v[i] : 0.0);
+        L->v_in[i] = L->v[i];
+        L->f_in[i] = L->f[i];
+    }
+    const int max_it = strong ? L->s.max_iterations : 1;
+    int converged = 0, fem_solved = 0, k;
+    double residual = NAN;
+    cpl_solve_info dem_info = {1, INFINITY, 0.0, NAN};
+    for (k = 1; k <= max_it; k++) {
+        call.iteration = k;
+        /* DEM with the current interface position and velocity -> contact forces */
+        if (do_solve(c, c->dem, &call, L->u_in, L->v_in, L->f_dem, NULL, &dem_info)) return -1;
+        if (!force_mode) {
+            /* weak, or algorithm 2: forces go to the structure unrelaxed (39) */
+            int solved = fem_solve_or_skip(c, &call, L->f_dem, fem_solved);
+            if (solved < 0) return -1;
+            fem_solved |= solved;
+            memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
+            residual = residual_uv(L, &converged);            /* (28), (29), (35) */
+            if (!strong || converged || k == max_it) {
+                if (report_iteration(c, &call, residual, NAN, solved)) return -1;
+                break;
+            }
+            double alpha;
+            pack(L, L->x_in, L->u_in, L->v_in);
+            pack(L, L->x_out, L->u_out, L->v_out);
+            if (cpl_relax_update(L->relax, L->x_in, L->x_out, L->x_in, &alpha, c->err))
+                return fail(c, NULL, &call, "relaxation");    /* (31), (32), (34) */
+            unpack(L, L->x_in, L->u_in, L->v_in);              /* (40), (41) */
+            if (report_iteration(c, &call, residual, alpha, solved)) return -1;
+        } else {
+            /* algorithm 3: residual and relaxation of the forces, then the structure */
+            residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);          /* (30), (36) */
+            converged = cpl_converged(residual, cpl_scaled_norm(L->f_dem, n3), L->s.tol_abs,
+                                      L->s.tol_rel);
+            double alpha;
+            if (cpl_relax_update(L->relax, L->f_in, L->f_dem, L->f_in, &alpha, c->err))
+                return fail(c, NULL, &call, "relaxation");                 /* (33), (34) */
+            /* iteration 1 evaluated the DEM at the predicted position, not at the FEM's
+             * answer to the previous relaxed force: no secant information in this pair */
+            if (k == 1) cpl_relax_forget_pair(L->relax);
+            int solved = fem_solve_or_skip(c, &call, L->f_in, fem_solved); /* (42) */
+            if (solved < 0) return -1;
+            fem_solved |= solved;
+            if (report_iteration(c, &call, residual, alpha, solved)) return -1;
+            if (converged || k == max_it) break;
+            memcpy(L->u_in, L->u_out, n3 * sizeof(double));                /* (37), (38) */
+            memcpy(L->v_in, L->v_out, n3 * sizeof(double));
+        }
+    }
+    if (k > max_it) k = max_it;
+    L->timing.iterations += k;
+    if (strong && !converged) {
+        L->timing.unconverged_steps++;
+        if (L->s.on_max_iterations == CPL_MAXIT_STOP) {
+            nc_error_set(c->err, CPL_ERR_NOT_CONVERGED,
+                         "interface residual %.3e still above the tolerance %.3e after %d "
+                         "iterations (max_iterations policy \"stop\")", residual, L->s.tol_abs, k);
+            return fail(c, NULL, &call, "convergence");
+        }
+    }
+    if (strong && !converged) {
+        cpl_relax_forget_history(L->relax);   /* do not carry a failed step's model along */
+    } else if (strong) {
+        if (force_mode) {
+            cpl_relax_end_step(L->relax, NULL, NULL);
+        } else {
+            pack(L, L->x_in, L->u_in, L->v_in);
+            pack(L, L->x_out, L->u_out, L->v_out);
+            cpl_relax_end_step(L->relax, L->x_in, L->x_out);
+        }
+    }
+    call.iteration = 0;
+    if (((!lazy_fem || fem_solved) && do_accept(c, c->fem, &call)) || do_accept(c, c->dem, &call))
+        return -1;
+
+    /* the structure's end state is the start of the next step */
+    memcpy(L->u, L->u_out, n3 * sizeof(double));
+    memcpy(L->v, L->v_out, n3 * sizeof(double));
+    memcpy(L->f, L->f_in, n3 * sizeof(double));
+    L->time_s += call.dt_s;
+    L->step++;
+    L->last_near = dem_info.near_interface;
+    L->timing.steps++;
+
+    if (c->obs && c->obs->on_step) {
+        cpl_step_record rec = {.step = call.step, .time_s = L->time_s, .dt_s = call.dt_s,
+                               .iterations = k, .converged = converged, .residual = residual,
+                               .near_interface = dem_info.near_interface,
+                               .min_gap_m = dem_info.min_gap_m};
+        cpl_total_force(L->f_dem, n3 / 3, rec.contact_force);
+        rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
+        if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");
+    }
+    return 0;
+}
+
+int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant *dem,
+                 const cpl_observer *observer, volatile sig_atomic_t *stop,
+                 cpl_failure *failure, nc_error *err)
+{
+    cpl_failure dummy;
+    if (!failure) failure = &dummy;
+    memset(failure, 0, sizeof *failure);
+    run_ctx c = {L, fem, dem, observer, stop, failure, err};
+    double t0 = nc_now_s();
+    int rc = 0;
+    const double eps = 1e-9 * L->s.dt_s;
+    while (L->time_s < L->s.end_time_s - eps && (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
+        if ((rc = run_step(&c)) != 0) break;
+    }
+    L->timing.total_s += nc_now_s() - t0;
+    return rc;
+}

@@ -1,0 +1,153 @@
+/* cpl_loop — the coupling loops of the paper, written against an abstract participant
+ * interface so they run with in-process test participants or with remote ones.
+ *
+ *   weak   (algorithms 1, 5): per step one exchange: DEM solve with the current interface
+ *          u, u̇ -> forces -> FEM solve -> u, u̇ -> accept.
+ *   strong (algorithms 2, 3, 6, 7): per step Gauss–Seidel iterations k = 1, 2, ...; the
+ *          solvers restore their start-of-step state for k > 1; residual (28)–(30),
+ *          r = max(r_u, r_u̇) (35) or r_F (36), convergence (27), relaxation (31)–(34) of
+ *          u, u̇ (algorithm 2) or of F (algorithm 3); then ACCEPT_STEP.
+ * Efficiency options of algorithm 1: a larger step while the DEM reports no particle near
+ * the interface; no FEM solve while the contact force is zero (only valid when the
+ * structure is otherwise unloaded and at rest). With that option the FEM's step begins at its
+ * first SOLVE of the step: a skipped step sends it nothing (no BEGIN_STEP / ACCEPT_STEP), and
+ * its next BEGIN_STEP carries the later time.
+ * The loop itself never prints: it reports every iteration and step to an observer.
+ */
+#ifndef CPL_LOOP_H
+#define CPL_LOOP_H
+
+#include <signal.h>
+#include <stddef.h>
+#include "cpl_relax.h"
+#include "nc_error.h"
+
+/* What a participant is asked to do: step, iteration (1-based; 0 outside solve), the
+ * start time and size of the step. */
+typedef struct cpl_call {
+    long step;
+    int iteration;
+    double time_s;
+    double dt_s;
+} cpl_call;
+
+/* Extra information a participant returns with a solve. */
+typedef struct cpl_solve_info {
+    int near_interface;     /* DEM: 1 if a particle is near the interface (1 when unknown) */
+    double min_gap_m;       /* DEM: smallest particle-interface gap (INFINITY when unknown) */
+    double contacts;        /* DEM: number of contacts at the end of the step */
+    double solver_time_s;   /* time the participant spent computing, NAN when not reported */
+} cpl_solve_info;
+
+/* A participant: `ctx` is passed back to every function; all return 0 / -1 (+ err). */
+typedef struct cpl_participant {
+    const char *name;       /* "fem", "dem": used in messages */
+    void *ctx;
+    int (*begin_step)(void *ctx, const cpl_call *call, nc_error *err);
+    /* FEM: in0 = force -> out0 = displacement, out1 = velocity.
+     * DEM: in0 = displacement, in1 = velocity (end of step) -> out0 = force.
+     * All n × 3; out1/in1 unused are NULL. The FEM may leave info untouched. */
+    int (*solve)(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                 double *out0, double *out1, cpl_solve_info *info, nc_error *err);
+    int (*accept)(void *ctx, const cpl_call *call, nc_error *err);
+} cpl_participant;
+
+typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
+typedef enum { CPL_RELAX_DISPLACEMENT_VELOCITY = 0, CPL_RELAX_FORCE } cpl_relaxed_quantity;
+typedef enum { CPL_MAXIT_ACCEPT = 0, CPL_MAXIT_STOP } cpl_maxit_policy;
+typedef enum { CPL_PREDICT_CONSTANT = 0, CPL_PREDICT_LINEAR } cpl_predictor;
+
+typedef struct cpl_loop_settings {
+    cpl_scheme scheme;
+    double start_time_s;
+    double end_time_s;
+    double dt_s;                    /* nominal step */
+    double tol_abs;                 /* ε of eq. (27) on the scaled residual norm */
+    double tol_rel;                 /* optional relative tolerance (0 = off) */
+    int max_iterations;             /* per step (strong) */
+    cpl_maxit_policy on_max_iterations;
+    cpl_relaxed_quantity relaxed;
+    cpl_relax_settings relax;
+    cpl_predictor predictor;        /* first guess of the step's end-of-step u (linear) */
+    int far_step;                   /* efficiency option (i): enlarge Δt when not near */
+    double far_step_factor;         /* the paper used 100 */
+    int skip_fem_without_contact;   /* efficiency option (ii) */
+    double contact_force_threshold_n; /* |F| <= this counts as no contact force */
+    long max_steps;                 /* stop after this many steps (0 = until end time) */
+} cpl_loop_settings;
+
+void cpl_loop_settings_default(cpl_loop_settings *s);
+/* Checks ranges and consistency; `where` names the source (e.g. "coupler.json"). */
+int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_error *err);
+
+typedef struct cpl_iteration_record {
+    long step;
+    int iteration;
+    double time_s, dt_s;
+    double residual;                /* r of eq. (35) or (36) */
+    double alpha;                   /* relaxation factor applied after it (NAN: none/QN) */
+    double contact_force[3];        /* total force of the DEM on the net, N */
+    int fem_solved;                 /* 0 when skipped by efficiency option (ii) */
+} cpl_iteration_record;
+
+typedef struct cpl_step_record {
+    long step;
+    double time_s;                  /* end time of the step */
+    double dt_s;
+    int iterations;
+    int converged;                  /* weak scheme: whether the single exchange was within
+                                       the tolerance (information only) */
+    double residual;                /* of the last iteration */
+    double contact_force[3];
+    int in_contact;                 /* any non-zero contact force */
+    int near_interface;
+    double min_gap_m;
+} cpl_step_record;
+
+typedef struct cpl_observer {
+    void *ctx;
+    int (*on_iteration)(void *ctx, const cpl_iteration_record *rec, nc_error *err);
+    int (*on_step)(void *ctx, const cpl_step_record *rec, nc_error *err);
+} cpl_observer;
+
+/* Wall-clock split of a run (seconds). wait_* include transport; solver_* are what the
+ * participants reported themselves (NAN when they did not). */
+typedef struct cpl_timing {
+    double total_s;
+    double wait_fem_s, wait_dem_s;
+    double solver_fem_s, solver_dem_s;
+    long fem_solves, dem_solves, steps, iterations, unconverged_steps;
+} cpl_timing;
+
+/* Where a failed run stopped. */
+typedef struct cpl_failure {
+    const cpl_participant *participant;   /* NULL: the coupler itself (or interrupted) */
+    long step;
+    int iteration;
+    const char *command;                  /* "begin_step", "solve", "accept", "relax" */
+} cpl_failure;
+
+enum { CPL_ERR_INTERRUPTED = 40, CPL_ERR_NOT_CONVERGED = 41, CPL_ERR_PARTICIPANT = 42 };
+
+typedef struct cpl_loop cpl_loop;
+
+/* n_nodes interface nodes; the initial interface state (u0, v0 may be NULL for zero). */
+int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
+                    const double *u0, const double *v0, nc_error *err);
+void cpl_loop_free(cpl_loop *loop);
+
+/* Runs from start to end time. `stop` (may be NULL) is polled between requests; when it
+ * becomes non-zero the run ends with CPL_ERR_INTERRUPTED. On failure `failure` says where;
+ * err names the participant, step, iteration and reason. */
+int cpl_loop_run(cpl_loop *loop, const cpl_participant *fem, const cpl_participant *dem,
+                 const cpl_observer *observer, volatile sig_atomic_t *stop,
+                 cpl_failure *failure, nc_error *err);
+
+const cpl_timing *cpl_loop_timing(const cpl_loop *loop);
+/* Accepted interface state (n × 3 each) after the last accepted step. */
+const double *cpl_loop_displacement(const cpl_loop *loop);
+const double *cpl_loop_velocity(const cpl_loop *loop);
+const double *cpl_loop_force(const cpl_loop *loop);
+double cpl_loop_time(const cpl_loop *loop);
+
+#endif

@@ -1,0 +1,211 @@
+/* cpl_remote — FEM and DEM participants over the netcouple protocol. */
+#include "cpl_remote.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "nc_log.h"
+
+static void options_ms(proto_options *o, double timeout_s)
+{
+    proto_options_default(o);
+    o->timeout_ms = (int)fmin(timeout_s * 1000.0, 2e9);
+}
+
+int cpl_remote_open(cpl_remote *r, cpl_remote_kind kind, const char *endpoint,
+                    double connect_timeout_s, double reply_timeout_s, nc_error *err)
+{
+    memset(r, 0, sizeof *r);
+    r->kind = kind;
+    snprintf(r->name, sizeof r->name, "%s", kind == CPL_REMOTE_FEM ? "fem" : "dem");
+    snprintf(r->endpoint, sizeof r->endpoint, "%s", endpoint);
+    /* HELLO on a short-timeout connection: a participant that is not there fails fast */
+    proto_options o;
+    options_ms(&o, connect_timeout_s);
+    proto_peer *probe = NULL;
+    if (proto_peer_open(&probe, r->name, endpoint, &o, err)) return -1;
+    int rc = proto_peer_hello(probe, &r->reply, err);
+    proto_peer_close(probe);
+    if (rc) return nc_error_prefix(err, "%s: handshake failed", r->name);
+    snprintf(r->peer_role, sizeof r->peer_role, "%s", r->reply.role);
+    snprintf(r->peer_program, sizeof r->peer_program, "%s", r->reply.name);
+    options_ms(&o, reply_timeout_s);
+    if (proto_peer_open(&r->peer, r->name, endpoint, &o, err)) return -1;
+    if (proto_peer_hello(r->peer, &r->reply, err)) {
+        cpl_remote_close(r);
+        return nc_error_prefix(err, "%s: handshake failed", r->name);
+    }
+    r->alive = 1;
+    return 0;
+}
+
+/* Sends r->request; records whether the peer is still there after a failure. */
+static int request(cpl_remote *r, nc_error *err)
+{
+    if (proto_peer_request(r->peer, &r->request, &r->reply, err) == 0) return 0;
+    /* an error reply means it is alive and keeps serving; anything else (timeout, closed
+     * connection, garbage) means it cannot be trusted to answer SHUTDOWN */
+    r->alive = err && err->code == PROTO_ERR_PEER;
+    return -1;
+}
+
+int cpl_remote_interface_fem(cpl_remote *fem, cpl_mesh *mesh, double **u0, double **v0,
+                             nc_error *err)
+{
+    *u0 = *v0 = NULL;
+    proto_message_init(&fem->request, PROTO_MSG_INTERFACE);
+    fem->request.step = -1;
+    if (request(fem, err)) return nc_error_prefix(err, "fem: interface");
+    const int32_t *ids, *elements = NULL;
+    const double *xyz;
+    size_t n = 0, n_ids = 0, m = 0;
+    if (proto_message_get_f64(&fem->reply, "coordinates", 0, 3, &xyz, &n, err) ||
+        proto_message_get_i32(&fem->reply, "node_ids", n, 0, &ids, &n_ids, err))
+        return nc_error_prefix(err, "fem: interface reply");
+    for (size_t i = 0; i < fem->reply.n_arrays; i++)
+        if (strcmp(fem->reply.arrays[i].name, "elements") == 0 &&
+            proto_message_get_i32(&fem->reply, "elements", 0, 2, &elements, &m, err))
+            return nc_error_prefix(err, "fem: interface reply");
+    if (cpl_mesh_init(mesh, n, ids, xyz, m, elements, "fem: interface reply", err)) return -1;
+    fem->n_nodes = n;
+    const char *names[2] = {"displacement", "velocity"};
+    double **outs[2] = {u0, v0};
+    for (int k = 0; k < 2; k++)
+        for (size_t i = 0; i < fem->reply.n_arrays; i++)
+            if (strcmp(fem->reply.arrays[i].name, names[k]) == 0) {
+                const double *d;
+                if (proto_message_get_f64(&fem->reply, names[k], n, 3, &d, NULL, err))
+                    return nc_error_prefix(err, "fem: interface reply");
+                *outs[k] = malloc(3 * n * sizeof(double));
+                if (!*outs[k]) return nc_error_set(err, 1, "out of memory");
+                memcpy(*outs[k], d, 3 * n * sizeof(double));
+            }
+    return 0;
+}
+
+int cpl_remote_interface_dem(cpl_remote *dem, const cpl_mesh *mesh, nc_error *err)
+{
+    proto_message_init(&dem->request, PROTO_MSG_INTERFACE);
+    dem->request.step = -1;
+    if (proto_message_add_i32(&dem->request, "node_ids", mesh->node_ids, mesh->n_nodes, 0, err) ||
+        proto_message_add_f64(&dem->request, "coordinates", mesh->coordinates, mesh->n_nodes, 3,
+                              err) ||
+        proto_message_add_i32(&dem->request, "elements", mesh->elements, mesh->n_elements, 2,
+                              err))
+        return -1;
+    if (request(dem, err)) return nc_error_prefix(err, "dem: interface");
+    dem->n_nodes = mesh->n_nodes;
+    return 0;
+}
+
+static void command(cpl_remote *r, proto_msg_type type, const cpl_call *call)
+{
+    proto_message_init(&r->request, type);
+    r->request.step = call->step;
+    r->request.iteration = call->iteration;
+    r->request.time_s = call->time_s;
+    r->request.dt_s = call->dt_s;
+}
+
+static int remote_begin(void *ctx, const cpl_call *call, nc_error *err)
+{
+    cpl_remote *r = ctx;
+    command(r, PROTO_MSG_BEGIN_STEP, call);
+    return request(r, err);
+}
+
+static int remote_accept(void *ctx, const cpl_call *call, nc_error *err)
+{
+    cpl_remote *r = ctx;
+    command(r, PROTO_MSG_ACCEPT_STEP, call);
+    return request(r, err);
+}
+
+static int copy_array(cpl_remote *r, const char *name, double *out, nc_error *err)
+{
+    const double *d;
+    if (proto_message_get_f64(&r->reply, name, r->n_nodes, 3, &d, NULL, err)) {
+        r->alive = 1;   /* it answered, just wrongly */
+        return -1;
+    }
+    memcpy(out, d, 3 * r->n_nodes * sizeof(double));
+    return 0;
+}
+
+static int remote_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                        double *out0, double *out1, cpl_solve_info *info, nc_error *err)
+{
+    cpl_remote *r = ctx;
+    command(r, PROTO_MSG_SOLVE, call);
+    const size_t n = r->n_nodes;
+    if (r->kind == CPL_REMOTE_FEM) {
+        if (proto_message_add_f64(&r->request, "force", in0, n, 3, err) || request(r, err) ||
+            copy_array(r, "displacement", out0, err) || copy_array(r, "velocity", out1, err))
+            return -1;
+    } else {
+        if (proto_message_add_f64(&r->request, "displacement", in0, n, 3, err) ||
+            proto_message_add_f64(&r->request, "velocity", in1, n, 3, err) || request(r, err) ||
+            copy_array(r, "force", out0, err))
+            return -1;
+        info->near_interface = proto_message_value(&r->reply, "near_interface", 1.0) != 0.0;
+        info->min_gap_m = proto_message_value(&r->reply, "min_gap_m", INFINITY);
+        info->contacts = proto_message_value(&r->reply, "contacts", 0.0);
+    }
+    info->solver_time_s = proto_message_value(&r->reply, "solve_time_s", NAN);
+    return 0;
+}
+
+cpl_participant cpl_remote_participant(cpl_remote *r)
+{
+    cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept};
+    return p;
+}
+
+int cpl_remote_shutdown(cpl_remote *r, double timeout_s, nc_error *err)
+{
+    proto_options o;
+    options_ms(&o, timeout_s);
+    proto_peer *peer = NULL;
+    if (proto_peer_open(&peer, r->name, r->endpoint, &o, err)) return -1;
+    proto_message_init(&r->request, PROTO_MSG_SHUTDOWN);
+    r->request.step = -1;
+    int rc = proto_peer_request(peer, &r->request, &r->reply, err);
+    proto_peer_close(peer);
+    return rc;
+}
+
+void cpl_remote_close(cpl_remote *r)
+{
+    proto_peer_close(r->peer);
+    r->peer = NULL;
+    proto_message_free(&r->request);
+    proto_message_free(&r->reply);
+}
+
+int cpl_read_endpoint_file(const char *path, double timeout_s, char *endpoint, size_t size,
+                           volatile const sig_atomic_t *stop, nc_error *err)
+{
+    double t0 = nc_now_s();
+    for (;;) {
+        FILE *f = fopen(path, "r");
+        if (f) {
+            char line[1024] = "";
+            char *ok = fgets(line, sizeof line, f);
+            fclose(f);
+            line[strcspn(line, "\r\n \t")] = '\0';
+            if (ok && line[0]) {
+                snprintf(endpoint, size, "%s", line);
+                return 0;
+            }
+        }
+        if (stop && *stop) return nc_error_set(err, 1, "interrupted while waiting for %s", path);
+        if (nc_now_s() - t0 > timeout_s)
+            return nc_error_set(err, 1, "%s: endpoint file did not appear within %.1f s (did "
+                                "the participant start?)", path, timeout_s);
+        struct timespec ts = {0, 50 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+}

@@ -1,0 +1,292 @@
+/* coupler — drives a FEM and a DEM participant through the netcouple protocol.
+ *
+ *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
+ *
+ * Exit codes: 0 success, 1 input/participant/coupling failure, 130 interrupted (SIGINT),
+ * 143 terminated (SIGTERM). See coupler/README.md.
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cpl_config.h"
+#include "cpl_history.h"
+#include "cpl_interface.h"
+#include "cpl_loop.h"
+#include "cpl_progress.h"
+#include "cpl_remote.h"
+#include "nc_log.h"
+
+static volatile sig_atomic_t g_signal = 0;   /* the only global: set by the signal handler */
+
+static void on_signal(int sig)
+{
+    g_signal = sig;
+}
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP]\n"
+            "               [--quiet]\n"
+            "Couples a FEM and a DEM participant (weak or strong scheme, see coupler/README.md).\n"
+            "  --output DIR        results folder (coupling.h5, iterations.log); default '.'\n"
+            "  --fem-endpoint EP   override fem.endpoint of coupler.json (e.g. tcp://127.0.0.1:5555)\n"
+            "  --dem-endpoint EP   override dem.endpoint\n"
+            "  --quiet             only warnings, errors and the final summary\n");
+}
+
+typedef struct app {
+    cpl_config cfg;
+    const char *config_path, *output_dir, *fem_ep_arg, *dem_ep_arg;
+    int quiet;
+    cpl_remote fem, dem;
+    int fem_open, dem_open;
+    cpl_mesh mesh;
+    cpl_history history;
+    cpl_progress progress;
+    cpl_loop *loop;
+    char fem_ep[1024], dem_ep[1024];   /* resolved endpoints ("" while unknown) */
+} app;
+
+static int observe_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
+{
+    app *a = ctx;
+    return cpl_history_iteration(&a->history, rec, err);
+}
+
+static int observe_step(void *ctx, const cpl_step_record *rec, nc_error *err)
+{
+    app *a = ctx;
+    if (cpl_history_step(&a->history, rec, err)) return -1;
+    cpl_progress_step(&a->progress, rec, a->cfg.loop.scheme == CPL_SCHEME_STRONG);
+    return 0;
+}
+
+static int parse_args(app *a, int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        int has_value = i + 1 < argc;
+        if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
+            usage(stdout);
+            exit(0);
+        } else if (!strcmp(arg, "--quiet")) {
+            a->quiet = 1;
+        } else if (!strcmp(arg, "--output") && has_value) {
+            a->output_dir = argv[++i];
+        } else if (!strcmp(arg, "--fem-endpoint") && has_value) {
+            a->fem_ep_arg = argv[++i];
+        } else if (!strcmp(arg, "--dem-endpoint") && has_value) {
+            a->dem_ep_arg = argv[++i];
+        } else if (arg[0] == '-') {
+            fprintf(stderr, "coupler: unknown option or missing value: %s\n", arg);
+            usage(stderr);
+            return -1;
+        } else if (!a->config_path) {
+            a->config_path = arg;
+        } else {
+            fprintf(stderr, "coupler: more than one input file: %s\n", arg);
+            return -1;
+        }
+    }
+    if (!a->config_path) {
+        usage(stderr);
+        return -1;
+    }
+    if (!a->output_dir) a->output_dir = ".";
+    return 0;
+}
+
+static int resolve_endpoint(app *a, const cpl_endpoint_config *c, const char *arg,
+                            const char *name, char *out, size_t size, nc_error *err)
+{
+    if (arg) {
+        snprintf(out, size, "%s", arg);
+        return 0;
+    }
+    if (c->endpoint[0]) {
+        snprintf(out, size, "%s", c->endpoint);
+        return 0;
+    }
+    if (c->endpoint_file[0])
+        return cpl_read_endpoint_file(c->endpoint_file, a->cfg.connect_timeout_s, out, size,
+                                      &g_signal, err);
+    return nc_error_set(err, 1, "%s: no endpoint for the %s participant (set %s.endpoint or "
+                        "%s.endpoint_file, or use --%s-endpoint)", a->config_path, name, name,
+                        name, name);
+}
+
+/* Tells the participants to stop: both after success, the healthy one(s) after a failure. */
+static int shutdown_all(app *a, const cpl_participant *failed)
+{
+    int rc = 0;
+    cpl_remote *all[2] = {&a->fem, &a->dem};
+    int open[2] = {a->fem_open, a->dem_open};
+    const char *known[2] = {a->fem_ep, a->dem_ep};
+    for (int i = 0; i < 2; i++) {
+        cpl_remote *r = all[i];
+        if (!open[i]) {
+            /* not connected yet (start-up failed): still ask it to go, if we know where */
+            if (!known[i][0]) continue;
+            snprintf(r->name, sizeof r->name, "%s", i == 0 ? "fem" : "dem");
+            snprintf(r->endpoint, sizeof r->endpoint, "%s", known[i]);
+            nc_error err;
+            cpl_remote_shutdown(r, a->cfg.shutdown_timeout_s, &err);
+            proto_message_free(&r->request);
+            proto_message_free(&r->reply);
+            continue;
+        }
+        int is_failed = failed && failed->ctx == r;
+        proto_peer_close(r->peer);   /* drop a possibly pending request first */
+        r->peer = NULL;
+        if (is_failed && !r->alive) continue;
+        nc_error err;
+        nc_error_clear(&err);
+        if (cpl_remote_shutdown(r, a->cfg.shutdown_timeout_s, &err)) {
+            cpl_progress_message(&a->progress, "coupler: %s did not acknowledge SHUTDOWN: %s",
+                                 r->name, err.message);
+            rc = -1;
+        }
+    }
+    return rc;
+}
+
+static void print_timing(app *a)
+{
+    const cpl_timing *t = cpl_loop_timing(a->loop);
+    double own = t->total_s - t->wait_fem_s - t->wait_dem_s;
+    FILE *o = a->progress.out;
+    fprintf(o, "coupler: %ld steps, %ld iterations (%.2f per step), %ld unconverged steps\n",
+            t->steps, t->iterations, t->steps ? (double)t->iterations / (double)t->steps : 0.0,
+            t->unconverged_steps);
+    fprintf(o, "coupler: wall time %.3f s: waiting for fem %.3f s (%.1f%%), for dem %.3f s "
+            "(%.1f%%), coupler itself %.3f s (%.1f%%)\n", t->total_s, t->wait_fem_s,
+            t->total_s > 0 ? 100.0 * t->wait_fem_s / t->total_s : 0.0, t->wait_dem_s,
+            t->total_s > 0 ? 100.0 * t->wait_dem_s / t->total_s : 0.0, own,
+            t->total_s > 0 ? 100.0 * own / t->total_s : 0.0);
+    if (isfinite(t->solver_fem_s) && isfinite(t->solver_dem_s)) {
+        double exchange = t->wait_fem_s + t->wait_dem_s - t->solver_fem_s - t->solver_dem_s;
+        fprintf(o, "coupler: fem solve %.3f s, dem solve %.3f s, exchange + coupler %.3f s "
+                "(%.1f%%)\n", t->solver_fem_s, t->solver_dem_s, exchange + own,
+                t->total_s > 0 ? 100.0 * (exchange + own) / t->total_s : 0.0);
+    }
+    fflush(o);
+}
+
+int main(int argc, char **argv)
+{
+    app a;
+    memset(&a, 0, sizeof a);
+    if (parse_args(&a, argc, argv)) return 1;
+    setvbuf(stdout, NULL, _IOLBF, 0);
+
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;   /* no SA_RESTART: a blocking wait returns on Ctrl-C */
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    nc_error err;
+    nc_error_clear(&err);
+    int rc = 1, history_open = 0;
+    double *u0 = NULL, *v0 = NULL;
+    cpl_failure failure;
+    memset(&failure, 0, sizeof failure);
+    cpl_config_default(&a.cfg);
+    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet, 10.0, 0.0, 1.0);
+    /* endpoints given on the command line are known even if coupler.json is bad */
+    if (a.fem_ep_arg) snprintf(a.fem_ep, sizeof a.fem_ep, "%s", a.fem_ep_arg);
+    if (a.dem_ep_arg) snprintf(a.dem_ep, sizeof a.dem_ep, "%s", a.dem_ep_arg);
+    if (cpl_config_load(&a.cfg, a.config_path, &err)) {
+        cpl_config_default(&a.cfg);   /* the defaults' timeouts for the shutdown below */
+        goto fail;
+    }
+    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet,
+                      a.cfg.progress_interval_s, a.cfg.loop.start_time_s, a.cfg.loop.end_time_s);
+    if (mkdir(a.output_dir, 0777) != 0 && errno != EEXIST) {
+        nc_error_set(&err, 1, "%s: cannot create the output folder: %s", a.output_dir,
+                     strerror(errno));
+        goto fail;
+    }
+
+    char *fem_ep = a.fem_ep, *dem_ep = a.dem_ep;
+    if (resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, "fem", fem_ep, sizeof a.fem_ep, &err) ||
+        resolve_endpoint(&a, &a.cfg.dem, a.dem_ep_arg, "dem", dem_ep, sizeof a.dem_ep, &err))
+        goto fail;
+    if (cpl_remote_open(&a.fem, CPL_REMOTE_FEM, fem_ep, a.cfg.connect_timeout_s,
+                        a.cfg.reply_timeout_s, &err))
+        goto fail;
+    a.fem_open = 1;
+    if (cpl_remote_open(&a.dem, CPL_REMOTE_DEM, dem_ep, a.cfg.connect_timeout_s,
+                        a.cfg.reply_timeout_s, &err))
+        goto fail;
+    a.dem_open = 1;
+    if (!a.quiet)
+        cpl_progress_message(&a.progress, "coupler: fem = %s (%s), dem = %s (%s)",
+                             a.fem.peer_program, fem_ep, a.dem.peer_program, dem_ep);
+
+    /* conforming interface (section 4.4): the FEM's interface mesh is the DEM's wall */
+    if (cpl_remote_interface_fem(&a.fem, &a.mesh, &u0, &v0, &err) ||
+        cpl_remote_interface_dem(&a.dem, &a.mesh, &err))
+        goto fail;
+    if (!a.quiet)
+        cpl_progress_message(&a.progress, "coupler: interface of %zu nodes, %zu elements; %s "
+                             "scheme, dt %g s, end %g s", a.mesh.n_nodes, a.mesh.n_elements,
+                             a.cfg.loop.scheme == CPL_SCHEME_STRONG ? "strong" : "weak",
+                             a.cfg.loop.dt_s, a.cfg.loop.end_time_s);
+    if (cpl_loop_create(&a.loop, &a.cfg.loop, a.mesh.n_nodes, u0, v0, &err)) goto fail;
+    if (cpl_history_open(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations, &err))
+        goto fail;
+    history_open = 1;
+
+    cpl_participant fem = cpl_remote_participant(&a.fem), dem = cpl_remote_participant(&a.dem);
+    cpl_observer obs = {&a, observe_iteration, observe_step};
+    if (cpl_loop_run(a.loop, &fem, &dem, &obs, &g_signal, &failure, &err)) {
+        /* say which signal; one that interrupted a wait shows up as a transport error of
+         * that participant, which is not its fault */
+        if (g_signal) {
+            const char *name = g_signal == SIGINT ? "SIGINT" : "SIGTERM";
+            if (err.code == CPL_ERR_INTERRUPTED) {
+                char where[NC_ERROR_MESSAGE_MAX];
+                const char *at = strstr(err.message, " at step");
+                snprintf(where, sizeof where, "%s", at ? at : "");
+                nc_error_set(&err, CPL_ERR_INTERRUPTED, "interrupted by %s%s", name, where);
+            } else {
+                char reason[NC_ERROR_MESSAGE_MAX];
+                snprintf(reason, sizeof reason, "%s", err.message);
+                nc_error_set(&err, CPL_ERR_INTERRUPTED, "interrupted by %s (%s)", name, reason);
+            }
+            failure.participant = NULL;
+        }
+        goto fail;
+    }
+    cpl_progress_finish(&a.progress);
+    rc = shutdown_all(&a, NULL) ? 1 : 0;
+    print_timing(&a);
+    goto done;
+
+fail:
+    cpl_progress_finish(&a.progress);
+    fprintf(stderr, "coupler: error: %s\n", err.message);
+    shutdown_all(&a, failure.participant);
+    if (a.loop) print_timing(&a);
+    rc = g_signal == SIGINT ? 130 : g_signal == SIGTERM ? 143 : 1;
+
+done:
+    if (history_open) cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL);
+    if (a.fem_open) cpl_remote_close(&a.fem);
+    if (a.dem_open) cpl_remote_close(&a.dem);
+    cpl_loop_free(a.loop);
+    cpl_mesh_free(&a.mesh);
+    free(u0);
+    free(v0);
+    return rc;
+}

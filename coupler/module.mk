@@ -1,0 +1,8 @@
+# coupler/module.mk — coupling-overhead benchmark (run by `make bench`).
+BENCH_TARGETS += bench-coupler
+.PHONY: bench-coupler
+$(BUILD)/bench/coupler_bench: $(BUILD)/coupler/bench/coupler_bench.o $(LINK_coupler)
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+bench-coupler: $(BUILD)/bench/coupler_bench $(BIN)/coupler
+	$< $(BIN)

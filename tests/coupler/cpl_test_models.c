@@ -1,0 +1,258 @@
+/* cpl_test_models — closed-form in-process participants and the monolithic reference. */
+#include "cpl_test_models.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double *vec(size_t n) { return calloc(n ? n : 1, sizeof(double)); }
+
+void tm_structure_init(tm_structure *s, size_t n_nodes, double m, double k, double k_link)
+{
+    memset(s, 0, sizeof *s);
+    size_t nd = 3 * n_nodes;
+    s->nd = nd;
+    s->m = vec(nd);
+    s->K = vec(nd * nd);
+    s->u0 = vec(nd); s->v0 = vec(nd); s->u = vec(nd); s->v = vec(nd);
+    s->fail_step = -1;
+    for (size_t i = 0; i < nd; i++) {
+        s->m[i] = m * (1.0 + 0.1 * (double)(i / 3));     /* nodes differ a little */
+        s->K[i * nd + i] = k;
+    }
+    /* springs k_link between neighbouring nodes, same component */
+    for (size_t a = 0; a + 1 < n_nodes; a++)
+        for (size_t c = 0; c < 3; c++) {
+            size_t i = 3 * a + c, j = 3 * (a + 1) + c;
+            s->K[i * nd + i] += k_link;
+            s->K[j * nd + j] += k_link;
+            s->K[i * nd + j] -= k_link;
+            s->K[j * nd + i] -= k_link;
+        }
+}
+
+void tm_structure_free(tm_structure *s)
+{
+    free(s->m); free(s->K); free(s->u0); free(s->v0); free(s->u); free(s->v);
+    memset(s, 0, sizeof *s);
+}
+
+void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, double g)
+{
+    memset(p, 0, sizeof *p);
+    size_t nd = 3 * n_nodes;
+    p->nd = nd;
+    p->mp = vec(nd); p->kc = vec(nd); p->g = vec(nd);
+    p->x0 = vec(nd); p->y0 = vec(nd); p->x = vec(nd); p->y = vec(nd);
+    p->fail_step = -1;
+    for (size_t i = 0; i < nd; i++) {
+        p->mp[i] = mp * (1.0 + 0.2 * (double)(i % 3));
+        p->kc[i] = kc * (1.0 + 0.05 * (double)i);
+        p->g[i] = (i % 3 == 2) ? g : 0.0;
+    }
+}
+
+void tm_particles_free(tm_particles *p)
+{
+    free(p->mp); free(p->kc); free(p->g); free(p->x0); free(p->y0); free(p->x); free(p->y);
+    memset(p, 0, sizeof *p);
+}
+
+int tm_solve_dense(double *A, double *b, size_t n)
+{
+    for (size_t c = 0; c < n; c++) {
+        size_t piv = c;
+        for (size_t r = c + 1; r < n; r++)
+            if (fabs(A[r * n + c]) > fabs(A[piv * n + c])) piv = r;
+        if (A[piv * n + c] == 0.0) return -1;
+        if (piv != c) {
+            for (size_t j = 0; j < n; j++) {
+                double t = A[c * n + j]; A[c * n + j] = A[piv * n + j]; A[piv * n + j] = t;
+            }
+            double t = b[c]; b[c] = b[piv]; b[piv] = t;
+        }
+        for (size_t r = c + 1; r < n; r++) {
+            double f = A[r * n + c] / A[c * n + c];
+            for (size_t j = c; j < n; j++) A[r * n + j] -= f * A[c * n + j];
+            b[r] -= f * b[c];
+        }
+    }
+    for (size_t r = n; r-- > 0;) {
+        double s = b[r];
+        for (size_t j = r + 1; j < n; j++) s -= A[r * n + j] * b[j];
+        b[r] = s / A[r * n + r];
+    }
+    return 0;
+}
+
+/* ---- structure participant ----------------------------------------------------------- */
+
+static int s_begin(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    tm_structure *s = ctx;
+    s->begins++;
+    memcpy(s->u, s->u0, s->nd * sizeof(double));
+    memcpy(s->v, s->v0, s->nd * sizeof(double));
+    return 0;
+}
+
+static void structure_solve(tm_structure *s, const double *F, double dt)
+{
+    size_t nd = s->nd;
+    double *A = vec(nd * nd), *b = vec(nd);
+    for (size_t i = 0; i < nd; i++) {
+        for (size_t j = 0; j < nd; j++) A[i * nd + j] = dt * dt * s->K[i * nd + j];
+        A[i * nd + i] += s->m[i];
+        b[i] = s->m[i] * (s->u0[i] + dt * s->v0[i]) + dt * dt * F[i];
+    }
+    tm_solve_dense(A, b, nd);
+    for (size_t i = 0; i < nd; i++) {
+        s->u[i] = b[i];
+        s->v[i] = (b[i] - s->u0[i]) / dt;
+    }
+    free(A);
+    free(b);
+}
+
+static int s_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                   double *out0, double *out1, cpl_solve_info *info, nc_error *err)
+{
+    (void)in1; (void)info;
+    tm_structure *s = ctx;
+    if (call->step == s->fail_step && call->iteration == s->fail_iteration)
+        return nc_error_set(err, 1, "Newton did not converge in 20 iterations (test)");
+    s->solves++;
+    if (call->dt_s > s->dt_seen_max) s->dt_seen_max = call->dt_s;
+    structure_solve(s, in0, call->dt_s);   /* restores the start state implicitly */
+    memcpy(out0, s->u, s->nd * sizeof(double));
+    memcpy(out1, s->v, s->nd * sizeof(double));
+    return 0;
+}
+
+static int s_accept(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    tm_structure *s = ctx;
+    s->accepts++;
+    memcpy(s->u0, s->u, s->nd * sizeof(double));
+    memcpy(s->v0, s->v, s->nd * sizeof(double));
+    return 0;
+}
+
+cpl_participant tm_structure_participant(tm_structure *s)
+{
+    cpl_participant p = {"fem", s, s_begin, s_solve, s_accept};
+    return p;
+}
+
+/* ---- particle participant ------------------------------------------------------------ */
+
+static int p_begin(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    tm_particles *p = ctx;
+    memcpy(p->x, p->x0, p->nd * sizeof(double));
+    memcpy(p->y, p->y0, p->nd * sizeof(double));
+    return 0;
+}
+
+static int p_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                   double *out0, double *out1, cpl_solve_info *info, nc_error *err)
+{
+    (void)in1; (void)out1;
+    tm_particles *p = ctx;
+    if (call->step == p->fail_step && call->iteration == p->fail_iteration)
+        return nc_error_set(err, 1, "particle solver failed (test)");
+    p->solves++;
+    double dt = call->dt_s;
+    for (size_t i = 0; i < p->nd; i++) {
+        double x1 = (p->mp[i] * (p->x0[i] + dt * p->y0[i]) +
+                     dt * dt * (p->kc[i] * in0[i] + p->mp[i] * p->g[i])) /
+                    (p->mp[i] + dt * dt * p->kc[i]);
+        p->y[i] = (x1 - p->x0[i]) / dt;
+        p->x[i] = x1;
+        out0[i] = p->kc[i] * (x1 - in0[i]);
+    }
+    info->near_interface = call->time_s + call->dt_s < p->far_until_s ? 0 : 1;
+    info->contacts = 1;
+    return 0;
+}
+
+static int p_accept(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    tm_particles *p = ctx;
+    memcpy(p->x0, p->x, p->nd * sizeof(double));
+    memcpy(p->y0, p->y, p->nd * sizeof(double));
+    return 0;
+}
+
+cpl_participant tm_particles_participant(tm_particles *p)
+{
+    cpl_participant q = {"dem", p, p_begin, p_solve, p_accept};
+    return q;
+}
+
+void tm_monolithic_step(tm_structure *s, tm_particles *p, double dt)
+{
+    size_t nd = s->nd, n = 2 * nd;
+    double *A = vec(n * n), *b = vec(n);
+    for (size_t i = 0; i < nd; i++) {
+        /* structure rows: (M + dt² K) u − dt² kc (x − u) = M (u0 + dt v0) */
+        for (size_t j = 0; j < nd; j++) A[i * n + j] = dt * dt * s->K[i * nd + j];
+        A[i * n + i] += s->m[i] + dt * dt * p->kc[i];
+        A[i * n + nd + i] = -dt * dt * p->kc[i];
+        b[i] = s->m[i] * (s->u0[i] + dt * s->v0[i]);
+        /* particle rows: (mp + dt² kc) x − dt² kc u = mp (x0 + dt y0) + dt² mp g */
+        size_t r = nd + i;
+        A[r * n + nd + i] = p->mp[i] + dt * dt * p->kc[i];
+        A[r * n + i] = -dt * dt * p->kc[i];
+        b[r] = p->mp[i] * (p->x0[i] + dt * p->y0[i]) + dt * dt * p->mp[i] * p->g[i];
+    }
+    tm_solve_dense(A, b, n);
+    for (size_t i = 0; i < nd; i++) {
+        s->v0[i] = (b[i] - s->u0[i]) / dt;
+        s->u0[i] = b[i];
+        p->y0[i] = (b[nd + i] - p->x0[i]) / dt;
+        p->x0[i] = b[nd + i];
+    }
+    free(A);
+    free(b);
+}
+
+/* ---- recorder ------------------------------------------------------------------------ */
+
+static int r_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
+{
+    (void)err;
+    tm_recorder *r = ctx;
+    r->total_iterations++;
+    if (rec->step == 0 && rec->iteration >= 1 && rec->iteration <= 512)
+        r->step0_residual[rec->iteration - 1] = rec->residual;
+    r->last_iteration_count = rec->iteration;
+    return 0;
+}
+
+static int r_step(void *ctx, const cpl_step_record *rec, nc_error *err)
+{
+    (void)err;
+    tm_recorder *r = ctx;
+    if (r->steps < 4096) {
+        r->iterations[r->steps] = rec->iterations;
+        r->residual[r->steps] = rec->residual;
+        r->converged[r->steps] = rec->converged;
+        r->time[r->steps] = rec->time_s;
+        r->force_z[r->steps] = rec->contact_force[2];
+        r->dt[r->steps] = rec->dt_s;
+    }
+    r->steps++;
+    return 0;
+}
+
+cpl_observer tm_recorder_observer(tm_recorder *r)
+{
+    memset(r, 0, sizeof *r);
+    cpl_observer o = {r, r_iteration, r_step};
+    return o;
+}

@@ -1,0 +1,69 @@
+/* cpl_test_models — in-process closed-form participants for the coupler unit tests.
+ *
+ * Structure ("FEM"): nd = 3 n dofs, diagonal masses m, dense stiffness K, backward Euler:
+ *   (M + Δt² K) u1 = M (u0 + Δt v0) + Δt² F,  v1 = (u1 − u0) / Δt.
+ * Particles ("DEM"): one particle per dof, mass mp, bilateral linear contact spring kc to the
+ * wall, body acceleration g, backward Euler with the wall at its end-of-step position w:
+ *   (mp + Δt² kc) x1 = mp (x0 + Δt y0) + Δt² (kc w + mp g),  force on the wall kc (x1 − w).
+ * Both restore their start-of-step state on every solve, like the real solvers.
+ * The monolithic reference solves both together with the same scheme (2 nd unknowns).
+ * Gauss–Seidel fixed-point derivative per dof (K diagonal): J = −Δt² kc mp /
+ * ((m + Δt² k)(mp + Δt² kc)); unrelaxed iteration converges iff |J| < 1.
+ */
+#ifndef CPL_TEST_MODELS_H
+#define CPL_TEST_MODELS_H
+
+#include <stddef.h>
+#include "../../coupler/cpl_loop.h"
+
+typedef struct tm_structure {
+    size_t nd;
+    double *m, *K;            /* [nd], [nd × nd] row-major */
+    double *u0, *v0, *u, *v;  /* start of step, current */
+    long solves, begins, accepts;
+    long fail_step;           /* reply an error at this step/iteration (-1: never) */
+    int fail_iteration;
+    double dt_seen_max;       /* largest Δt received */
+} tm_structure;
+
+typedef struct tm_particles {
+    size_t nd;
+    double *mp, *kc, *g;
+    double *x0, *y0, *x, *y;
+    long solves;
+    double far_until_s;       /* report near_interface = 0 while t + Δt < this */
+    long fail_step;
+    int fail_iteration;
+} tm_particles;
+
+void tm_structure_init(tm_structure *s, size_t n_nodes, double m, double k, double k_link);
+void tm_structure_free(tm_structure *s);
+void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, double g);
+void tm_particles_free(tm_particles *p);
+
+/* The cpl_participant wrappers. */
+cpl_participant tm_structure_participant(tm_structure *s);
+cpl_participant tm_particles_participant(tm_particles *p);
+
+/* One monolithic backward-Euler step of the coupled system (updates both committed states). */
+void tm_monolithic_step(tm_structure *s, tm_particles *p, double dt);
+
+/* Dense Gaussian elimination with partial pivoting: solves A x = b (A, b overwritten). */
+int tm_solve_dense(double *A, double *b, size_t n);
+
+/* Observer collecting iterations per step. */
+typedef struct tm_recorder {
+    long steps;
+    int iterations[4096];
+    double residual[4096];
+    int converged[4096];
+    double time[4096];
+    double force_z[4096];
+    double dt[4096];
+    double step0_residual[512];   /* residual of each iteration of step 0 */
+    long total_iterations;
+    int last_iteration_count;
+} tm_recorder;
+cpl_observer tm_recorder_observer(tm_recorder *r);
+
+#endif

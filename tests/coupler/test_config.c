@@ -1,0 +1,125 @@
+/* coupler.json parsing: defaults, every section, and clear messages for bad input. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../../coupler/cpl_config.h"
+
+static int parse(const char *text, cpl_config *c, nc_error *err)
+{
+    cJSON *root = cJSON_Parse(text);
+    assert_non_null(root);
+    cpl_config_default(c);
+    int rc = cpl_config_parse(c, root, "coupler.json", "/case", err);
+    cJSON_Delete(root);
+    return rc;
+}
+
+static void test_minimal_and_defaults(void **state)
+{
+    (void)state;
+    cpl_config c;
+    nc_error err;
+    assert_int_equal(parse("{\"scheme\": \"weak\", \"dt\": 0.001, \"end_time\": 0.5}", &c, &err), 0);
+    assert_int_equal(c.loop.scheme, CPL_SCHEME_WEAK);
+    assert_float_equal(c.loop.dt_s, 1e-3, 0.0);
+    assert_float_equal(c.loop.end_time_s, 0.5, 0.0);
+    assert_float_equal(c.loop.tol_abs, 1e-6, 0.0);
+    assert_int_equal(c.loop.max_iterations, 50);
+    assert_int_equal(c.loop.relax.method, CPL_RELAX_NONE);
+    assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_ACCEPT);
+    assert_string_equal(c.fem.endpoint, "");
+}
+
+static void test_full_file(void **state)
+{
+    (void)state;
+    const char *text =
+        "{\"fem\": {\"endpoint\": \"tcp://127.0.0.1:5555\"},"
+        " \"dem\": {\"endpoint_file\": \"dem.endpoint\"},"
+        " \"scheme\": \"strong\", \"dt\": 2e-3, \"end_time\": 1, \"start_time\": 0.5,"
+        " \"tolerance\": 1e-8, \"relative_tolerance\": 1e-4, \"max_iterations\": 12,"
+        " \"on_max_iterations\": \"stop\", \"relaxed_quantity\": \"force\","
+        " \"predictor\": \"linear\", \"max_steps\": 7,"
+        " \"relaxation\": {\"method\": \"iqn-ils\", \"alpha\": 0.1, \"filter\": 1e-3,"
+        "   \"reuse_steps\": 2, \"max_columns\": 30},"
+        " \"efficiency\": {\"far_step\": true, \"far_step_factor\": 100,"
+        "   \"skip_fem_without_contact\": true, \"contact_force_threshold\": 1e-9},"
+        " \"timeouts\": {\"connect\": 5, \"reply\": 60, \"shutdown\": 2},"
+        " \"output\": {\"iterations\": false, \"progress_interval\": 1}}";
+    cpl_config c;
+    nc_error err;
+    assert_int_equal(parse(text, &c, &err), 0);
+    assert_string_equal(c.fem.endpoint, "tcp://127.0.0.1:5555");
+    assert_string_equal(c.dem.endpoint_file, "/case/dem.endpoint");
+    assert_int_equal(c.loop.scheme, CPL_SCHEME_STRONG);
+    assert_float_equal(c.loop.start_time_s, 0.5, 0.0);
+    assert_float_equal(c.loop.tol_rel, 1e-4, 0.0);
+    assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_STOP);
+    assert_int_equal(c.loop.relaxed, CPL_RELAX_FORCE);
+    assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);
+    assert_int_equal(c.loop.max_steps, 7);
+    assert_int_equal(c.loop.relax.method, CPL_RELAX_IQN_ILS);
+    assert_int_equal(c.loop.relax.iqn_reuse_steps, 2);
+    assert_int_equal(c.loop.relax.iqn_max_columns, 30);
+    assert_float_equal(c.loop.relax.iqn_filter, 1e-3, 0.0);
+    assert_true(c.loop.far_step && c.loop.skip_fem_without_contact);
+    assert_float_equal(c.reply_timeout_s, 60.0, 0.0);
+    assert_int_equal(c.write_iterations, 0);
+}
+
+static void expect_error(const char *text, const char *fragment)
+{
+    cpl_config c;
+    nc_error err;
+    nc_error_clear(&err);
+    assert_int_equal(parse(text, &c, &err), -1);
+    if (!strstr(err.message, fragment)) fail_msg("message '%s' lacks '%s'", err.message, fragment);
+}
+
+static void test_bad_input_messages(void **state)
+{
+    (void)state;
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.001, \"end_time\": 1, \"tolerence\": 1}",
+                 "coupler.json.tolerence: unknown key");
+    expect_error("{\"dt\": 0.001, \"end_time\": 1}", "scheme");
+    expect_error("{\"scheme\": \"implicit\", \"dt\": 0.001, \"end_time\": 1}", "\"weak\", \"strong\"");
+    expect_error("{\"scheme\": \"weak\", \"dt\": -1, \"end_time\": 1}", "dt");
+    expect_error("{\"scheme\": \"weak\", \"dt\": 0.1, \"end_time\": 0}", "end_time");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxation\": {\"method\": \"aitken\", \"alpha_min\": 1, \"alpha_max\": 0.5}}",
+                 "alpha_min");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxation\": {\"method\": \"broyden\"}}", "relaxation.method");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"fem\": {\"endpoint\": \"a\", \"endpoint_file\": \"b\"}}", "not both");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1, \"max_iterations\": 0}",
+                 "max_iterations");
+}
+
+static void test_load_missing_file(void **state)
+{
+    (void)state;
+    cpl_config c;
+    nc_error err;
+    cpl_config_default(&c);
+    assert_int_equal(cpl_config_load(&c, "/nonexistent/coupler.json", &err), -1);
+    assert_non_null(strstr(err.message, "/nonexistent/coupler.json"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_minimal_and_defaults),
+        cmocka_unit_test(test_full_file),
+        cmocka_unit_test(test_bad_input_messages),
+        cmocka_unit_test(test_load_missing_file),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,425 @@
+/* Coupling loops against closed-form in-process participants (cpl_test_models.h):
+ * weak lags (first-order error), strong reproduces the monolithic solution, α = 1 diverges
+ * exactly where |J| > 1, Aitken beats constant α, IQN-ILS bound, force vs displacement
+ * relaxation, efficiency options, max-iteration policy, participant errors, interruption. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cpl_test_models.h"
+#include "../../coupler/cpl_loop.h"
+
+typedef struct problem {
+    size_t nodes;
+    double m, k, k_link, mp, kc, g;
+} problem;
+
+/* Mild coupling: |J| ≈ 0.1 at Δt = 0.01 s. */
+static const problem MILD = {1, 1.0, 100.0, 0.0, 1.0, 1000.0, -9.81};
+/* Light net, heavy rock, stiff contact: |J| ≈ 45 at Δt = 0.01 s (added-mass-like). */
+static const problem HARD = {2, 0.1, 100.0, 50.0, 10.0, 1e5, -9.81};
+
+typedef struct run_result {
+    int rc;
+    nc_error err;
+    cpl_failure failure;
+    tm_recorder rec;
+    double u_err;            /* max |u − u_monolithic| over the interface after the run */
+    double u_mono_scale;     /* max |u_monolithic| */
+    long fem_solves, fem_begins;
+    double fem_dt_max;
+    cpl_timing timing;
+} run_result;
+
+static void run(const problem *pb, const cpl_loop_settings *s, run_result *out,
+                void (*tweak)(tm_structure *, tm_particles *))
+{
+    memset(out, 0, sizeof *out);
+    tm_structure st, st_ref;
+    tm_particles pa, pa_ref;
+    tm_structure_init(&st, pb->nodes, pb->m, pb->k, pb->k_link);
+    tm_particles_init(&pa, pb->nodes, pb->mp, pb->kc, pb->g);
+    tm_structure_init(&st_ref, pb->nodes, pb->m, pb->k, pb->k_link);
+    tm_particles_init(&pa_ref, pb->nodes, pb->mp, pb->kc, pb->g);
+    if (tweak) {
+        tweak(&st, &pa);
+        tweak(&st_ref, &pa_ref);
+    }
+    cpl_participant fem = tm_structure_participant(&st), dem = tm_particles_participant(&pa);
+    cpl_observer obs = tm_recorder_observer(&out->rec);
+    cpl_loop *loop;
+    assert_int_equal(cpl_loop_create(&loop, s, pb->nodes, NULL, NULL, &out->err), 0);
+    out->rc = cpl_loop_run(loop, &fem, &dem, &obs, NULL, &out->failure, &out->err);
+    /* monolithic reference with the same step sizes */
+    for (long i = 0; i < out->rec.steps && i < 4096; i++) tm_monolithic_step(&st_ref, &pa_ref, out->rec.dt[i]);
+    const double *u = cpl_loop_displacement(loop);
+    for (size_t i = 0; i < st.nd; i++) {
+        out->u_err = fmax(out->u_err, fabs(u[i] - st_ref.u0[i]));
+        out->u_mono_scale = fmax(out->u_mono_scale, fabs(st_ref.u0[i]));
+    }
+    out->fem_solves = st.solves;
+    out->fem_begins = st.begins;
+    out->fem_dt_max = st.dt_seen_max;
+    out->timing = *cpl_loop_timing(loop);
+    cpl_loop_free(loop);
+    tm_structure_free(&st);
+    tm_structure_free(&st_ref);
+    tm_particles_free(&pa);
+    tm_particles_free(&pa_ref);
+}
+
+static cpl_loop_settings settings(cpl_scheme scheme, double dt, double end)
+{
+    cpl_loop_settings s;
+    cpl_loop_settings_default(&s);
+    s.scheme = scheme;
+    s.dt_s = dt;
+    s.end_time_s = end;
+    s.tol_abs = 1e-10;
+    s.max_iterations = 200;
+    return s;
+}
+
+/* Strong coupling with no relaxation on the mild problem equals the monolithic backward-Euler
+ * solution: the interface residual 1e-10 per iteration and |J| ≈ 0.1 bound the per-step
+ * error by ~1e-10, over 50 steps below 1e-8 (observed ~1e-12). */
+static void test_strong_matches_monolithic(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.5);
+    run_result r;
+    run(&MILD, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.rec.steps, 50);
+    assert_true(r.u_mono_scale > 1e-3);          /* a real response, not a trivial zero */
+    assert_true(r.u_err < 1e-8);
+    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+}
+
+/* Weak coupling lags: with the constant predictor the particles see last step's interface,
+ * an O(Δt) splitting error.
+ * Halving Δt must roughly halve the deviation from the monolithic answer (ratio in
+ * [1.6, 2.5] for a first-order error), and the deviation is far above strong's. */
+static void test_weak_lags_first_order(void **state)
+{
+    (void)state;
+    /* soft contact (ω Δt ≈ 0.03): the asymptotic first-order regime */
+    const problem soft = {1, 1.0, 100.0, 0.0, 1.0, 100.0, -9.81};
+    run_result r1, r2, r3;
+    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.002, 0.3);
+    s.predictor = CPL_PREDICT_CONSTANT;   /* the particles see the wall of the last step */
+    run(&soft, &s, &r1, NULL);
+    s.dt_s = 0.001;
+    run(&soft, &s, &r2, NULL);
+    /* extrapolating the wall (u + Δt u̇) must reduce that lag */
+    s.predictor = CPL_PREDICT_LINEAR;
+    run(&soft, &s, &r3, NULL);
+    assert_int_equal(r3.rc, 0);
+    print_message("weak, linear predictor, dt/2: deviation %.3e\n", r3.u_err);
+    assert_true(r3.u_err < 0.5 * r2.u_err);
+    assert_int_equal(r1.rc, 0);
+    assert_int_equal(r2.rc, 0);
+    assert_int_equal(r1.timing.iterations, r1.rec.steps);   /* one exchange per step */
+    double ratio = r1.u_err / r2.u_err;
+    print_message("weak: deviation from monolithic %.3e (dt), %.3e (dt/2), ratio %.3f\n",
+                  r1.u_err, r2.u_err, ratio);
+    assert_true(r1.u_err > 1e-3 * r1.u_mono_scale);
+    assert_true(ratio > 1.6 && ratio < 2.5);
+}
+
+/* Largest |J| of the per-dof Gauss–Seidel map (K diagonal: one node, no link). */
+static double max_abs_J(const problem *pb, double dt)
+{
+    tm_structure st;
+    tm_particles pa;
+    tm_structure_init(&st, pb->nodes, pb->m, pb->k, pb->k_link);
+    tm_particles_init(&pa, pb->nodes, pb->mp, pb->kc, pb->g);
+    double jmax = 0.0;
+    for (size_t i = 0; i < st.nd; i++) {
+        double J = dt * dt * pa.kc[i] * pa.mp[i] /
+                   ((st.m[i] + dt * dt * st.K[i * st.nd + i]) * (pa.mp[i] + dt * dt * pa.kc[i]));
+        jmax = fmax(jmax, J);
+    }
+    tm_structure_free(&st);
+    tm_particles_free(&pa);
+    return jmax;
+}
+
+/* Structure mass chosen so that max |J| is exactly `target`. */
+static problem problem_with_J(double target, double dt)
+{
+    problem pb = {1, 1.0, 100.0, 0.0, 5.0, 2e4, -9.81};
+    double j1 = max_abs_J(&pb, dt);                /* J ∝ 1 / (m + Δt² k) */
+    double c = j1 * (pb.m + dt * dt * pb.k);
+    pb.m = c / target - dt * dt * pb.k;
+    return pb;
+}
+
+/* Unrelaxed Gauss–Seidel (α = 1) converges iff |J| < 1: |J| = 0.8 converges, |J| = 1.25
+ * diverges (residual grows by |J| per iteration, so after 40 iterations it must have grown
+ * by more than 1.25^40 / 10 ≈ 750). */
+static void test_alpha_one_diverges_where_theory_says(void **state)
+{
+    (void)state;
+    const double dt = 0.01;
+    problem ok = problem_with_J(0.8, dt), bad = problem_with_J(1.25, dt);
+    assert_float_equal(max_abs_J(&ok, dt), 0.8, 1e-12);
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, dt, 0.05);
+    s.max_iterations = 400;
+    run_result r;
+    run(&ok, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+    assert_true(r.u_err < 1e-8);
+
+    s.max_iterations = 40;
+    s.end_time_s = dt;   /* one step */
+    run(&bad, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);                    /* policy: accept with a warning */
+    assert_int_equal(r.rec.converged[0], 0);
+    assert_int_equal(r.timing.unconverged_steps, 1);
+    assert_true(r.rec.step0_residual[39] > 750.0 * r.rec.step0_residual[0]);
+}
+
+static long total_iterations(const problem *pb, cpl_relax_method method, double alpha,
+                             cpl_relaxed_quantity q, double *u_err)
+{
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.2);
+    s.relax.method = method;
+    s.relax.alpha = alpha;
+    s.relax.first_cap = 0.5;
+    s.relax.iqn_reuse_steps = 0;
+    s.relaxed = q;
+    s.tol_abs = 1e-9;
+    run_result r;
+    run(pb, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+    if (u_err) *u_err = r.u_err;
+    return r.timing.iterations;
+}
+
+/* |J| ≈ 45 with force relaxation: α = 1 diverges, constant α = 0.02 converges (rate
+ * |1 − α (1 − J)| ≈ 0.1 for the stiffest dof, slower for the others), Aitken finds the factor
+ * itself and needs fewer iterations. Same with displacement relaxation on a |J| = 0.8 problem
+ * and α = 0.5 (in algorithm 2 the u̇ block has its own α; with a small constant α it would
+ * converge only at rate 1 − α). All reach the monolithic answer (1e-7). */
+static void test_aitken_fewer_iterations_than_constant(void **state)
+{
+    (void)state;
+    double e_const, e_aitken;
+    long n_const = total_iterations(&HARD, CPL_RELAX_CONSTANT, 0.02, CPL_RELAX_FORCE, &e_const);
+    long n_aitken = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02, CPL_RELAX_FORCE, &e_aitken);
+    print_message("force relaxation, 20 steps: constant %ld, aitken %ld iterations\n", n_const,
+                  n_aitken);
+    assert_true(n_aitken < n_const);
+    assert_true(e_const < 1e-7 && e_aitken < 1e-7);
+    problem p08 = problem_with_J(0.8, 0.01);
+    n_const = total_iterations(&p08, CPL_RELAX_CONSTANT, 0.5, CPL_RELAX_DISPLACEMENT_VELOCITY,
+                               &e_const);
+    n_aitken = total_iterations(&p08, CPL_RELAX_AITKEN, 0.5, CPL_RELAX_DISPLACEMENT_VELOCITY,
+                                &e_aitken);
+    print_message("u/v relaxation, |J| = 0.8: constant %ld, aitken %ld iterations\n", n_const,
+                  n_aitken);
+    assert_true(n_aitken < n_const);
+    assert_true(e_const < 1e-7 && e_aitken < 1e-7);
+}
+
+/* IQN-ILS on the linear hard problem (2 linked nodes): at most n + 1 quasi-Newton updates
+ * per step for n relaxed unknowns, i.e. convergence detected by iteration n + 2 for
+ * algorithm 2 (n = 12) and n + 3 for algorithm 3 (n = 6; its first iteration starts from
+ * the predicted position, not from the map). */
+static void test_iqn_bound_on_linear_problem(void **state)
+{
+    (void)state;
+    for (int mode = 0; mode < 2; mode++) {
+        cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+        s.relax.method = CPL_RELAX_IQN_ILS;
+        s.relax.alpha = 0.02;
+        s.relax.iqn_reuse_steps = 0;
+        s.relax.iqn_filter = 1e-10;   /* keep every independent column: exact for linear */
+        s.relaxed = mode ? CPL_RELAX_FORCE : CPL_RELAX_DISPLACEMENT_VELOCITY;
+        s.tol_abs = 1e-9;
+        run_result r;
+        run(&HARD, &s, &r, NULL);
+        assert_int_equal(r.rc, 0);
+        int bound = mode ? 6 + 3 : 12 + 2, worst = 0;
+        for (long i = 0; i < r.rec.steps; i++) {
+            assert_true(r.rec.converged[i]);
+            assert_true(r.rec.iterations[i] <= bound);
+            if (r.rec.iterations[i] > worst) worst = r.rec.iterations[i];
+        }
+        print_message("iqn-ils, %s relaxation: at most %d iterations per step (bound %d)\n",
+                      mode ? "force" : "u/v", worst, bound);
+        assert_true(r.u_err < 1e-7);
+    }
+}
+
+/* Algorithm 2 (u, u̇) and algorithm 3 (F) relaxation converge to the same monolithic
+ * solution (1e-7) on the hard problem, with constant α and with Aitken. */
+static void test_force_vs_displacement_relaxation(void **state)
+{
+    (void)state;
+    double e1, e2, e3;
+    long n_disp = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02,
+                                   CPL_RELAX_DISPLACEMENT_VELOCITY, &e1);
+    long n_force = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02, CPL_RELAX_FORCE, &e2);
+    long n_force_const = total_iterations(&HARD, CPL_RELAX_CONSTANT, 0.02, CPL_RELAX_FORCE, &e3);
+    print_message("aitken: displacement %ld, force %ld iterations; constant force %ld\n",
+                  n_disp, n_force, n_force_const);
+    assert_true(e1 < 1e-7 && e2 < 1e-7 && e3 < 1e-7);
+    assert_true(n_force < n_force_const);
+}
+
+static void far_until(tm_structure *s, tm_particles *p)
+{
+    (void)s;
+    p->far_until_s = 0.1;
+}
+
+/* Efficiency option (i): Δt × 10 while the DEM reports nobody near the interface; back to Δt
+ * once it does; the last step ends exactly at end_time. */
+static void test_far_step_option(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.001, 0.2);
+    s.far_step = 1;
+    s.far_step_factor = 10.0;
+    run_result r;
+    run(&MILD, &s, &r, far_until);
+    assert_int_equal(r.rc, 0);
+    assert_float_equal(r.rec.dt[0], 0.001, 1e-15);   /* nothing known yet: nominal */
+    assert_float_equal(r.rec.dt[1], 0.01, 1e-15);
+    assert_float_equal(r.fem_dt_max, 0.01, 1e-15);
+    assert_float_equal(r.rec.dt[r.rec.steps - 1], 0.001, 1e-12);
+    assert_float_equal(r.rec.time[r.rec.steps - 1], 0.2, 1e-12);
+    /* 0.001 + 9 × 0.01 = 0.091 < 0.1, then a large step to 0.101, then 99 small ones */
+    assert_int_equal(r.rec.steps, 1 + 10 + 99);
+}
+
+static void no_gravity(tm_structure *s, tm_particles *p)
+{
+    (void)s;
+    for (size_t i = 0; i < p->nd; i++) p->g[i] = 0.0;
+}
+
+/* Efficiency option (ii): with no load nothing moves, all contact forces are 0 and the FEM is
+ * never asked anything (no begin, solve or accept); with gravity it is solved every step. */
+static void test_skip_fem_without_contact(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s.skip_fem_without_contact = 1;
+    run_result r;
+    run(&MILD, &s, &r, no_gravity);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.fem_solves, 0);
+    assert_int_equal(r.fem_begins, 0);
+    run(&MILD, &s, &r, NULL);
+    assert_true(r.fem_solves >= 10);
+    assert_int_equal(r.fem_begins, 10);
+    assert_true(r.u_err < 1e-8);   /* still the monolithic answer */
+}
+
+static void test_max_iterations_stop_policy(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s.max_iterations = 5;
+    s.on_max_iterations = CPL_MAXIT_STOP;
+    run_result r;
+    run(&HARD, &s, &r, NULL);   /* α = 1 on |J| ≈ 45 cannot converge */
+    assert_int_equal(r.rc, -1);
+    assert_int_equal(r.err.code, CPL_ERR_NOT_CONVERGED);
+    assert_non_null(strstr(r.err.message, "step 0"));
+    assert_non_null(strstr(r.err.message, "after 5 iterations"));
+}
+
+static void fem_fails(tm_structure *s, tm_particles *p)
+{
+    (void)p;
+    s->fail_step = 3;
+    s->fail_iteration = 2;
+}
+
+static void test_participant_error_names_where(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s.relax.method = CPL_RELAX_AITKEN;
+    s.relax.alpha = 0.02;
+    run_result r;
+    run(&HARD, &s, &r, fem_fails);
+    assert_int_equal(r.rc, -1);
+    assert_non_null(r.failure.participant);
+    assert_string_equal(r.failure.participant->name, "fem");
+    assert_int_equal(r.failure.step, 3);
+    assert_int_equal(r.failure.iteration, 2);
+    assert_non_null(strstr(r.err.message, "fem: step 3"));
+    assert_non_null(strstr(r.err.message, "iteration 2"));
+    assert_non_null(strstr(r.err.message, "Newton did not converge"));
+    assert_int_equal(r.rec.steps, 3);   /* steps 0..2 were accepted */
+}
+
+static void test_interrupt_flag(void **state)
+{
+    (void)state;
+    tm_structure st;
+    tm_particles pa;
+    tm_structure_init(&st, 1, 1.0, 100.0, 0.0);
+    tm_particles_init(&pa, 1, 1.0, 1000.0, -9.81);
+    cpl_participant fem = tm_structure_participant(&st), dem = tm_particles_participant(&pa);
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop *loop;
+    nc_error err;
+    cpl_failure failure;
+    volatile sig_atomic_t stop = 1;
+    assert_int_equal(cpl_loop_create(&loop, &s, 1, NULL, NULL, &err), 0);
+    assert_int_equal(cpl_loop_run(loop, &fem, &dem, NULL, &stop, &failure, &err), -1);
+    assert_int_equal(err.code, CPL_ERR_INTERRUPTED);
+    assert_null(failure.participant);
+    assert_int_equal(st.begins, 0);
+    cpl_loop_free(loop);
+    tm_structure_free(&st);
+    tm_particles_free(&pa);
+}
+
+static void test_settings_check(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    nc_error err;
+    s.tol_abs = 0.0;
+    assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
+    assert_non_null(strstr(err.message, "coupler.json: tolerance"));
+    s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s.relax.method = CPL_RELAX_AITKEN;
+    s.relax.alpha_min = 1.0;
+    s.relax.alpha_max = 0.5;
+    assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_strong_matches_monolithic),
+        cmocka_unit_test(test_weak_lags_first_order),
+        cmocka_unit_test(test_alpha_one_diverges_where_theory_says),
+        cmocka_unit_test(test_aitken_fewer_iterations_than_constant),
+        cmocka_unit_test(test_iqn_bound_on_linear_problem),
+        cmocka_unit_test(test_force_vs_displacement_relaxation),
+        cmocka_unit_test(test_far_step_option),
+        cmocka_unit_test(test_skip_fem_without_contact),
+        cmocka_unit_test(test_max_iterations_stop_policy),
+        cmocka_unit_test(test_participant_error_names_where),
+        cmocka_unit_test(test_interrupt_flag),
+        cmocka_unit_test(test_settings_check),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,261 @@
+/* Unit tests of the relaxation methods on fixed-point problems x = H(x) with known answers:
+ * constant (31)–(33), Aitken (34) with first-iteration cap, clipping and zero-denominator
+ * guard, IQN-ILS (exact for an affine map after at most n + 1 updates), QR filter, reuse. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../../coupler/cpl_relax.h"
+#include "../../coupler/cpl_relax_aitken.h"
+#include "../../coupler/cpl_relax_iqn.h"
+
+static cpl_relax *make(cpl_relax_method method, double alpha, size_t n, size_t blocks)
+{
+    cpl_relax_settings s;
+    cpl_relax_settings_default(&s);
+    s.method = method;
+    s.alpha = alpha;
+    s.iqn_reuse_steps = 0;
+    s.iqn_filter = 1e-10;   /* exactness claims need all independent columns */
+    cpl_relax *r = NULL;
+    nc_error err;
+    assert_int_equal(cpl_relax_create(&r, &s, n, blocks, &err), 0);
+    return r;
+}
+
+static void test_constant_and_none(void **state)
+{
+    (void)state;
+    cpl_relax *r = make(CPL_RELAX_CONSTANT, 0.25, 2, 1);
+    const double in[2] = {1.0, 2.0}, out[2] = {5.0, -2.0};
+    double next[2], alpha;
+    nc_error err;
+    cpl_relax_begin_step(r);
+    assert_int_equal(cpl_relax_update(r, in, out, next, &alpha, &err), 0);
+    assert_float_equal(next[0], 2.0, 1e-15);   /* 1 + 0.25 · 4 */
+    assert_float_equal(next[1], 1.0, 1e-15);   /* 2 + 0.25 · (−4) */
+    assert_float_equal(alpha, 0.25, 0.0);
+    cpl_relax_free(r);
+    r = make(CPL_RELAX_NONE, 0.5, 2, 1);
+    assert_int_equal(cpl_relax_update(r, in, out, next, &alpha, &err), 0);
+    assert_float_equal(next[0], 5.0, 0.0);
+    assert_float_equal(alpha, 1.0, 0.0);
+    cpl_relax_free(r);
+}
+
+/* Scalar affine map H(x) = a x + b: Aitken's second factor is 1/(1 − a) exactly, so the
+ * second update lands on the fixed point x* = b / (1 − a) (to round-off, 1e-12). */
+static void test_aitken_exact_on_scalar_affine_map(void **state)
+{
+    (void)state;
+    const double a = -3.0, b = 2.0, xstar = b / (1.0 - a);
+    cpl_relax *r = make(CPL_RELAX_AITKEN, 0.5, 1, 1);
+    double x = 0.0, out, alpha;
+    nc_error err;
+    cpl_relax_begin_step(r);
+    for (int k = 0; k < 2; k++) {
+        out = a * x + b;
+        assert_int_equal(cpl_relax_update(r, &x, &out, &x, &alpha, &err), 0);
+    }
+    assert_float_equal(alpha, 1.0 / (1.0 - a), 1e-12);
+    assert_float_equal(x, xstar, 1e-12);
+    cpl_relax_free(r);
+}
+
+static void test_aitken_first_iteration_cap_and_sign(void **state)
+{
+    (void)state;
+    cpl_aitken a;
+    nc_error err;
+    /* α0 = 0.9, cap 0.5: a later step's first α is min(0.5, 0.9) */
+    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.9, 0.5, -1.0, 2.0, &err), 0);
+    double x = 0.0, out = 1.0;
+    cpl_aitken_begin_step(&a);
+    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), 0.9, 0.0);   /* very first: α0 */
+    cpl_aitken_begin_step(&a);
+    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), 0.5, 0.0);   /* capped */
+    /* a negative previous α keeps its sign: sign(α)·min(cap, |α|) */
+    a.alpha[0] = -0.3;
+    cpl_aitken_begin_step(&a);
+    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), -0.3, 0.0);
+    cpl_aitken_free(&a);
+}
+
+static void test_aitken_clipping_and_zero_denominator(void **state)
+{
+    (void)state;
+    cpl_aitken a;
+    nc_error err;
+    /* H(x) = 3x + 1 (slope > 1): eq. (34) gives α = 1/(1 − 3) = −0.5, clipped to 1e-3 */
+    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-3, 2.0, &err), 0);
+    double x = 0.0, out;
+    cpl_aitken_begin_step(&a);
+    for (int k = 0; k < 2; k++) {
+        out = 3.0 * x + 1.0;
+        cpl_aitken_update(&a, &x, &out, &x);
+    }
+    assert_float_equal(a.alpha[0], 1e-3, 0.0);
+    cpl_aitken_free(&a);
+
+    /* identical residuals twice: ‖Δr‖ = 0, α must stay the previous one (no NaN) */
+    assert_int_equal(cpl_aitken_init(&a, 2, 2, 0.4, 0.5, 1e-6, 2.0, &err), 0);
+    double in[2] = {1.0, 1.0}, o[2] = {2.0, 3.0}, next[2];
+    cpl_aitken_begin_step(&a);
+    cpl_aitken_update(&a, in, o, next);
+    double alpha = cpl_aitken_update(&a, in, o, next);
+    assert_float_equal(alpha, 0.4, 0.0);
+    assert_true(isfinite(next[0]) && isfinite(next[1]));
+    /* blocks get separate factors: block 1's residual is twice block 0's, same α here */
+    assert_float_equal(a.alpha[1], 0.4, 0.0);
+    cpl_aitken_free(&a);
+}
+
+/* Affine map H(x) = A x + b with a non-symmetric A of spectral radius > 1 (plain iteration
+ * diverges). IQN-ILS is exact for affine maps once it has n independent columns: the
+ * (n+1)-th update (evaluation n + 2 checks it) gives x* to round-off (1e-9 relative). */
+static void test_iqn_linear_in_n_plus_1_updates(void **state)
+{
+    (void)state;
+    enum { N = 6 };
+    double A[N * N], b[N];
+    unsigned seed = 12345;
+    for (int i = 0; i < N * N; i++) {
+        seed = seed * 1103515245u + 12345u;
+        A[i] = ((double)(seed >> 8 & 0xffff) / 65535.0 - 0.5) * 2.0;
+    }
+    for (int i = 0; i < N; i++) {
+        A[i * N + i] -= 1.5;   /* makes plain fixed-point iteration diverge */
+        b[i] = 1.0 + i;
+    }
+    cpl_relax *r = make(CPL_RELAX_IQN_ILS, 0.1, N, 1);
+    double x[N] = {0}, out[N], alpha;
+    nc_error err;
+    cpl_relax_begin_step(r);
+    int evaluations = 0;
+    double res = INFINITY;
+    for (int k = 0; k < 20; k++) {
+        for (int i = 0; i < N; i++) {
+            out[i] = b[i];
+            for (int j = 0; j < N; j++) out[i] += A[i * N + j] * x[j];
+        }
+        evaluations++;
+        res = 0.0;
+        for (int i = 0; i < N; i++) res += (out[i] - x[i]) * (out[i] - x[i]);
+        res = sqrt(res);
+        if (res < 1e-9) break;
+        assert_int_equal(cpl_relax_update(r, x, out, x, &alpha, &err), 0);
+        if (k == 0) assert_float_equal(alpha, 0.1, 0.0);   /* no columns: plain step */
+        else assert_true(isnan(alpha));
+    }
+    assert_true(res < 1e-9);
+    assert_true(evaluations <= N + 2);
+    cpl_relax_free(r);
+}
+
+/* The same x evaluated twice gives a zero column: the filter must drop it, no NaN. */
+static void test_iqn_filter_drops_dependent_columns(void **state)
+{
+    (void)state;
+    cpl_iqn q;
+    nc_error err;
+    assert_int_equal(cpl_iqn_init(&q, 3, 0, 0.5, 1e-8, 0, &err), 0);
+    cpl_iqn_begin_step(&q);
+    double x[3] = {1, 2, 3}, out[3] = {2, 2, 2}, next[3];
+    cpl_iqn_update(&q, x, out, next);
+    cpl_iqn_update(&q, x, out, next);   /* identical pair -> zero column */
+    assert_true(q.dropped >= 1);
+    assert_int_equal((int)q.cols, 0);
+    for (int i = 0; i < 3; i++) assert_true(isfinite(next[i]));
+    /* parallel columns (new step, so only these pairs count): equal residual differences */
+    cpl_iqn_begin_step(&q);
+    double x2[3] = {0, 0, 0}, o2[3] = {1, 1, 1};
+    cpl_iqn_update(&q, x2, o2, next);
+    double x3[3] = {1, 1, 1}, o3[3] = {3, 3, 3};
+    cpl_iqn_update(&q, x3, o3, next);
+    double x4[3] = {2, 2, 2}, o4[3] = {5, 5, 5};
+    cpl_iqn_update(&q, x4, o4, next);
+    assert_true(q.cols <= 1);
+    cpl_iqn_free(&q);
+}
+
+static int solve_affine(cpl_relax *r, const double *A, const double *b, int n)
+{
+    double x[8] = {0}, out[8], alpha;
+    nc_error err;
+    cpl_relax_begin_step(r);
+    for (int k = 1; k <= 30; k++) {
+        double res = 0.0;
+        for (int i = 0; i < n; i++) {
+            out[i] = b[i];
+            for (int j = 0; j < n; j++) out[i] += A[i * n + j] * x[j];
+            res += (out[i] - x[i]) * (out[i] - x[i]);
+        }
+        if (sqrt(res) < 1e-9) {
+            cpl_relax_end_step(r, x, out);
+            return k;
+        }
+        if (cpl_relax_update(r, x, out, x, &alpha, &err)) return 99;
+    }
+    return 99;
+}
+
+/* Reusing the previous step's columns: the next step of the same linear map (new b)
+ * needs fewer evaluations than the first. */
+static void test_iqn_reuse_previous_steps(void **state)
+{
+    (void)state;
+    enum { N = 5 };
+    double A[N * N] = {0}, b1[N], b2[N];
+    for (int i = 0; i < N; i++) {
+        A[i * N + i] = -2.0 - 0.3 * i;
+        if (i + 1 < N) A[i * N + i + 1] = 0.5;
+        b1[i] = 1.0;
+        b2[i] = 1.0 + 0.1 * i;
+    }
+    cpl_relax_settings s;
+    cpl_relax_settings_default(&s);
+    s.method = CPL_RELAX_IQN_ILS;
+    s.alpha = 0.2;
+    s.iqn_reuse_steps = 2;
+    s.iqn_filter = 1e-10;
+    cpl_relax *r;
+    nc_error err;
+    assert_int_equal(cpl_relax_create(&r, &s, N, 1, &err), 0);
+    int first = solve_affine(r, A, b1, N);
+    int second = solve_affine(r, A, b2, N);
+    assert_true(first <= N + 2);
+    assert_true(second < first);
+    cpl_relax_free(r);
+}
+
+static void test_divergence_reported(void **state)
+{
+    (void)state;
+    cpl_relax *r = make(CPL_RELAX_CONSTANT, 1.0, 1, 1);
+    double x = 0.0, out = INFINITY, alpha;
+    nc_error err;
+    assert_int_equal(cpl_relax_update(r, &x, &out, &x, &alpha, &err), -1);
+    assert_non_null(strstr(err.message, "non-finite"));
+    cpl_relax_free(r);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_constant_and_none),
+        cmocka_unit_test(test_aitken_exact_on_scalar_affine_map),
+        cmocka_unit_test(test_aitken_first_iteration_cap_and_sign),
+        cmocka_unit_test(test_aitken_clipping_and_zero_denominator),
+        cmocka_unit_test(test_iqn_linear_in_n_plus_1_updates),
+        cmocka_unit_test(test_iqn_filter_drops_dependent_columns),
+        cmocka_unit_test(test_iqn_reuse_previous_steps),
+        cmocka_unit_test(test_divergence_reported),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
