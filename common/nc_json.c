@@ -9,16 +9,25 @@
 
 #define NC_JSON_MAX_FILE_BYTES (512L * 1024 * 1024)
 
+/* "fem.json" + "nodes" -> "fem.json: nodes"; "fem.json: supports[0]" + "dofs" ->
+ * "fem.json: supports[0].dofs": the file is set off from the path inside it. */
+static const char *separator(const char *where, const char *key)
+{
+    if (!where[0] || !key[0]) return "";
+    size_t length = strlen(where);
+    return length >= 5 && strcmp(where + length - 5, ".json") == 0 ? ": " : ".";
+}
+
 const char *nc_json_path(char *buf, size_t size, const char *where, const char *key)
 {
-    snprintf(buf, size, "%s%s%s", where, (where[0] && key[0]) ? "." : "", key);
+    snprintf(buf, size, "%s%s%s", where, separator(where, key), key);
     return buf;
 }
 
 const char *nc_json_path_index(char *buf, size_t size, const char *where, const char *key,
                                int index)
 {
-    snprintf(buf, size, "%s%s%s[%d]", where, (where[0] && key[0]) ? "." : "", key, index);
+    snprintf(buf, size, "%s%s%s[%d]", where, separator(where, key), key, index);
     return buf;
 }
 

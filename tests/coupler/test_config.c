@@ -87,7 +87,7 @@ static void test_bad_input_messages(void **state)
 {
     (void)state;
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.001, \"end_time\": 1, \"tolerence\": 1}",
-                 "coupler.json.tolerence: unknown key");
+                 "coupler.json: tolerence: unknown key");
     expect_error("{\"dt\": 0.001, \"end_time\": 1}", "scheme");
     expect_error("{\"scheme\": \"implicit\", \"dt\": 0.001, \"end_time\": 1}", "\"weak\", \"strong\"");
     expect_error("{\"scheme\": \"weak\", \"dt\": -1, \"end_time\": 1}", "dt");
