@@ -1,0 +1,503 @@
+/* dem_config — dem.json parser with validated fields and named errors. */
+#include "dem_config.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dem_neighbor_grid.h"
+#include "dem_stl.h"
+#include "nc_json.h"
+
+static int find_material(const dem_sim *s, const cJSON *obj, const char *where, int *index,
+                         nc_error *err)
+{
+    const char *name;
+    if (nc_json_string_opt(obj, where, "material", NULL, &name, err)) return -1;
+    if (!name) {
+        *index = 0;
+        return 0;
+    }
+    for (size_t k = 0; k < s->n_materials; k++)
+        if (strcmp(s->materials[k].name, name) == 0) {
+            *index = (int)k;
+            return 0;
+        }
+    return nc_error_set(err, 1, "%s.material: unknown material \"%s\" (define it in materials)",
+                        where, name);
+}
+
+static int parse_materials(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"name", "youngs_modulus_pa", "poisson_ratio",
+                                       "density_kg_m3", "restitution", "friction", NULL};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array(root, file, "materials", &arr, &count, err)) return -1;
+    if (count == 0) return nc_error_set(err, 1, "%s.materials: expected at least one material", file);
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "materials", k);
+        const cJSON *m = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(m)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(m, where, keys, err)) return -1;
+        dem_material mat;
+        memset(&mat, 0, sizeof mat);
+        const char *name;
+        if (nc_json_string(m, where, "name", &name, err) ||
+            nc_json_positive(m, where, "youngs_modulus_pa", &mat.youngs_modulus_pa, err) ||
+            nc_json_number_range(m, where, "poisson_ratio", -0.999, 0.5, &mat.poisson_ratio, err) ||
+            nc_json_positive(m, where, "density_kg_m3", &mat.density_kg_m3, err) ||
+            nc_json_number_range(m, where, "restitution", 0.0, 1.0, &mat.restitution, err) ||
+            nc_json_number_range(m, where, "friction", 0.0, INFINITY, &mat.friction, err))
+            return -1;
+        if (strlen(name) == 0 || strlen(name) >= sizeof mat.name)
+            return nc_error_set(err, 1, "%s.name: expected 1 to %zu characters", where,
+                                sizeof mat.name - 1);
+        for (size_t q = 0; q < s->n_materials; q++)
+            if (strcmp(s->materials[q].name, name) == 0)
+                return nc_error_set(err, 1, "%s.name: material \"%s\" defined twice", where, name);
+        snprintf(mat.name, sizeof mat.name, "%s", name);
+        if (dem_sim_add_material(s, &mat, err) < 0) return -1;
+    }
+    return 0;
+}
+
+static int parse_particles(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"position", "radius", "velocity", "angular_velocity",
+                                       "material", NULL};
+    static const double zero[3] = {0, 0, 0};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array_opt(root, file, "particles", &arr, &count, err)) return -1;
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "particles", k);
+        const cJSON *p = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(p)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(p, where, keys, err)) return -1;
+        double pos[3], vel[3], omega[3], r;
+        int mat;
+        if (nc_json_vec3(p, where, "position", pos, err) ||
+            nc_json_positive(p, where, "radius", &r, err) ||
+            nc_json_vec3_opt(p, where, "velocity", zero, vel, err) ||
+            nc_json_vec3_opt(p, where, "angular_velocity", zero, omega, err) ||
+            find_material(s, p, where, &mat, err))
+            return -1;
+        if (dem_sim_add_sphere(s, pos, r, mat, vel, omega, err)) return nc_error_prefix(err, "%s", where);
+    }
+    return 0;
+}
+
+/* xorshift64* — a small reproducible generator whose state lives in the caller. */
+static double rng_uniform(uint64_t *state)
+{
+    uint64_t x = *state;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    *state = x;
+    return (double)((x * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static int generate_lattice(dem_sim *s, const cJSON *g, const char *where, const double lo[3],
+                            const double hi[3], double r, int mat, const double vel[3],
+                            nc_error *err)
+{
+    double spacing;
+    if (nc_json_number_range_opt(g, where, "spacing", 2.0 * r, 2.0 * r, INFINITY, &spacing, err))
+        return -1;
+    long n[3];
+    for (int k = 0; k < 3; k++) {
+        double room = hi[k] - lo[k] - 2.0 * r;
+        n[k] = (long)floor(room / spacing + 1e-9) + 1;
+    }
+    if ((double)n[0] * (double)n[1] * (double)n[2] > 5e7)
+        return nc_error_set(err, 1, "%s: lattice would hold more than 5e7 spheres", where);
+    for (long z = 0; z < n[2]; z++)
+        for (long y = 0; y < n[1]; y++)
+            for (long x = 0; x < n[0]; x++) {
+                double p[3] = {lo[0] + r + (double)x * spacing, lo[1] + r + (double)y * spacing,
+                               lo[2] + r + (double)z * spacing};
+                if (dem_sim_add_sphere(s, p, r, mat, vel, NULL, err)) return -1;
+            }
+    return 0;
+}
+
+static int generate_random(dem_sim *s, const cJSON *g, const char *where, const double lo[3],
+                           const double hi[3], double r, int mat, const double vel[3],
+                           nc_error *err)
+{
+    long count, seed, attempts;
+    double rmax;
+    if (nc_json_int(g, where, "count", 1, 50000000, &count, err) ||
+        nc_json_int_opt(g, where, "seed", 1, 0, 0x7fffffffL, &seed, err) ||
+        nc_json_int_opt(g, where, "max_attempts", 1000, 1, 1000000000L, &attempts, err) ||
+        nc_json_number_range_opt(g, where, "radius_max", r, r, INFINITY, &rmax, err))
+        return -1;
+    for (int k = 0; k < 3; k++)
+        if (hi[k] - lo[k] <= 2.0 * rmax)
+            return nc_error_set(err, 1, "%s: the box is smaller than one sphere diameter", where);
+    /* placed spheres in a hash grid of cells >= 2 rmax: a candidate checks 27 cells */
+    double cell = 2.0 * rmax;
+    long dims[3];
+    double total = 1.0;
+    for (int k = 0; k < 3; k++) {
+        dims[k] = (long)floor((hi[k] - lo[k]) / cell) + 1;
+        total *= (double)dims[k];
+    }
+    while (total > 4.0 * (double)count + 1e6) {
+        cell *= 1.5;
+        total = 1.0;
+        for (int k = 0; k < 3; k++) {
+            dims[k] = (long)floor((hi[k] - lo[k]) / cell) + 1;
+            total *= (double)dims[k];
+        }
+    }
+    size_t ncell = (size_t)total;
+    int32_t *head = malloc(ncell * sizeof *head);
+    int32_t *next = malloc((size_t)count * sizeof *next);
+    double *xyz = malloc(3 * (size_t)count * sizeof *xyz);
+    double *rad = malloc((size_t)count * sizeof *rad);
+    if (!head || !next || !xyz || !rad) {
+        free(head); free(next); free(xyz); free(rad);
+        return nc_error_set(err, 1, "%s: out of memory for %ld spheres", where, count);
+    }
+    for (size_t c = 0; c < ncell; c++) head[c] = -1;
+    uint64_t state = 0x9E3779B97F4A7C15ULL ^ (uint64_t)seed;
+    long placed = 0, tries = 0, max_tries = attempts * count;
+    while (placed < count && tries < max_tries) {
+        tries++;
+        double rr = r + (rmax - r) * rng_uniform(&state);
+        double p[3];
+        long c[3];
+        for (int k = 0; k < 3; k++) {
+            p[k] = lo[k] + rr + (hi[k] - lo[k] - 2.0 * rr) * rng_uniform(&state);
+            c[k] = (long)((p[k] - lo[k]) / cell);
+            if (c[k] >= dims[k]) c[k] = dims[k] - 1;
+        }
+        int ok = 1;
+        for (long dz = -1; dz <= 1 && ok; dz++)
+            for (long dy = -1; dy <= 1 && ok; dy++)
+                for (long dx = -1; dx <= 1 && ok; dx++) {
+                    long x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+                    if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) continue;
+                    for (int32_t q = head[(z * dims[1] + y) * dims[0] + x]; q >= 0 && ok; q = next[q]) {
+                        double d2 = 0.0;
+                        for (int k = 0; k < 3; k++) {
+                            double d = xyz[3 * q + k] - p[k];
+                            d2 += d * d;
+                        }
+                        double rs = rr + rad[q];
+                        if (d2 < rs * rs) ok = 0;
+                    }
+                }
+        if (!ok) continue;
+        memcpy(xyz + 3 * placed, p, sizeof p);
+        rad[placed] = rr;
+        size_t id = (size_t)((c[2] * dims[1] + c[1]) * dims[0] + c[0]);
+        next[placed] = head[id];
+        head[id] = (int32_t)placed;
+        placed++;
+    }
+    int rc = 0;
+    if (placed < count)
+        rc = nc_error_set(err, 1, "%s: placed only %ld of %ld non-overlapping spheres after %ld "
+                                  "attempts (box too small for count?)", where, placed, count, tries);
+    for (long k = 0; k < placed && rc == 0; k++)
+        rc = dem_sim_add_sphere(s, xyz + 3 * k, rad[k], mat, vel, NULL, err);
+    free(head); free(next); free(xyz); free(rad);
+    return rc;
+}
+
+static int parse_generators(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"type", "min", "max", "radius", "radius_max", "material",
+                                       "velocity", "spacing", "count", "seed", "max_attempts", NULL};
+    static const char *const types[] = {"lattice", "random", NULL};
+    static const double zero[3] = {0, 0, 0};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array_opt(root, file, "generators", &arr, &count, err)) return -1;
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "generators", k);
+        const cJSON *g = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(g)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(g, where, keys, err)) return -1;
+        int type, mat;
+        double lo[3], hi[3], vel[3], r;
+        if (!cJSON_GetObjectItemCaseSensitive(g, "type"))
+            return nc_error_set(err, 1, "%s.type: missing (expected \"lattice\" or \"random\")", where);
+        if (nc_json_choice_opt(g, where, "type", types, 0, &type, err) ||
+            nc_json_vec3(g, where, "min", lo, err) || nc_json_vec3(g, where, "max", hi, err) ||
+            nc_json_positive(g, where, "radius", &r, err) ||
+            nc_json_vec3_opt(g, where, "velocity", zero, vel, err) ||
+            find_material(s, g, where, &mat, err))
+            return -1;
+        for (int d = 0; d < 3; d++)
+            if (hi[d] - lo[d] < 2.0 * r)
+                return nc_error_set(err, 1, "%s: max - min must be at least one diameter (%g m) "
+                                            "in every direction", where, 2.0 * r);
+        if (type == 1 && !cJSON_GetObjectItemCaseSensitive(g, "count"))
+            return nc_error_set(err, 1, "%s.count: missing (expected an integer >= 1)", where);
+        int rc = type == 0 ? generate_lattice(s, g, where, lo, hi, r, mat, vel, err)
+                           : generate_random(s, g, where, lo, hi, r, mat, vel, err);
+        if (rc) return -1;
+    }
+    return 0;
+}
+
+static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"spheres", "material", "velocity", "angular_velocity", NULL};
+    static const char *const skeys[] = {"position", "radius", NULL};
+    static const double zero[3] = {0, 0, 0};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array_opt(root, file, "clusters", &arr, &count, err)) return -1;
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "clusters", k);
+        const cJSON *c = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(c)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(c, where, keys, err)) return -1;
+        const cJSON *sp;
+        int ns, mat;
+        double vel[3], omega[3];
+        if (nc_json_array(c, where, "spheres", &sp, &ns, err) ||
+            nc_json_vec3_opt(c, where, "velocity", zero, vel, err) ||
+            nc_json_vec3_opt(c, where, "angular_velocity", zero, omega, err) ||
+            find_material(s, c, where, &mat, err))
+            return -1;
+        if (ns == 0) return nc_error_set(err, 1, "%s.spheres: expected at least one sphere", where);
+        double *pos = malloc(3 * (size_t)ns * sizeof *pos), *rad = malloc((size_t)ns * sizeof *rad);
+        if (!pos || !rad) {
+            free(pos); free(rad);
+            return nc_error_set(err, 1, "%s: out of memory", where);
+        }
+        int rc = 0;
+        for (int q = 0; q < ns && rc == 0; q++) {
+            char sw[700];
+            nc_json_path_index(sw, sizeof sw, where, "spheres", q);
+            const cJSON *o = cJSON_GetArrayItem(sp, q);
+            if (!cJSON_IsObject(o)) rc = nc_error_set(err, 1, "%s: expected an object", sw);
+            else rc = nc_json_check_keys(o, sw, skeys, err) ||
+                      nc_json_vec3(o, sw, "position", pos + 3 * q, err) ||
+                      nc_json_positive(o, sw, "radius", rad + q, err) ? -1 : 0;
+        }
+        if (rc == 0) rc = dem_sim_add_cluster(s, (size_t)ns, pos, rad, mat, vel, omega, err);
+        free(pos);
+        free(rad);
+        if (rc) return -1;
+    }
+    return 0;
+}
+
+static int parse_planes(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"point", "normal", "velocity", "material", NULL};
+    static const double zero[3] = {0, 0, 0};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array_opt(root, file, "planes", &arr, &count, err)) return -1;
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "planes", k);
+        const cJSON *p = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(p)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(p, where, keys, err)) return -1;
+        double point[3], normal[3], vel[3];
+        int mat;
+        if (nc_json_vec3(p, where, "point", point, err) ||
+            nc_json_vec3(p, where, "normal", normal, err) ||
+            nc_json_vec3_opt(p, where, "velocity", zero, vel, err) ||
+            find_material(s, p, where, &mat, err))
+            return -1;
+        if (dem_sim_add_plane(s, point, normal, vel, mat, err)) return nc_error_prefix(err, "%s", where);
+    }
+    return 0;
+}
+
+static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const char *base_dir,
+                        nc_error *err)
+{
+    static const char *const keys[] = {"file", "velocity", "material", NULL};
+    static const double zero[3] = {0, 0, 0};
+    const cJSON *arr;
+    int count;
+    if (nc_json_array_opt(root, file, "meshes", &arr, &count, err)) return -1;
+    if (count == 0) return 0;
+    s->meshes = calloc((size_t)count, sizeof *s->meshes);
+    if (!s->meshes) return nc_error_set(err, 1, "dem: out of memory");
+    for (int k = 0; k < count; k++) {
+        char where[600];
+        nc_json_path_index(where, sizeof where, file, "meshes", k);
+        const cJSON *m = cJSON_GetArrayItem(arr, k);
+        if (!cJSON_IsObject(m)) return nc_error_set(err, 1, "%s: expected an object", where);
+        if (nc_json_check_keys(m, where, keys, err)) return -1;
+        dem_mesh *mesh = &s->meshes[k];
+        s->n_meshes = (size_t)k + 1;
+        const char *path;
+        int mat;
+        if (nc_json_string(m, where, "file", &path, err) ||
+            nc_json_vec3_opt(m, where, "velocity", zero, mesh->velocity, err) ||
+            find_material(s, m, where, &mat, err))
+            return -1;
+        mesh->material = mat;
+        char full[1024];
+        if (path[0] == '/' || !base_dir || !base_dir[0]) snprintf(full, sizeof full, "%s", path);
+        else snprintf(full, sizeof full, "%s/%s", base_dir, path);
+        if (dem_stl_load(mesh, full, err)) return nc_error_prefix(err, "%s.file", where);
+    }
+    return 0;
+}
+
+static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+{
+    static const char *const keys[] = {"youngs_modulus_pa", "poisson_ratio", "friction",
+                                       "restitution", "cable_radius_m", "near_distance_m", NULL};
+    const cJSON *w;
+    if (nc_json_object_opt(root, file, "net_wall", &w, err)) return -1;
+    if (!w) return 0;
+    char where[600];
+    nc_json_path(where, sizeof where, file, "net_wall");
+    dem_net *n = &s->net;
+    if (nc_json_check_keys(w, where, keys, err) ||
+        nc_json_positive(w, where, "youngs_modulus_pa", &n->youngs_modulus_pa, err) ||
+        nc_json_number_range(w, where, "poisson_ratio", -0.999, 0.5, &n->poisson_ratio, err) ||
+        nc_json_number_range(w, where, "friction", 0.0, INFINITY, &n->friction, err) ||
+        nc_json_number_range_opt(w, where, "restitution", -1.0, 0.0, 1.0, &n->restitution, err) ||
+        nc_json_number_range_opt(w, where, "cable_radius_m", 0.0, 0.0, INFINITY, &n->cable_radius_m, err) ||
+        nc_json_number_range_opt(w, where, "near_distance_m", -1.0, 0.0, INFINITY, &n->near_distance_m, err))
+        return -1;
+    return 0;
+}
+
+static int parse_root(dem_sim *s, const cJSON *root, const char *file, const char *base_dir,
+                      nc_error *err)
+{
+    static const char *const keys[] = {"description", "materials", "particles", "generators",
+                                       "clusters", "planes", "meshes", "gravity", "dt_s",
+                                       "dt_safety", "end_time_s", "output_interval_s",
+                                       "contact_law", "damping", "linear", "net_wall", "threads",
+                                       "neighbor_skin_m", "free_flight", NULL};
+    static const char *const laws[] = {"hertz_mindlin", "linear", NULL};
+    static const char *const dampings[] = {"fit", "a7", NULL};
+    static const double g0[3] = {0, 0, -9.81};
+    snprintf(s->source, sizeof s->source, "%s", file);
+    if (nc_json_check_keys(root, file, keys, err)) return -1;
+    dem_params *p = &s->prm;
+    int law;
+    if (nc_json_vec3_opt(root, file, "gravity", g0, p->gravity, err) ||
+        nc_json_choice_opt(root, file, "contact_law", laws, 0, &law, err))
+        return -1;
+    p->law = (dem_law)law;
+    int damping;
+    if (nc_json_choice_opt(root, file, "damping", dampings, law == 0 ? 0 : 1, &damping, err))
+        return -1;
+    p->damping = (dem_damping_formula)damping;
+    const cJSON *dt = cJSON_GetObjectItemCaseSensitive(root, "dt_s");
+    if (!dt || (cJSON_IsString(dt) && strcmp(dt->valuestring, "auto") == 0)) {
+        p->dt_auto = 1;
+    } else if (cJSON_IsNumber(dt) && dt->valuedouble > 0.0 && isfinite(dt->valuedouble)) {
+        p->dt_auto = 0;
+        p->dt_s = dt->valuedouble;
+    } else {
+        return nc_error_set(err, 1, "%s.dt_s: expected a number > 0 or \"auto\"", file);
+    }
+    long threads;
+    if (nc_json_number_range_opt(root, file, "dt_safety", 0.1, 1e-6, 1.0, &p->dt_safety, err) ||
+        nc_json_number_range_opt(root, file, "end_time_s", 1.0, 0.0, INFINITY, &p->end_time_s, err) ||
+        nc_json_number_range_opt(root, file, "output_interval_s", p->end_time_s / 100.0, 0.0,
+                                 INFINITY, &p->output_interval_s, err) ||
+        nc_json_int_opt(root, file, "threads", 0, 0, DEM_MAX_BUFFERS, &threads, err) ||
+        nc_json_number_range_opt(root, file, "neighbor_skin_m", 0.0, 0.0, INFINITY, &s->skin_m, err) ||
+        nc_json_bool_opt(root, file, "free_flight", 0, &p->free_flight, err))
+        return -1;
+    p->threads = (int)threads;
+    const cJSON *lin;
+    if (nc_json_object_opt(root, file, "linear", &lin, err)) return -1;
+    if (lin) {
+        static const char *const lkeys[] = {"normal_stiffness_n_per_m",
+                                            "tangential_stiffness_ratio", NULL};
+        char where[600];
+        nc_json_path(where, sizeof where, file, "linear");
+        if (nc_json_check_keys(lin, where, lkeys, err) ||
+            nc_json_positive(lin, where, "normal_stiffness_n_per_m", &p->linear_kn_n_per_m, err) ||
+            nc_json_number_range_opt(lin, where, "tangential_stiffness_ratio", 2.0 / 7.0, 0.0,
+                                     INFINITY, &p->linear_kt_ratio, err))
+            return -1;
+    } else if (p->law == DEM_LAW_LINEAR) {
+        return nc_error_set(err, 1, "%s.linear: missing (the linear contact law needs "
+                                    "{\"normal_stiffness_n_per_m\": k})", file);
+    }
+    if (parse_materials(s, root, file, err) || parse_particles(s, root, file, err) ||
+        parse_generators(s, root, file, err) || parse_clusters(s, root, file, err) ||
+        parse_planes(s, root, file, err) || parse_meshes(s, root, file, base_dir, err) ||
+        parse_net_wall(s, root, file, err))
+        return -1;
+    return 0;
+}
+
+/* Builds the item grids of the meshes (triangles, mesh frame). */
+static int build_mesh_grids(dem_sim *s, nc_error *err)
+{
+    double rmax = 0.0;
+    for (size_t i = 0; i < s->sph.n; i++) rmax = fmax(rmax, s->sph.radius[i]);
+    for (size_t m = 0; m < s->n_meshes; m++) {
+        dem_mesh *mesh = &s->meshes[m];
+        size_t nt = mesh->n_triangles;
+        double *lo = malloc(3 * nt * sizeof *lo), *hi = malloc(3 * nt * sizeof *hi);
+        mesh->grid = calloc(1, sizeof *mesh->grid);
+        if (!lo || !hi || !mesh->grid) {
+            free(lo); free(hi);
+            return nc_error_set(err, 1, "dem: out of memory for mesh %s", mesh->path);
+        }
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 3; k++) {
+                double a = mesh->vertices[3 * (size_t)mesh->tri[3 * t] + k];
+                double b = mesh->vertices[3 * (size_t)mesh->tri[3 * t + 1] + k];
+                double c = mesh->vertices[3 * (size_t)mesh->tri[3 * t + 2] + k];
+                lo[3 * t + k] = fmin(a, fmin(b, c));
+                hi[3 * t + k] = fmax(a, fmax(b, c));
+            }
+        int rc = dem_item_grid_build(mesh->grid, nt, lo, hi, rmax > 0 ? rmax : 1.0, err);
+        free(lo);
+        free(hi);
+        if (rc) return -1;
+    }
+    return 0;
+}
+
+int dem_config_parse_string(dem_sim *s, const char *json, const char *where,
+                            const char *base_dir, nc_error *err)
+{
+    cJSON *root = cJSON_Parse(json);
+    if (!root || !cJSON_IsObject(root)) {
+        cJSON_Delete(root);
+        return nc_error_set(err, 1, "%s: malformed JSON (expected an object)", where);
+    }
+    int rc = parse_root(s, root, where, base_dir, err);
+    cJSON_Delete(root);
+    if (rc == 0) rc = build_mesh_grids(s, err);
+    return rc;
+}
+
+int dem_config_load(dem_sim *s, const char *path, nc_error *err)
+{
+    cJSON *root;
+    if (nc_json_load_file(path, &root, err)) return -1;
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = '\0';
+    else snprintf(dir, sizeof dir, ".");
+    int rc = parse_root(s, root, path, dir, err);
+    cJSON_Delete(root);
+    if (rc == 0) rc = build_mesh_grids(s, err);
+    return rc;
+}

@@ -1,0 +1,91 @@
+/* dem_contact_hertz — the contact force law of one contact (Appendix A, eq. (A.5), Table 3).
+ *
+ * Hertz–Mindlin: Fn = 4/3 E* sqrt(R*) δ^1.5 + cn δ̇, cn = 2 ζ sqrt(m* kn') with the tangent
+ * stiffness kn' = 2 E* sqrt(R* δ) (the stiffness the fit (A.8)-(A.10) was made for), clamped to
+ * Fn >= 0 (no tension). Tangential: incremental spring kt = 8 G* sqrt(R* δ) with history,
+ * rescaled by kt/kt_prev while unloading, dashpot ct = 2 ζ sqrt(m* kt), Coulomb cap μ Fn.
+ * Linear: Fn = kn δ + 2 ζ sqrt(m* kn) δ̇ (the classic spring–dashpot for which (A.7) is exact;
+ * the dashpot may pull slightly at the end of the contact, as (A.7) assumes), kt = ratio kn.
+ */
+#ifndef DEM_CONTACT_HERTZ_H
+#define DEM_CONTACT_HERTZ_H
+
+#include <math.h>
+
+#include "dem_model.h"
+
+/* Effective properties of a contact pair. */
+typedef struct dem_pair {
+    double e_star;  /* Pa */
+    double g_star;  /* Pa */
+    double r_star;  /* m */
+    double m_star;  /* kg */
+    double zeta;    /* damping ratio */
+    double mu;      /* friction coefficient */
+    double kt_kn_root; /* sqrt(kt / kn') = sqrt(4 G* / E*) (Hertz), sqrt(ratio) (linear) */
+} dem_pair;
+
+/* 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 ; 1/G* = (2-ν1)/G1 + (2-ν2)/G2. */
+double dem_effective_modulus(double e1, double nu1, double e2, double nu2);
+double dem_effective_shear(double g1, double nu1, double g2, double nu2);
+
+/* Force on sphere i for overlap δ > 0 along the unit normal n (from i towards the other body),
+ * vc = velocity of the other body's contact point minus sphere i's (A.2), time step dt.
+ * ft (3, elastic tangential force on i), kt_prev, fn_prev are the contact's history, updated.
+ * Writes the total force on i to f_i and returns the normal force magnitude.
+ * Inline: it runs once per contact and step. */
+static inline double dem_contact_force(const dem_params *prm, const dem_pair *pair,
+                                       double overlap, const double n[3], const double vc[3],
+                                       double dt, double ft[3], double *kt_prev,
+                                       double *fn_prev, double f_i[3])
+{
+    double vn = vc[0] * n[0] + vc[1] * n[1] + vc[2] * n[2];
+    double overlap_rate = -vn; /* > 0 while approaching (A.3) */
+    double fn, kt, cn_root; /* cn_root = sqrt(m* kn') */
+    if (prm->law == DEM_LAW_HERTZ_MINDLIN) {
+        double root = sqrt(pair->r_star * overlap);
+        double kn_tangent = 2.0 * pair->e_star * root;             /* dFn/dδ */
+        double fn_elastic = (2.0 / 3.0) * kn_tangent * overlap;    /* 4/3 E* sqrt(R*) δ^1.5 */
+        cn_root = sqrt(pair->m_star * kn_tangent);
+        fn = fn_elastic + 2.0 * pair->zeta * cn_root * overlap_rate;
+        if (fn < 0.0) fn = 0.0; /* no tension */
+        kt = 8.0 * pair->g_star * root;
+    } else {
+        double kn = prm->linear_kn_n_per_m;
+        cn_root = sqrt(pair->m_star * kn);
+        fn = kn * overlap + 2.0 * pair->zeta * cn_root * overlap_rate;
+        kt = prm->linear_kt_ratio * kn;
+    }
+    double ct = 2.0 * pair->zeta * cn_root * pair->kt_kn_root; /* 2 ζ sqrt(m* kt) */
+    double vt[3] = {vc[0] - vn * n[0], vc[1] - vn * n[1], vc[2] - vn * n[2]};
+
+    double old2 = ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2];
+    if (old2 > 0.0) {
+        /* keep the history in the current tangent plane (the contact frame turns) */
+        double fdn = ft[0] * n[0] + ft[1] * n[1] + ft[2] * n[2];
+        for (int k = 0; k < 3; k++) ft[k] -= fdn * n[k];
+        double new2 = ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2];
+        double s = new2 > 0.0 ? sqrt(old2 / new2) : 0.0;
+        /* (A.5): unloading scales the stored force with the stiffness ratio */
+        if (fn < *fn_prev && *kt_prev > 0.0) s *= kt / *kt_prev;
+        for (int k = 0; k < 3; k++) ft[k] *= s;
+    }
+    for (int k = 0; k < 3; k++) ft[k] += kt * vt[k] * dt; /* (A.4): Δs = v_t dt */
+
+    double trial[3] = {ft[0] + ct * vt[0], ft[1] + ct * vt[1], ft[2] + ct * vt[2]};
+    double trial2 = trial[0] * trial[0] + trial[1] * trial[1] + trial[2] * trial[2];
+    double cap = pair->mu * (fn > 0.0 ? fn : 0.0);
+    if (trial2 > cap * cap) { /* Coulomb: slide, keep the spring at the cap */
+        double s = trial2 > 0.0 ? cap / sqrt(trial2) : 0.0;
+        for (int k = 0; k < 3; k++) {
+            trial[k] *= s;
+            ft[k] = trial[k] - ct * vt[k];
+        }
+    }
+    for (int k = 0; k < 3; k++) f_i[k] = -fn * n[k] + trial[k];
+    *kt_prev = kt;
+    *fn_prev = fn;
+    return fn;
+}
+
+#endif

@@ -1,0 +1,170 @@
+/* dem_integrate — symplectic Euler time integration of translation and rotation. */
+#include "dem_integrate.h"
+
+#include <math.h>
+#include <string.h>
+
+void dem_quat_to_matrix(const double q[4], double r[9])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    r[0] = 1 - 2 * (y * y + z * z); r[1] = 2 * (x * y - w * z);     r[2] = 2 * (x * z + w * y);
+    r[3] = 2 * (x * y + w * z);     r[4] = 1 - 2 * (x * x + z * z); r[5] = 2 * (y * z - w * x);
+    r[6] = 2 * (x * z - w * y);     r[7] = 2 * (y * z + w * x);     r[8] = 1 - 2 * (x * x + y * y);
+}
+
+void dem_quat_rotate(const double q[4], const double v[3], double out[3])
+{
+    double r[9];
+    dem_quat_to_matrix(q, r);
+    for (int a = 0; a < 3; a++) out[a] = r[3 * a] * v[0] + r[3 * a + 1] * v[1] + r[3 * a + 2] * v[2];
+}
+
+void dem_cluster_omega(const double q[4], const double inv_inertia_body[9], const double L[3],
+                       double omega[3])
+{
+    double r[9], lb[3], wb[3];
+    dem_quat_to_matrix(q, r);
+    for (int a = 0; a < 3; a++) lb[a] = r[a] * L[0] + r[3 + a] * L[1] + r[6 + a] * L[2]; /* Rᵀ L */
+    for (int a = 0; a < 3; a++)
+        wb[a] = inv_inertia_body[3 * a] * lb[0] + inv_inertia_body[3 * a + 1] * lb[1] +
+                inv_inertia_body[3 * a + 2] * lb[2];
+    for (int a = 0; a < 3; a++) omega[a] = r[3 * a] * wb[0] + r[3 * a + 1] * wb[1] + r[3 * a + 2] * wb[2];
+}
+
+/* Rigid-body kinematics of the spheres of body k. */
+static inline void place_spheres(dem_sim *s, long k)
+{
+    const dem_bodies *b = &s->bod;
+    int32_t first = b->first_sphere[k], count = b->n_spheres[k];
+    const double *xb = b->pos + 3 * k, *vb = b->vel + 3 * k, *w = b->omega + 3 * k;
+    if (!b->is_cluster[k]) {
+        double *x = s->sph.pos + 3 * (size_t)first, *v = s->sph.vel + 3 * (size_t)first;
+        x[0] = xb[0];
+        x[1] = xb[1];
+        x[2] = xb[2];
+        v[0] = vb[0];
+        v[1] = vb[1];
+        v[2] = vb[2];
+        return;
+    }
+    double r[9];
+    dem_quat_to_matrix(b->quat + 4 * k, r);
+    for (int32_t q = first; q < first + count; q++) {
+        const double *o = s->sph.offset + 3 * (size_t)q;
+        double d[3];
+        for (int a = 0; a < 3; a++) d[a] = r[3 * a] * o[0] + r[3 * a + 1] * o[1] + r[3 * a + 2] * o[2];
+        double *x = s->sph.pos + 3 * (size_t)q, *v = s->sph.vel + 3 * (size_t)q;
+        x[0] = xb[0] + d[0];
+        x[1] = xb[1] + d[1];
+        x[2] = xb[2] + d[2];
+        v[0] = vb[0] + w[1] * d[2] - w[2] * d[1];
+        v[1] = vb[1] + w[2] * d[0] - w[0] * d[2];
+        v[2] = vb[2] + w[0] * d[1] - w[1] * d[0];
+    }
+}
+
+void dem_integrate_bodies(dem_sim *s, double dt)
+{
+    dem_bodies *b = &s->bod;
+    const double *g = s->prm.gravity;
+    long n = (long)b->n;
+    double worst = s->max_disp2;
+#pragma omp parallel for schedule(static) reduction(max : worst) num_threads(s->n_buffers) if (n >= DEM_PARALLEL_MIN)
+    for (long k = 0; k < n; k++) {
+        /* spheres -> body, in sphere order (deterministic) */
+        double F[3] = {0, 0, 0}, T[3] = {0, 0, 0};
+        int32_t first = b->first_sphere[k], count = b->n_spheres[k];
+        double *x = b->pos + 3 * k;
+        for (int32_t q = first; q < first + count; q++) {
+            const double *f = s->sph.force + 3 * (size_t)q, *xs = s->sph.pos + 3 * (size_t)q;
+            const double *ts = s->sph.torque + 3 * (size_t)q;
+            double r[3] = {xs[0] - x[0], xs[1] - x[1], xs[2] - x[2]};
+            F[0] += f[0];
+            F[1] += f[1];
+            F[2] += f[2];
+            T[0] += ts[0] + r[1] * f[2] - r[2] * f[1];
+            T[1] += ts[1] + r[2] * f[0] - r[0] * f[2];
+            T[2] += ts[2] + r[0] * f[1] - r[1] * f[0];
+        }
+        memcpy(b->force + 3 * k, F, sizeof F);
+        memcpy(b->torque + 3 * k, T, sizeof T);
+
+        double *v = b->vel + 3 * k, *w = b->omega + 3 * k;
+        double im = b->inv_mass[k];
+        for (int d = 0; d < 3; d++) {
+            v[d] += dt * (F[d] * im + g[d]); /* (16), velocity first */
+            x[d] += dt * v[d];
+        }
+        if (!b->is_cluster[k]) {
+            double ii = b->inv_inertia_body[9 * k]; /* isotropic sphere */
+            for (int d = 0; d < 3; d++) w[d] += dt * T[d] * ii; /* (17) */
+        } else {
+            double *L = b->angmom + 3 * k, *q = b->quat + 4 * k;
+            const double *ib = b->inv_inertia_body + 9 * k;
+            for (int d = 0; d < 3; d++) L[d] += dt * T[d];
+            dem_cluster_omega(q, ib, L, w);
+            /* q̇ = ½ (0, ω) ⊗ q */
+            double dq[4] = {-w[0] * q[1] - w[1] * q[2] - w[2] * q[3],
+                            w[0] * q[0] + w[1] * q[3] - w[2] * q[2],
+                            -w[0] * q[3] + w[1] * q[0] + w[2] * q[1],
+                            w[0] * q[2] - w[1] * q[1] + w[2] * q[0]};
+            double norm = 0.0;
+            for (int d = 0; d < 4; d++) {
+                q[d] += 0.5 * dt * dq[d];
+                norm += q[d] * q[d];
+            }
+            norm = sqrt(norm);
+            for (int d = 0; d < 4; d++) q[d] /= norm;
+            dem_cluster_omega(q, ib, L, w);
+        }
+        place_spheres(s, k);
+        for (int32_t q = first; q < first + count; q++) {
+            const double *p = s->sph.pos + 3 * (size_t)q, *p0 = s->pos_at_build + 3 * (size_t)q;
+            double d[3] = {p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]};
+            double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            if (!(d2 <= worst)) worst = d2; /* NaN propagates and forces a rebuild */
+        }
+    }
+    s->max_disp2 = worst;
+}
+
+void dem_free_flight(dem_sim *s, double dt, long rot_substeps)
+{
+    dem_bodies *b = &s->bod;
+    const double *g = s->prm.gravity;
+    double h = dt / (double)(rot_substeps > 0 ? rot_substeps : 1);
+    for (size_t k = 0; k < b->n; k++) {
+        double *x = b->pos + 3 * k, *v = b->vel + 3 * k, *w = b->omega + 3 * k;
+        for (int d = 0; d < 3; d++) {
+            x[d] += v[d] * dt + 0.5 * g[d] * dt * dt;
+            v[d] += g[d] * dt;
+        }
+        if (!b->is_cluster[k]) continue;
+        double *q = b->quat + 4 * k;
+        const double *L = b->angmom + 3 * k, *ib = b->inv_inertia_body + 9 * k;
+        for (long r = 0; r < rot_substeps; r++) {
+            dem_cluster_omega(q, ib, L, w);
+            double dq[4] = {-w[0] * q[1] - w[1] * q[2] - w[2] * q[3],
+                            w[0] * q[0] + w[1] * q[3] - w[2] * q[2],
+                            -w[0] * q[3] + w[1] * q[0] + w[2] * q[1],
+                            w[0] * q[2] - w[1] * q[1] + w[2] * q[0]};
+            double norm = 0.0;
+            for (int d = 0; d < 4; d++) {
+                q[d] += 0.5 * h * dq[d];
+                norm += q[d] * q[d];
+            }
+            norm = sqrt(norm);
+            for (int d = 0; d < 4; d++) q[d] /= norm;
+        }
+        dem_cluster_omega(q, ib, L, w);
+    }
+    dem_update_spheres(s);
+    s->rebuild = 1;
+}
+
+void dem_update_spheres(dem_sim *s)
+{
+    long n = (long)s->bod.n;
+#pragma omp parallel for schedule(static) num_threads(s->n_buffers) if (n >= DEM_PARALLEL_MIN)
+    for (long k = 0; k < n; k++) place_spheres(s, k);
+}

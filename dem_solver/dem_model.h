@@ -1,0 +1,159 @@
+/* dem_model — the data of a DEM simulation: materials, spheres, rigid bodies, walls, contacts.
+ *
+ * Everything is flat structure-of-arrays storage owned by one dem_sim (see dem_solver.h for the
+ * functions that operate on it). Every sphere belongs to exactly one rigid body: a free sphere is
+ * a body with one sphere at offset 0, a cluster is a body with several spheres whose body-frame
+ * offsets are fixed. Vectors are stored as 3 consecutive doubles (x[3*i+0..2]).
+ * Units: SI everywhere (m, s, kg, N, Pa).
+ */
+#ifndef DEM_MODEL_H
+#define DEM_MODEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Loops over fewer items than this run on one thread (a parallel region costs more). */
+#define DEM_PARALLEL_MIN 512
+/* Most OpenMP threads (contact buffers) a simulation uses. */
+#define DEM_MAX_BUFFERS 256
+
+typedef enum { DEM_LAW_HERTZ_MINDLIN = 0, DEM_LAW_LINEAR = 1 } dem_law;
+typedef enum { DEM_DAMPING_FIT = 0, DEM_DAMPING_A7 = 1 } dem_damping_formula;
+
+typedef struct dem_material {
+    char name[64];
+    double youngs_modulus_pa;
+    double poisson_ratio;
+    double density_kg_m3;
+    double restitution;   /* coefficient of restitution ε (A.6) */
+    double friction;      /* Coulomb friction coefficient μ */
+    double shear_modulus_pa; /* G = E / (2 (1 + ν)) */
+    double zeta;             /* damping ratio from ε by (A.7) or (A.8)-(A.10) */
+    double pair_e_star;      /* E* and G* of a contact between two spheres of this material */
+    double pair_g_star;
+    double pair_kt_kn_root;  /* sqrt(kt / kn') of such a contact */
+} dem_material;
+
+/* Global parameters read from dem.json. */
+typedef struct dem_params {
+    double gravity[3];            /* m/s² */
+    double dt_s;                  /* DEM time step actually used */
+    int dt_auto;                  /* 1: dt_s from the critical step estimate */
+    double dt_safety;             /* fraction of the critical step used when auto */
+    double end_time_s;            /* standalone run length */
+    double output_interval_s;     /* standalone output interval (0: every step) */
+    dem_law law;
+    dem_damping_formula damping;
+    double linear_kn_n_per_m;     /* linear law: normal stiffness */
+    double linear_kt_ratio;       /* linear law: kt = ratio * kn */
+    int threads;                  /* OpenMP threads (0: library default) */
+    int free_flight;              /* coupled: one ballistic step when nothing can touch */
+} dem_params;
+
+/* Spheres: the collision primitives. Spheres of a body are contiguous. */
+typedef struct dem_spheres {
+    size_t n, cap;
+    int32_t *id;          /* user-visible id (0..n-1 unless given) */
+    int32_t *body;        /* owning body */
+    int32_t *material;    /* index into materials */
+    double *radius;       /* m */
+    double *offset;       /* 3n: centre in the body frame (0 for free spheres) */
+    double *pos;          /* 3n: centre, world frame */
+    double *vel;          /* 3n: centre velocity, world frame */
+    double *force;        /* 3n: contact force summed per sphere (scratch of a step) */
+    double *torque;       /* 3n: contact torque about the sphere centre (scratch) */
+} dem_spheres;
+
+/* Rigid bodies (free spheres and clusters). */
+typedef struct dem_bodies {
+    size_t n, cap;
+    int32_t *first_sphere, *n_spheres;
+    int32_t *is_cluster;
+    double *mass, *inv_mass;
+    double *inv_inertia_body; /* 9n: inverse inertia tensor in the body frame, row-major */
+    double *inertia_body;     /* 9n */
+    double *pos;              /* 3n: centre of mass */
+    double *vel;              /* 3n */
+    double *omega;            /* 3n: angular velocity, world frame */
+    double *angmom;           /* 3n: angular momentum about the COM, world frame (clusters) */
+    double *quat;             /* 4n: orientation (w, x, y, z), body -> world */
+    double *force;            /* 3n: total contact force of the step (scratch) */
+    double *torque;           /* 3n: total contact torque about the COM (scratch) */
+} dem_bodies;
+
+/* An infinite one-sided plane: particles live on the side the normal points to. */
+typedef struct dem_plane {
+    double point0[3];     /* point at t = 0 */
+    double point[3];      /* current point = point0 + velocity t */
+    double normal[3], velocity[3];
+    int material;
+} dem_plane;
+
+struct dem_item_grid;
+
+/* A rigid triangle mesh (STL), translating with a prescribed velocity. Vertices are welded so
+ * that shared edges and vertices are single features (counted once). */
+typedef struct dem_mesh {
+    char path[512];
+    size_t n_vertices, n_triangles, n_edges;
+    double *vertices;      /* 3 per vertex, mesh frame (world at t = 0) */
+    int32_t *tri;          /* 3 vertex indices per triangle */
+    int32_t *tri_edges;    /* 3 edge indices per triangle: (v0,v1), (v1,v2), (v2,v0) */
+    int32_t *edges;        /* 2 vertex indices per edge */
+    double velocity[3];    /* m/s */
+    double offset[3];      /* current translation = velocity * t */
+    int material;
+    struct dem_item_grid *grid; /* triangles in the mesh frame, built once */
+} dem_mesh;
+
+/* The coupled net wall: the FEM interface mesh of nodes and 2-node line elements. */
+typedef struct dem_net {
+    int active;
+    size_t n_nodes, n_edges;
+    int32_t *node_ids;     /* FEM ids (for output only) */
+    int32_t *edges;        /* 2 node indices per edge */
+    double *ref;           /* 3n reference coordinates */
+    double *start;         /* 3n position at the start of the coupling step */
+    double *end;           /* 3n position at the end of the step (from the FEM) */
+    double *end_vel;       /* 3n FEM velocity at the end of the step */
+    double *cur;           /* 3n current position during sub-steps */
+    double *vel;           /* 3n current velocity used for contacts */
+    double *force;         /* 3n nodal contact force of the current sub-step (on the net) */
+    double *impulse;       /* 3n accumulated nodal force * dt over the step */
+    /* wall material */
+    double youngs_modulus_pa, poisson_ratio, friction, shear_modulus_pa;
+    double restitution;    /* < 0: use the particle's damping */
+    double zeta;
+    double cable_radius_m; /* contact when the centre is within R + cable radius */
+    double near_distance_m;/* "near_interface" threshold on the surface gap */
+    double *box_lo, *box_hi; /* 3 per edge: scratch for the grid */
+    struct dem_item_grid *grid;
+} dem_net;
+
+/* Contact kinds (the key of a contact is (sphere i, kind, j)). */
+enum {
+    DEM_CONTACT_SPHERE = 0, /* j: other sphere (j > i) */
+    DEM_CONTACT_PLANE = 1,  /* j: plane index */
+    DEM_CONTACT_MESH = 2,   /* j: global mesh feature id (face, edge or vertex) */
+    DEM_CONTACT_NET_EDGE = 3, /* j: net edge (interior point) */
+    DEM_CONTACT_NET_NODE = 4  /* j: net node (vertex) */
+};
+
+/* A list of contacts, ordered by sphere i (then by discovery order, which is deterministic).
+ * History (ft, kt_prev, fn_prev) survives from one step to the next through the key. */
+typedef struct dem_contacts {
+    size_t n, cap;
+    int32_t *i, *kind, *j;
+    int32_t *aux;          /* mesh index for mesh contacts */
+    double *ft;            /* 3n: elastic tangential force on i (history) */
+    double *kt_prev;       /* tangential stiffness of the previous step */
+    double *fn_prev;       /* normal force of the previous step */
+    double *force;         /* 3n: total contact force on sphere i */
+    double *torque_i;      /* 3n: torque on sphere i about its centre */
+    double *torque_j;      /* 3n: torque on sphere j about its centre (sphere contacts) */
+    double *weight;        /* net edge parameter t in [0,1] (force to nodes (1-t), t) */
+    double *overlap;       /* m */
+    double *normal;        /* 3n: unit normal from sphere i towards the other body */
+} dem_contacts;
+
+#endif

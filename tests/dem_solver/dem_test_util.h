@@ -1,0 +1,17 @@
+/* dem_test_util — helpers shared by the dem_solver tests: building a prepared simulation from
+ * JSON text, and a one-line rigid net wall. */
+#ifndef DEM_TEST_UTIL_H
+#define DEM_TEST_UTIL_H
+
+#include "dem_config.h"
+#include "dem_solver.h"
+
+/* dem_sim_init + parse + prepare; fails the test (cmocka) on error. */
+void dem_test_build(dem_sim *s, const char *json);
+/* Same, returning -1 and the message instead of failing. */
+int dem_test_try_build(dem_sim *s, const char *json, nc_error *err);
+/* Writes `text` to NC_TMP (or /tmp)/name and returns the path in buf. */
+const char *dem_test_write_file(char *buf, size_t size, const char *name, const void *text,
+                                size_t length);
+
+#endif
