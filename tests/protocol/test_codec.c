@@ -206,6 +206,38 @@ static void test_nan_and_inf_rejected(void **state)
     assert_non_null(strstr(err.message, "'gap'"));
 }
 
+static void test_non_finite_found_anywhere_in_large_arrays(void **state)
+{
+    (void)state;
+    /* the vectorised check works in blocks of 16 with a scalar tail: try every region */
+    size_t n = 1000 * 3 + 1;
+    double *data = calloc(n, sizeof *data);
+    for (size_t k = 0; k < n; k++) data[k] = 1e300 * ((k % 7) - 3.0); /* large but finite */
+    char header[256];
+    snprintf(header, sizeof header, "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"u\",\"dtype\":\"f64\",\"shape\":[%zu]}]}", n);
+    const void *frames[1] = {data};
+    size_t lengths[1] = {n * sizeof *data};
+    proto_message in;
+    memset(&in, 0, sizeof in);
+    nc_error err;
+    assert_int_equal(proto_decode(&in, header, strlen(header), frames, lengths, 1, LIMIT, &err), 0);
+    size_t positions[6] = {0, 15, 16, 1777, n - 2, n - 1};
+    double bad[3] = {NAN, INFINITY, -INFINITY};
+    for (int p = 0; p < 6; p++) {
+        for (int b = 0; b < 3; b++) {
+            double keep = data[positions[p]];
+            data[positions[p]] = bad[b];
+            assert_int_equal(proto_decode(&in, header, strlen(header), frames, lengths, 1, LIMIT, &err), -1);
+            char expect[64];
+            snprintf(expect, sizeof expect, "value %zu (row %zu,", positions[p], positions[p]);
+            if (!strstr(err.message, expect)) fail_msg("%s (expected '%s')", err.message, expect);
+            data[positions[p]] = keep;
+        }
+    }
+    proto_message_free(&in);
+    free(data);
+}
+
 static void test_oversize_rejected(void **state)
 {
     (void)state;
@@ -279,6 +311,7 @@ int main(void)
         cmocka_unit_test(test_malformed_headers),
         cmocka_unit_test(test_malformed_arrays),
         cmocka_unit_test(test_nan_and_inf_rejected),
+        cmocka_unit_test(test_non_finite_found_anywhere_in_large_arrays),
         cmocka_unit_test(test_oversize_rejected),
         cmocka_unit_test(test_storage_reused),
         cmocka_unit_test(test_add_array_usage_errors),
