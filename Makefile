@@ -47,7 +47,7 @@ LDFLAGS += -fopenmp $(SAN_FLAGS)
 MODULES := common protocol fem_solver dem_solver coupler
 PROGRAMS := fem_solver dem_solver coupler
 
-.PHONY: all test bench demo fuzz install clean deps check-deps
+.PHONY: all test bench demo fuzz install clean deps check-deps check-bench-deps
 all: check-deps programs
 
 # Build and run the whole test suite; the last line counts tests ("N passed, N failed").
@@ -128,7 +128,10 @@ tests: $(TEST_BINS)
 BENCH_TARGETS :=
 -include $(wildcard */module.mk)
 
-bench: check-deps programs $(BENCH_TARGETS)
+bench: check-bench-deps programs $(BENCH_TARGETS)
+
+check-bench-deps:
+	@scripts/check_deps.sh --bench >/dev/null 2>&1 || scripts/install_deps.sh --bench
 
 # ---- install / clean -------------------------------------------------------------------------
 install: programs

@@ -3,21 +3,35 @@
 # Run as root (or through sudo). `make test`, `make demo` and `make all` call it on their own
 # when `scripts/check_deps.sh` finds something missing.
 #   scripts/install_deps.sh            install what is missing
-#   scripts/install_deps.sh --list     print the package list and exit
+#   scripts/install_deps.sh --bench    the same plus what only `make bench` needs
+#   scripts/install_deps.sh --list [--bench]   print the package list and exit
 set -euo pipefail
 
-# build: compilers, pkg-config; libraries: ZeroMQ, HDF5, cJSON, SuiteSparse, cmocka (unit tests);
+# build: compilers, pkg-config; libraries: ZeroMQ, HDF5, cJSON, SuiteSparse, cmocka (unit tests),
+# OpenBLAS (CHOLMOD's dense kernels: several times faster than the reference BLAS);
 # clang + its runtime for the libFuzzer target; python packages for plots, the Python
 # participant and the end-to-end checks; hdf5-tools for h5dump/h5ls.
 PACKAGES=(
   build-essential pkg-config
   libzmq3-dev libhdf5-dev libcjson-dev libsuitesparse-dev libcmocka-dev
+  libopenblas0-pthread
   clang libclang-rt-dev
   hdf5-tools
   python3 python3-zmq python3-h5py python3-numpy python3-matplotlib
 )
 
-if [ "${1:-}" = "--list" ]; then
+# only for `make bench`: LIGGGHTS, the reference DEM code the DEM benchmark compares with
+BENCH_PACKAGES=(liggghts)
+
+list=0
+for arg in "$@"; do
+  case "$arg" in
+    --list) list=1 ;;
+    --bench) PACKAGES+=("${BENCH_PACKAGES[@]}") ;;
+    *) echo "install_deps: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
+if [ $list -eq 1 ]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0
 fi
