@@ -359,7 +359,9 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
 static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
 {
     static const char *const keys[] = {"youngs_modulus_pa", "poisson_ratio", "friction",
-                                       "restitution", "cable_radius_m", "near_distance_m", NULL};
+                                       "restitution", "cable_radius_m", "near_distance_m",
+                                       "coupling_force", NULL};
+    static const char *const force_kinds[] = {"average", "end_of_step", NULL};
     const cJSON *w;
     if (nc_json_object_opt(root, file, "net_wall", &w, err)) return -1;
     if (!w) return 0;
@@ -372,7 +374,8 @@ static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_er
         nc_json_number_range(w, where, "friction", 0.0, INFINITY, &n->friction, err) ||
         nc_json_number_range_opt(w, where, "restitution", -1.0, 0.0, 1.0, &n->restitution, err) ||
         nc_json_number_range_opt(w, where, "cable_radius_m", 0.0, 0.0, INFINITY, &n->cable_radius_m, err) ||
-        nc_json_number_range_opt(w, where, "near_distance_m", -1.0, 0.0, INFINITY, &n->near_distance_m, err))
+        nc_json_number_range_opt(w, where, "near_distance_m", -1.0, 0.0, INFINITY, &n->near_distance_m, err) ||
+        nc_json_choice_opt(w, where, "coupling_force", force_kinds, 0, &n->force_at_end, err))
         return -1;
     return 0;
 }

@@ -126,6 +126,8 @@ typedef struct dem_net {
     double zeta;
     double cable_radius_m; /* contact when the centre is within R + cable radius */
     double near_distance_m;/* "near_interface" threshold on the surface gap */
+    int force_at_end;      /* coupled reply: 0 the time-averaged force of the step (impulse/dt),
+                              1 the force of the last sub-step (wall at its end position) */
     double *box_lo, *box_hi; /* 3 per edge: scratch for the grid */
     struct dem_item_grid *grid;
 } dem_net;

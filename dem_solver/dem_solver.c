@@ -736,7 +736,18 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
     }
     memcpy(net->cur, net->end, 3 * nn * sizeof(double));
     if (build_net_grid(s, err)) return -1;
-    for (size_t k = 0; k < 3 * nn; k++) force_out[k] = net->impulse[k] / dt_step;
+    if (net->force_at_end) {
+        /* The force of the last sub-step, whose wall is at its end-of-step position (see the
+         * loop above): the load at t_n+1 that a structure with equilibrium at t_n+1 (Newmark,
+         * Bossak) needs, and the force the particles received last. The step average stands
+         * for the middle of the step: applied as the t_n+1 load it lags the wall by about
+         * dt/2, a delayed contact spring that pumps energy into a light net
+         * (scripts/diagnostics/rest_position.md). After a free flight nothing touches the net
+         * and net->force is zero. */
+        memcpy(force_out, net->force, 3 * nn * sizeof(double));
+    } else {
+        for (size_t k = 0; k < 3 * nn; k++) force_out[k] = net->impulse[k] / dt_step;
+    }
     dem_sim_net_gap(s, info);
     info->substeps = flown ? 1 : substeps;
     return 0;

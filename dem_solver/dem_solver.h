@@ -117,7 +117,8 @@ int dem_sim_restore(dem_sim *s, nc_error *err);
 /* Runs one coupling step of length dt_step: the net moves linearly from its start-of-step
  * position to ref + disp_end (velocity (end - start) / dt_step), each sub-step seeing it at
  * the sub-step's end; force_out (3n) receives the time-averaged force of the particles on the
- * nodes (impulse / dt_step). vel_end is checked and stored only. With prm.free_flight a step in
+ * nodes (impulse / dt_step), or with net.force_at_end (net_wall.coupling_force
+ * "end_of_step") the force of the last sub-step, wall at its end position. vel_end is checked and stored only. With prm.free_flight a step in
  * which nothing can touch is one exact ballistic step (info->substeps = 1). */
 int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
                           const double *vel_end, double *force_out, dem_coupled_info *info,
