@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# `make install` gives a third-party solver everything it needs: headers, the static protocol
+# library and a pkg-config file. Builds a minimal participant against the installed copy only
+# and runs it until its idle timeout.
+set -eu
+prefix="$NC_TMP/prefix"
+# a fresh release build/install, whatever build the test suite itself runs under
+env -u MAKEFLAGS -u MAKELEVEL -u SANITIZE make -s -C "$NC_ROOT" install PREFIX="$prefix" >"$NC_TMP/install.log" 2>&1 || {
+  cat "$NC_TMP/install.log"; exit 1; }
+for f in bin/fem_solver bin/dem_solver bin/coupler lib/libnetcouple_protocol.a \
+         include/netcouple/proto.h include/netcouple/nc_error.h \
+         lib/pkgconfig/netcouple-protocol.pc share/doc/netcouple/protocol.md; do
+  [ -e "$prefix/$f" ] || { echo "missing after install: $f"; exit 1; }
+done
+cat > "$NC_TMP/third_party.c" <<'C'
+#include <proto.h>
+#include <stdio.h>
+#include <string.h>
+int main(void)
+{
+    proto_options options;
+    proto_options_default(&options);
+    options.idle_timeout_ms = 200;
+    proto_participant *p;
+    nc_error err;
+    if (proto_participant_open(&p, "tcp://127.0.0.1:*", "fem", "third party", "", &options, &err)) {
+        fprintf(stderr, "%s\n", err.message);
+        return 1;
+    }
+    proto_message command;
+    memset(&command, 0, sizeof command);
+    int rc = proto_participant_receive(p, &command, &err);
+    proto_participant_close(p);
+    /* nobody connects: the idle timeout must fire with its message */
+    if (rc == -1 && err.code == PROTO_ERR_IDLE && strstr(err.message, "idle timeout")) return 0;
+    fprintf(stderr, "unexpected: rc %d, %s\n", rc, err.message);
+    return 1;
+}
+C
+export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
+# shellcheck disable=SC2046
+cc -o "$NC_TMP/third_party" "$NC_TMP/third_party.c" $(pkg-config --cflags --libs netcouple-protocol)
+"$NC_TMP/third_party"
+echo "third-party participant built from the installed library and ran"
