@@ -54,8 +54,8 @@ static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_sett
     char path[512];
     nc_json_path(path, sizeof path, where, "relaxation");
     static const char *const keys[] = {"method", "alpha", "first_iteration_cap", "alpha_min",
-                                       "alpha_max", "filter", "reuse_steps", "max_columns",
-                                       NULL};
+                                       "alpha_max", "restart_growth", "filter", "reuse_steps",
+                                       "max_columns", NULL};
     static const char *const methods[] = {"none", "constant", "aitken", "iqn-ils", NULL};
     int method = 0;
     long reuse = r->iqn_reuse_steps, cols = r->iqn_max_columns;
@@ -68,6 +68,8 @@ static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_sett
                                  &r->alpha_min, err) ||
         nc_json_number_range_opt(obj, path, "alpha_max", r->alpha_max, -2.0, 10.0,
                                  &r->alpha_max, err) ||
+        nc_json_number_range_opt(obj, path, "restart_growth", r->restart_growth, 0.0, 1e6,
+                                 &r->restart_growth, err) ||
         nc_json_number_range_opt(obj, path, "filter", r->iqn_filter, 1e-16, 0.5,
                                  &r->iqn_filter, err) ||
         nc_json_int_opt(obj, path, "reuse_steps", reuse, 0, 100, &reuse, err) ||
@@ -76,6 +78,9 @@ static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_sett
     r->method = (cpl_relax_method)method;
     r->iqn_reuse_steps = (int)reuse;
     r->iqn_max_columns = (int)cols;
+    if (r->restart_growth > 0.0 && r->restart_growth < 1.0)
+        return nc_error_set(err, 1, "%s: restart_growth: expected 0 (off) or a number >= 1, "
+                                    "got %g", path, r->restart_growth);
     if (!(r->alpha_min < r->alpha_max))
         return nc_error_set(err, 1, "%s: alpha_min (%g) must be smaller than alpha_max (%g)",
                             path, r->alpha_min, r->alpha_max);

@@ -23,6 +23,7 @@ void cpl_relax_settings_default(cpl_relax_settings *s)
     s->first_cap = 0.5;
     s->alpha_min = 1e-6;
     s->alpha_max = 2.0;
+    s->restart_growth = 4.0; /* Aitken safeguard on (see cpl_relax_aitken.h) */
     s->iqn_filter = 1e-2;   /* "QR2" filter limit commonly used with IQN-ILS */
     s->iqn_reuse_steps = 4;
     s->iqn_max_columns = 0;
@@ -48,9 +49,11 @@ int cpl_relax_create(cpl_relax **out, const cpl_relax_settings *s, size_t n, siz
     r->s = *s;
     r->n = n;
     int rc = 0;
-    if (s->method == CPL_RELAX_AITKEN)
+    if (s->method == CPL_RELAX_AITKEN) {
         rc = cpl_aitken_init(&r->aitken, n, n_blocks, s->alpha, s->first_cap, s->alpha_min,
                              s->alpha_max, err);
+        r->aitken.restart_growth = s->restart_growth;
+    }
     else if (s->method == CPL_RELAX_IQN_ILS)
         rc = cpl_iqn_init(&r->iqn, n, s->iqn_max_columns > 0 ? (size_t)s->iqn_max_columns : 0,
                           s->alpha, s->iqn_filter, s->iqn_reuse_steps, err);

@@ -9,7 +9,8 @@
  *   constant  x^{k+1} = x^k + α r^k,  r^k = x̃^k − x^k                         (31)–(33)
  *   aitken    as constant with α^k of eq. (34), one α per block (α_u, α_u̇ or α_F); the first
  *             iteration of a step uses sign(α_prev)·min(first_cap, |α_prev|) of the previous
- *             step's last α; α is clipped to [alpha_min, alpha_max]
+ *             step's last α; α is clipped to [alpha_min, alpha_max]; optional restart at the
+ *             best iterate of the step when the residual grows (restart_growth)
  *   iqn-ils   x^{k+1} = x̃^k + W c,  c = argmin ‖V c + r^k‖, columns of residual (V) and
  *             output (W) differences, QR filter, columns of previous steps reused
  * Lifecycle per step: begin_step, update for each non-final iteration, end_step.
@@ -34,13 +35,16 @@ typedef struct cpl_relax_settings {
     double first_cap;       /* Aitken: cap of |α| in the first iteration of a step */
     double alpha_min;       /* Aitken: clipping range of α */
     double alpha_max;
+    double restart_growth;  /* Aitken: back to the step's best iterate with half its α when
+                               the residual exceeds this × the best residual (0 = off) */
     double iqn_filter;      /* IQN: drop a column whose part orthogonal to the newer
                                columns is < iqn_filter × its norm */
     int iqn_reuse_steps;    /* IQN: columns of this many previous steps are kept */
     int iqn_max_columns;    /* IQN: at most this many columns (0 = number of unknowns) */
 } cpl_relax_settings;
 
-/* Defaults: none, α = 0.5, first_cap = 0.5, clip [1e-6, 2], filter 1e-2, reuse 4, max 0. */
+/* Defaults: none, α = 0.5, first_cap = 0.5, clip [1e-6, 2], restart_growth 4, filter 1e-2,
+ * reuse 4, max 0. */
 void cpl_relax_settings_default(cpl_relax_settings *s);
 const char *cpl_relax_method_name(cpl_relax_method m);
 

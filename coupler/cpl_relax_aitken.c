@@ -2,7 +2,8 @@
  *   α^k = −α^{k−1} (r^{k−1})ᵀ (r^k − r^{k−1}) / ‖r^k − r^{k−1}‖²
  * computed per block (α_u, α_u̇ or α_F as in the paper), with the first-iteration rule
  * α^1 = sign(α_prev)·min(first_cap, |α_prev|) (α0 in the very first step), clipping to
- * [alpha_min, alpha_max] and a guard for a vanishing denominator (keep the previous α). */
+ * [alpha_min, alpha_max] and a guard for a vanishing denominator (keep the previous α).
+ * Optional safeguard: back to the best iterate of the step when the residual grows (header). */
 #include "cpl_relax_aitken.h"
 
 #include <float.h>
@@ -26,7 +27,10 @@ int cpl_aitken_init(cpl_aitken *a, size_t n, size_t n_blocks, double alpha0, dou
     a->alpha_max = alpha_max;
     a->alpha = calloc(n_blocks, sizeof *a->alpha);
     a->r_prev = calloc(n + 1, sizeof *a->r_prev);
-    if (!a->alpha || !a->r_prev) {
+    a->x_best = calloc(n + 1, sizeof *a->x_best);
+    a->r_best = calloc(n + 1, sizeof *a->r_best);
+    a->alpha_best = calloc(n_blocks, sizeof *a->alpha_best);
+    if (!a->alpha || !a->r_prev || !a->x_best || !a->r_best || !a->alpha_best) {
         cpl_aitken_free(a);
         return nc_error_set(err, 1, "aitken: out of memory for %zu unknowns", n);
     }
@@ -38,12 +42,16 @@ void cpl_aitken_free(cpl_aitken *a)
     if (!a) return;
     free(a->alpha);
     free(a->r_prev);
+    free(a->x_best);
+    free(a->r_best);
+    free(a->alpha_best);
     memset(a, 0, sizeof *a);
 }
 
 void cpl_aitken_begin_step(cpl_aitken *a)
 {
     a->have_prev = 0;
+    a->have_best = 0;
 }
 
 static double clip(double x, double lo, double hi)
@@ -54,6 +62,30 @@ static double clip(double x, double lo, double hi)
 double cpl_aitken_update(cpl_aitken *a, const double *x_in, const double *x_out,
                          double *x_next)
 {
+    double norm2 = 0.0;
+    for (size_t i = 0; i < a->n; i++) norm2 += (x_out[i] - x_in[i]) * (x_out[i] - x_in[i]);
+    if (a->restart_growth > 0.0 && a->have_best && a->have_prev &&
+        !(norm2 <= a->restart_growth * a->restart_growth * a->best_norm2)) {
+        /* the residual grew: back to the best iterate with half its last α */
+        for (size_t b = 0; b < a->n_blocks; b++) {
+            const size_t o = b * a->block, m = a->block;
+            double alpha = clip(0.5 * a->alpha_best[b], a->alpha_min, a->alpha_max);
+            for (size_t i = 0; i < m; i++) {
+                a->r_prev[o + i] = a->r_best[o + i];
+                x_next[o + i] = a->x_best[o + i] + alpha * a->r_best[o + i];
+            }
+            a->alpha[b] = a->alpha_best[b] = alpha;
+        }
+        a->n_restarts++;
+        return a->alpha[0];
+    }
+    const int new_best = a->restart_growth > 0.0 && (!a->have_best || norm2 < a->best_norm2);
+    if (new_best) {
+        memcpy(a->x_best, x_in, a->n * sizeof *x_in); /* before x_next (may alias x_in) */
+        for (size_t i = 0; i < a->n; i++) a->r_best[i] = x_out[i] - x_in[i];
+        a->best_norm2 = norm2;
+        a->have_best = 1;
+    }
     for (size_t b = 0; b < a->n_blocks; b++) {
         const size_t o = b * a->block, m = a->block;
         double alpha;
@@ -86,6 +118,7 @@ double cpl_aitken_update(cpl_aitken *a, const double *x_in, const double *x_out,
             x_next[o + i] = x_in[o + i] + alpha * r;   /* eqs. (31)–(33) */
         }
         a->alpha[b] = alpha;
+        if (new_best) a->alpha_best[b] = alpha;
     }
     a->have_prev = 1;
     a->have_alpha = 1;

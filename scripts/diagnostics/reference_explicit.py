@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""reference_explicit.py [T_END] [DT] [COR] [--mass consistent|lumped] [--tau TAU] — independent fine-step reference
+"""reference_explicit.py [T_END] [DT] [COR] [--mass consistent|lumped] [--tau TAU] [--save FILE.npz] — independent fine-step reference
 for paper case 7.2 (no coupling, no sub-stepping): the 3-element prestressed cable (E 1e9, A 1.26e-4,
 rho 7850, S_pre 1e6, Rayleigh C = tau M, tau 5) and the sphere (R 0.12, rho 3.5e4, E 1e7, nu 0.2, COR)
 integrated together with one explicit central-difference / symplectic-Euler step of DT (default 2e-5 s,
 far below the contact period ~7 ms and the axial period ~12 ms). Hertz normal contact on the segment
 1-2 with the (A.8)-(A.10) damping fit and the tangent-stiffness dashpot, as dem_solver does.
-Prints Point A (node 1) z, sphere z, energies every 0.1 s and the mean of the last 0.5 s."""
+Prints Point A (node 1) z, sphere z, energies every 0.1 s and the mean of the last 0.5 s.
+--save FILE.npz: every step's t, uA (node 1 z), sphere z and vz, contact force on the net (z) for
+comparisons (damped_contact.md: contact loss, time to rest).
+--case cable_impact [--swap]: paper 7.1 instead (contact still only on the inner element 1-2)."""
 import sys, math
 import numpy as np
 args = []
@@ -19,8 +22,15 @@ dt = float(args[1]) if len(args) > 1 else 2e-5
 cor = float(args[2]) if len(args) > 2 else 1.0
 lumped = '--mass' in sys.argv and sys.argv[sys.argv.index('--mass') + 1] == 'lumped'
 tau_arg = float(sys.argv[sys.argv.index('--tau') + 1]) if '--tau' in sys.argv else 5.0
+save = sys.argv[sys.argv.index('--save') + 1] if '--save' in sys.argv else None
 E, A, rho, Spre, tau = 1e9, 1.26e-4, 7850.0, 1e6, tau_arg
 R, rhos, Es, nus = 0.12, 3.5e4, 1e7, 0.2
+Eel = [E, E, E]; z0 = 0.42
+if '--case' in sys.argv and sys.argv[sys.argv.index('--case') + 1] == 'cable_impact':
+    # paper 7.1 (cases/cable_impact): E outer 1e5 / inner 1e9 (--swap: outer 1e9 / inner 1e5),
+    # S_pre 1e4, sphere R 0.4, rho 2e4, lowest point 0.30 m above the cable
+    Eel = [1e9, 1e5, 1e9] if '--swap' in sys.argv else [1e5, 1e9, 1e5]
+    Spre = 1e4; R, rhos = 0.4, 2e4; z0 = 0.70
 Ew, nuw = 2.1e11, 0.3
 g = 9.81
 Ms = 4 / 3 * math.pi * R**3 * rhos
@@ -46,13 +56,13 @@ else:
     Mn = np.array([[2 * m_el / 3, m_el / 6], [m_el / 6, 2 * m_el / 3]])
 Minv = np.linalg.inv(Mn)
 u = np.zeros((4, 3)); v = np.zeros((4, 3))
-xs = np.array([1.5, 0.0, 0.42]); vs = np.zeros(3)
+xs = np.array([1.5, 0.0, z0]); vs = np.zeros(3)
 def internal(u):
     f = np.zeros((4, 3))
-    for (k, l) in els:
+    for ie, (k, l) in enumerate(els):
         d = X[l] + u[l] - X[k] - u[k]
         l2 = d @ d
-        S = E * (l2 - L0 * L0) / (2 * L0 * L0) + Spre
+        S = Eel[ie] * (l2 - L0 * L0) / (2 * L0 * L0) + Spre
         if S < 0: continue
         fl = A * S / L0 * d
         f[l] += fl; f[k] -= fl
@@ -83,15 +93,15 @@ for it in range(nsteps + 1):
     if it % every == 0 or it == nsteps:
         Ekc = 0.5 * sum(v[[1, 2], c] @ Mn @ v[[1, 2], c] for c in range(3))
         Wc = 0.0
-        for (k, l) in els:
+        for ie, (k, l) in enumerate(els):
             d = X[l] + u[l] - X[k] - u[k]; l2 = d @ d
-            AS = E * A * (l2 - 1) / 2 + A * Spre
+            AS = Eel[ie] * A * (l2 - 1) / 2 + A * Spre
             AS = max(AS, 0.0)
-            Wc += L0 * (AS * AS - (A * Spre)**2) / (2 * E * A)
-        Es_ = 0.5 * Ms * vs @ vs + Ms * g * (xs[2] - 0.42)
+            Wc += L0 * (AS * AS - (A * Spre)**2) / (2 * Eel[ie] * A)
+        Es_ = 0.5 * Ms * vs @ vs + Ms * g * (xs[2] - z0)
         Ec = 8 / 15 * Estar * math.sqrt(R) * ov**2.5
         print(f"{t:6.2f} {u[1,2]:8.4f}  {xs[2]:8.4f} {vs[2]:7.3f} {Es_:9.2f} {Ekc+Wc:9.2f} {Es_+Ekc+Wc+Ec:9.2f}")
-    hist.append((t, u[1, 2]))
+    hist.append((t, u[1, 2], xs[2], vs[2], fnode[1, 2] + fnode[2, 2]))
     if it == nsteps: break
     # free nodes 1, 2: M a = f_contact - f_int - tau M v
     for c in range(3):
@@ -102,5 +112,7 @@ for it in range(nsteps + 1):
     vs += dt * (fsph / Ms + np.array([0, 0, -g]))
     xs += dt * vs
 hist = np.array(hist)
+if save:
+    np.savez(save, t=hist[:, 0], uA=hist[:, 1], zs=hist[:, 2], vzs=hist[:, 3], fz=hist[:, 4])
 tail = hist[hist[:, 0] >= T - 0.5, 1]
 print(f"last 0.5 s: uA mean {tail.mean():.5f} min {tail.min():.5f} max {tail.max():.5f}; peak uA {hist[:,1].min():.4f}")

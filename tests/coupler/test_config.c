@@ -97,6 +97,10 @@ static void test_bad_input_messages(void **state)
                  "alpha_min");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"relaxation\": {\"method\": \"broyden\"}}", "relaxation.method");
+    /* restart_growth below 1 would back-track on every iteration */
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxation\": {\"method\": \"aitken\", \"restart_growth\": 0.5}}",
+                 "restart_growth");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"fem\": {\"endpoint\": \"a\", \"endpoint_file\": \"b\"}}", "not both");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1, \"max_iterations\": 0}",

@@ -116,6 +116,82 @@ static void test_aitken_clipping_and_zero_denominator(void **state)
     cpl_aitken_free(&a);
 }
 
+/* On/off contact as a scalar map (the first contact step of case 7.2 with a damped contact):
+ * the structure's end position x, a particle whose surface ends at s = -0.01 below the free
+ * position 0; no contact (x <= s): the structure ends free, H = 0; contact: H = -g (x - s),
+ * g = 40 (contact force gain of the stiff contact on a light node). Fixed point
+ * x* = g s / (1 + g), in contact just above s. Plain Aitken from x = 0 (the predictor, deep
+ * contact) cycles with period 3: two contact-free iterates make H locally constant, eq. (34)
+ * gives alpha = 1, i.e. H = 0 = the predictor again (only the slow decay of alpha lets it out
+ * after about 60 evaluations). restart_growth = 2 goes back to the best iterate with half
+ * its alpha instead and converges in 24 evaluations (tolerance 1e-9 on |x - x*|). */
+static double onoff_map(double x)
+{
+    const double s = -0.01, g = 40.0;
+    return x > s ? -g * (x - s) : 0.0;
+}
+
+static int onoff_evaluations(double restart_growth, int max_eval, double *x_end, long *restarts)
+{
+    cpl_aitken a;
+    nc_error err;
+    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-6, 2.0, &err), 0);
+    a.restart_growth = restart_growth;
+    const double xstar = 40.0 * -0.01 / 41.0;
+    double x = 0.0;
+    int k;
+    cpl_aitken_begin_step(&a);
+    for (k = 1; k <= max_eval; k++) {
+        double out = onoff_map(x);
+        if (fabs(out - x) < 1e-9 && fabs(x - xstar) < 1e-9) break;
+        if (k == 4 && restart_growth == 0.0) assert_float_equal(x, 0.0, 1e-15); /* the cycle */
+        cpl_aitken_update(&a, &x, &out, &x);
+    }
+    *x_end = x;
+    *restarts = a.n_restarts;
+    cpl_aitken_free(&a);
+    return k;
+}
+
+static void test_aitken_restart_breaks_onoff_cycle(void **state)
+{
+    (void)state;
+    double x;
+    long restarts;
+    int plain = onoff_evaluations(0.0, 30, &x, &restarts);
+    assert_true(plain > 30);                           /* not converged in 30 evaluations */
+    assert_true(fabs(x - 40.0 * -0.01 / 41.0) > 1e-3);
+    assert_int_equal(restarts, 0);
+    int safe = onoff_evaluations(2.0, 30, &x, &restarts);
+    print_message("on/off contact map: plain Aitken > 30 evaluations, restart_growth 2: %d "
+                  "(%ld restarts)\n", safe, restarts);
+    assert_true(safe <= 30);
+    assert_float_equal(x, 40.0 * -0.01 / 41.0, 1e-9);
+    assert_true(restarts > 0);
+}
+
+/* The safeguard never fires on a contracting affine map (residual decreasing), so the exact
+ * secant of (34) is untouched: same result as without it. */
+static void test_aitken_restart_inactive_when_converging(void **state)
+{
+    (void)state;
+    for (int on = 0; on < 2; on++) {
+        cpl_aitken a;
+        nc_error err;
+        assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-6, 2.0, &err), 0);
+        a.restart_growth = on ? 2.0 : 0.0;
+        double x = 0.0, out;
+        cpl_aitken_begin_step(&a);
+        for (int k = 0; k < 2; k++) {
+            out = 0.5 * x + 1.0;   /* x* = 2 */
+            cpl_aitken_update(&a, &x, &out, &x);
+        }
+        assert_float_equal(x, 2.0, 1e-12);
+        assert_int_equal(a.n_restarts, 0);
+        cpl_aitken_free(&a);
+    }
+}
+
 /* Affine map H(x) = A x + b with a non-symmetric A of spectral radius > 1 (plain iteration
  * diverges). IQN-ILS is exact for affine maps once it has n independent columns: the
  * (n+1)-th update (evaluation n + 2 checks it) gives x* to round-off (1e-9 relative). */
@@ -252,6 +328,8 @@ int main(void)
         cmocka_unit_test(test_aitken_exact_on_scalar_affine_map),
         cmocka_unit_test(test_aitken_first_iteration_cap_and_sign),
         cmocka_unit_test(test_aitken_clipping_and_zero_denominator),
+        cmocka_unit_test(test_aitken_restart_breaks_onoff_cycle),
+        cmocka_unit_test(test_aitken_restart_inactive_when_converging),
         cmocka_unit_test(test_iqn_linear_in_n_plus_1_updates),
         cmocka_unit_test(test_iqn_filter_drops_dependent_columns),
         cmocka_unit_test(test_iqn_reuse_previous_steps),
