@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Re-runs the paper's studies (scripts/study.py) and copies the figures shown in README.md
+# to docs/figures/. Takes a few minutes on 2 cores. Usage: scripts/update_figures.sh
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+out="$root/results/studies"
+for study in timestep cable_impact restitution relaxation; do
+  rm -rf "${out:?}/$study"
+  "$root/scripts/study.py" "$study" --out "$out"
+done
+mkdir -p "$root/docs/figures"
+cp "$out"/timestep/fig12_point_a_vs_static.png "$out"/timestep/fig13a_iterations_displacement.png \
+   "$out"/timestep/fig13b_iterations_force.png "$out"/relaxation/fig14_relaxation.png \
+   "$out"/restitution/fig16a_weak_cor.png "$out"/restitution/fig16b_strong_cor.png \
+   "$out"/restitution/fig17_iterations_cor.png "$out"/cable_impact/fig9_point_a.png \
+   "$out"/cable_impact/fig11_iterations.png "$root/docs/figures/"
+echo "figures copied to docs/figures/"
