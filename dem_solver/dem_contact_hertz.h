@@ -33,8 +33,9 @@ double dem_effective_shear(double g1, double nu1, double g2, double nu2);
  * vc = velocity of the other body's contact point minus sphere i's (A.2), time step dt.
  * ft (3, elastic tangential force on i), kt_prev, fn_prev are the contact's history, updated.
  * Writes the total force on i to f_i and returns the normal force magnitude.
- * Inline: it runs once per contact and step. */
-static inline double dem_contact_force(const dem_params *prm, const dem_pair *pair,
+ * Always inlined: it runs once per contact and step, and a call would pass the small vectors
+ * through memory (store-forwarding stalls when they are read back as pairs). */
+static inline __attribute__((always_inline)) double dem_contact_force(const dem_params *prm, const dem_pair *pair,
                                        double overlap, const double n[3], const double vc[3],
                                        double dt, double ft[3], double *kt_prev,
                                        double *fn_prev, double f_i[3])
@@ -57,32 +58,48 @@ static inline double dem_contact_force(const dem_params *prm, const dem_pair *pa
         kt = prm->linear_kt_ratio * kn;
     }
     double ct = 2.0 * pair->zeta * cn_root * pair->kt_kn_root; /* 2 ζ sqrt(m* kt) */
-    double vt[3] = {vc[0] - vn * n[0], vc[1] - vn * n[1], vc[2] - vn * n[2]};
+    /* written out per component (no loops): the vectors then stay in registers */
+    double vt0 = vc[0] - vn * n[0], vt1 = vc[1] - vn * n[1], vt2 = vc[2] - vn * n[2];
+    double ft0 = ft[0], ft1 = ft[1], ft2 = ft[2];
 
-    double old2 = ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2];
+    double old2 = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
     if (old2 > 0.0) {
         /* keep the history in the current tangent plane (the contact frame turns) */
-        double fdn = ft[0] * n[0] + ft[1] * n[1] + ft[2] * n[2];
-        for (int k = 0; k < 3; k++) ft[k] -= fdn * n[k];
-        double new2 = ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2];
+        double fdn = ft0 * n[0] + ft1 * n[1] + ft2 * n[2];
+        ft0 -= fdn * n[0];
+        ft1 -= fdn * n[1];
+        ft2 -= fdn * n[2];
+        double new2 = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
         double s = new2 > 0.0 ? sqrt(old2 / new2) : 0.0;
         /* (A.5): unloading scales the stored force with the stiffness ratio */
         if (fn < *fn_prev && *kt_prev > 0.0) s *= kt / *kt_prev;
-        for (int k = 0; k < 3; k++) ft[k] *= s;
+        ft0 *= s;
+        ft1 *= s;
+        ft2 *= s;
     }
-    for (int k = 0; k < 3; k++) ft[k] += kt * vt[k] * dt; /* (A.4): Δs = v_t dt */
+    /* (A.4): Δs = v_t dt */
+    ft0 += kt * vt0 * dt;
+    ft1 += kt * vt1 * dt;
+    ft2 += kt * vt2 * dt;
 
-    double trial[3] = {ft[0] + ct * vt[0], ft[1] + ct * vt[1], ft[2] + ct * vt[2]};
-    double trial2 = trial[0] * trial[0] + trial[1] * trial[1] + trial[2] * trial[2];
+    double tr0 = ft0 + ct * vt0, tr1 = ft1 + ct * vt1, tr2 = ft2 + ct * vt2;
+    double trial2 = tr0 * tr0 + tr1 * tr1 + tr2 * tr2;
     double cap = pair->mu * (fn > 0.0 ? fn : 0.0);
     if (trial2 > cap * cap) { /* Coulomb: slide, keep the spring at the cap */
         double s = trial2 > 0.0 ? cap / sqrt(trial2) : 0.0;
-        for (int k = 0; k < 3; k++) {
-            trial[k] *= s;
-            ft[k] = trial[k] - ct * vt[k];
-        }
+        tr0 *= s;
+        tr1 *= s;
+        tr2 *= s;
+        ft0 = tr0 - ct * vt0;
+        ft1 = tr1 - ct * vt1;
+        ft2 = tr2 - ct * vt2;
     }
-    for (int k = 0; k < 3; k++) f_i[k] = -fn * n[k] + trial[k];
+    ft[0] = ft0;
+    ft[1] = ft1;
+    ft[2] = ft2;
+    f_i[0] = -fn * n[0] + tr0;
+    f_i[1] = -fn * n[1] + tr1;
+    f_i[2] = -fn * n[2] + tr2;
     *kt_prev = kt;
     *fn_prev = fn;
     return fn;

@@ -29,8 +29,7 @@ int dem_contacts_reserve(dem_contacts *c, size_t need, nc_error *err)
     } while (0)
     GROW(i, 1); GROW(kind, 1); GROW(j, 1); GROW(aux, 1);
     GROW(ft, 3); GROW(kt_prev, 1); GROW(fn_prev, 1);
-    GROW(force, 3); GROW(torque_i, 3); GROW(torque_j, 3);
-    GROW(weight, 1); GROW(overlap, 1); GROW(normal, 3);
+    GROW(overlap, 1); GROW(normal, 3);
 #undef GROW
     c->cap = cap;
     return 0;
@@ -40,8 +39,7 @@ void dem_contacts_free(dem_contacts *c)
 {
     free(c->i); free(c->kind); free(c->j); free(c->aux);
     free(c->ft); free(c->kt_prev); free(c->fn_prev);
-    free(c->force); free(c->torque_i); free(c->torque_j);
-    free(c->weight); free(c->overlap); free(c->normal);
+    free(c->overlap); free(c->normal);
     memset(c, 0, sizeof *c);
 }
 
@@ -53,8 +51,7 @@ static void copy_range(dem_contacts *dst, size_t to, const dem_contacts *src, si
 #define CP(field, per) memcpy(dst->field + (per) * to, src->field + (per) * from, (per) * n * sizeof *src->field)
     CP(i, 1); CP(kind, 1); CP(j, 1); CP(aux, 1);
     CP(ft, 3); CP(kt_prev, 1); CP(fn_prev, 1);
-    CP(force, 3); CP(torque_i, 3); CP(torque_j, 3);
-    CP(weight, 1); CP(overlap, 1); CP(normal, 3);
+    CP(overlap, 1); CP(normal, 3);
 #undef CP
 }
 
@@ -68,7 +65,7 @@ int dem_contacts_copy(dem_contacts *dst, const dem_contacts *src, nc_error *err)
 
 /* ---- small vector helpers ------------------------------------------------------------------- */
 
-static inline void cross3(const double a[3], const double b[3], double out[3])
+static inline __attribute__((always_inline)) void cross3(const double a[3], const double b[3], double out[3])
 {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];
@@ -90,54 +87,134 @@ typedef struct contact_in {
     dem_pair pair;
 } contact_in;
 
-/* Where a thread writes the contacts of the sphere it is working on. */
+/* Where a thread writes the contacts of the sphere it is working on, and where the forces go.
+ * Forces are summed while contacts are found, in contact order (by sphere i, then discovery
+ * order): directly into s->sph.force/torque for spheres whose contributions all come from this
+ * thread's range, through the thread's spill list for walls, net nodes and spheres shared with
+ * another range (those lists are summed afterwards in thread order, which is contact order).
+ * So every sum runs in the same order whatever the number of threads. */
 typedef struct emit_ctx {
     dem_contacts *out;
+    dem_spills *spill;
     size_t first;          /* index in out of the sphere's first contact */
 } emit_ctx;
 
-/* Appends the contact to the thread's list, with the history of the same key from the previous
- * step. Contacts of a sphere usually come in the same order as in the previous step, so the
- * record at the same position is tried first. */
-static int emit(const dem_sim *s, emit_ctx *ctx, size_t i, contact_in *in, double dt)
+static int spill_add(dem_spills *sp, int kind, int32_t index, double weight, const double f[3],
+                     const double t[3])
+{
+    if (sp->n == sp->cap) {
+        size_t cap = sp->cap ? 2 * sp->cap : 256;
+        dem_spill *r = realloc(sp->r, cap * sizeof *r);
+        if (!r) return -1;
+        sp->r = r;
+        sp->cap = cap;
+    }
+    dem_spill *r = &sp->r[sp->n++];
+    r->kind = kind;
+    r->index = index;
+    r->weight = weight;
+    for (int k = 0; k < 3; k++) {
+        r->f[k] = f[k];
+        r->t[k] = t ? t[k] : 0.0;
+    }
+    return 0;
+}
+
+/* Adds force f and torque t to sphere i (directly, or through the spills if it is shared). */
+static inline int add_to_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, const double f[3],
+                                const double t[3])
+{
+    if (s->shared_sphere[i]) return spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)i, 0.0, f, t);
+    double *fi = s->sph.force + 3 * i, *ti = s->sph.torque + 3 * i;
+    fi[0] += f[0];
+    fi[1] += f[1];
+    fi[2] += f[2];
+    ti[0] += t[0];
+    ti[1] += t[1];
+    ti[2] += t[2];
+    return 0;
+}
+
+/* Appends a contact record with key (i, kind, j, aux) to the thread's list and finds the history
+ * of the same key from the previous step (ft, kt_prev, fn_prev; zero for a new contact). Returns
+ * the record index (or -1 without memory) and in *prev the previous record (or -1). Contacts of
+ * a sphere usually come in the same order as in the previous step, so the record at the same
+ * position is tried first. */
+static inline __attribute__((always_inline)) long new_record(const dem_sim *s, emit_ctx *ctx, size_t i, int kind, int32_t j,
+                              int32_t aux, double ft[3], double *kt_prev, double *fn_prev,
+                              int32_t *prev)
 {
     dem_contacts *out = ctx->out;
     if (out->n == out->cap && dem_contacts_reserve(out, out->n + 1, NULL)) return -1;
     size_t c = out->n++;
     out->i[c] = (int32_t)i;
-    out->kind[c] = in->kind;
-    out->j[c] = in->j;
-    out->aux[c] = in->aux;
-    double *ft = out->ft + 3 * c;
-    ft[0] = ft[1] = ft[2] = 0.0;
-    out->kt_prev[c] = 0.0;
-    out->fn_prev[c] = 0.0;
+    out->kind[c] = kind;
+    out->j[c] = j;
+    out->aux[c] = aux;
+    const dem_contacts *pv = &s->prev;
     int32_t lo = s->prev_first[i], hi = s->prev_first[i + 1];
     int32_t hint = lo + (int32_t)(c - ctx->first);
-    if (hint < hi && s->prev.j[hint] == in->j && s->prev.kind[hint] == in->kind &&
-        s->prev.aux[hint] == in->aux) {
-        lo = hint;
-        hi = hint + 1;
-    }
-    for (int32_t p = lo; p < hi; p++) {
-        if (s->prev.kind[p] == in->kind && s->prev.j[p] == in->j && s->prev.aux[p] == in->aux) {
-            memcpy(ft, s->prev.ft + 3 * (size_t)p, 3 * sizeof *ft);
-            out->kt_prev[c] = s->prev.kt_prev[p];
-            out->fn_prev[c] = s->prev.fn_prev[p];
-            if (in->kind == DEM_CONTACT_NET_EDGE || in->kind == DEM_CONTACT_NET_NODE) {
-                /* A cable has no inside: if the normal flipped since the last step, the sphere
-                 * centre crossed the line (the net moved more than the overlap in one step).
-                 * Keep the side of the ongoing contact and count the crossing as overlap, so
-                 * the net pushes the sphere back instead of letting it through. */
-                const double *np = s->prev.normal + 3 * (size_t)p;
-                if (np[0] * in->n[0] + np[1] * in->n[1] + np[2] * in->n[2] < 0.0) {
-                    double dist = in->reach - in->overlap;
-                    in->overlap = in->reach + dist;
-                    for (int k = 0; k < 3; k++) in->n[k] = -in->n[k];
-                    in->lever_i = fmax(0.0, s->sph.radius[i] - 0.5 * in->overlap);
-                }
+    int32_t found = -1;
+    if (hint < hi && pv->j[hint] == j && pv->kind[hint] == kind && pv->aux[hint] == aux) {
+        found = hint;
+    } else {
+        for (int32_t p = lo; p < hi; p++)
+            if (pv->kind[p] == kind && pv->j[p] == j && pv->aux[p] == aux) {
+                found = p;
+                break;
             }
-            break;
+    }
+    if (found >= 0) {
+        const double *h = pv->ft + 3 * (size_t)found;
+        ft[0] = h[0];
+        ft[1] = h[1];
+        ft[2] = h[2];
+        *kt_prev = pv->kt_prev[found];
+        *fn_prev = pv->fn_prev[found];
+    } else {
+        ft[0] = ft[1] = ft[2] = 0.0;
+        *kt_prev = 0.0;
+        *fn_prev = 0.0;
+    }
+    *prev = found;
+    return (long)c;
+}
+
+/* Stores the updated history and geometry of record c. */
+static inline __attribute__((always_inline)) void store_record(dem_contacts *out, size_t c, const double ft[3], double kt_prev,
+                                double fn_prev, double overlap, const double n[3])
+{
+    double *h = out->ft + 3 * c, *nn = out->normal + 3 * c;
+    h[0] = ft[0];
+    h[1] = ft[1];
+    h[2] = ft[2];
+    out->kt_prev[c] = kt_prev;
+    out->fn_prev[c] = fn_prev;
+    out->overlap[c] = overlap;
+    nn[0] = n[0];
+    nn[1] = n[1];
+    nn[2] = n[2];
+}
+
+/* A contact of sphere i with a wall (plane, mesh feature, net edge or node): force, torque on
+ * i and the reaction on the wall. */
+static int emit(const dem_sim *s, emit_ctx *ctx, size_t i, contact_in *in, double dt)
+{
+    double ft[3], kt_prev, fn_prev;
+    int32_t p;
+    long c = new_record(s, ctx, i, in->kind, in->j, in->aux, ft, &kt_prev, &fn_prev, &p);
+    if (c < 0) return -1;
+    if (p >= 0 && (in->kind == DEM_CONTACT_NET_EDGE || in->kind == DEM_CONTACT_NET_NODE)) {
+        /* A cable has no inside: if the normal flipped since the last step, the sphere
+         * centre crossed the line (the net moved more than the overlap in one step).
+         * Keep the side of the ongoing contact and count the crossing as overlap, so
+         * the net pushes the sphere back instead of letting it through. */
+        const double *np = s->prev.normal + 3 * (size_t)p;
+        if (np[0] * in->n[0] + np[1] * in->n[1] + np[2] * in->n[2] < 0.0) {
+            double dist = in->reach - in->overlap;
+            in->overlap = in->reach + dist;
+            for (int k = 0; k < 3; k++) in->n[k] = -in->n[k];
+            in->lever_i = fmax(0.0, s->sph.radius[i] - 0.5 * in->overlap);
         }
     }
     const double *v_i = s->sph.vel + 3 * i;
@@ -147,22 +224,14 @@ static int emit(const dem_sim *s, emit_ctx *ctx, size_t i, contact_in *in, doubl
     cross3(w_i, r_i, wr);
     double vc[3]; /* (A.2) */
     for (int k = 0; k < 3; k++) vc[k] = in->v_other[k] - (v_i[k] + wr[k]);
-    double *f = out->force + 3 * c;
-    dem_contact_force(&s->prm, &in->pair, in->overlap, in->n, vc, dt, ft, &out->kt_prev[c],
-                      &out->fn_prev[c], f);
-    cross3(r_i, f, out->torque_i + 3 * c);
-    if (in->kind == DEM_CONTACT_SPHERE) {
-        double r_j[3] = {in->lever_j * in->n[0], in->lever_j * in->n[1], in->lever_j * in->n[2]};
-        /* force -f at -r_j: torque = (-r_j) x (-f) = r_j x f */
-        cross3(r_j, f, out->torque_j + 3 * c);
-    } else {
-        double *tj = out->torque_j + 3 * c;
-        tj[0] = tj[1] = tj[2] = 0.0;
-    }
-    out->weight[c] = in->weight;
-    out->overlap[c] = in->overlap;
-    memcpy(out->normal + 3 * c, in->n, 3 * sizeof(double));
-    return 0;
+    double f[3], t[3];
+    dem_contact_force(&s->prm, &in->pair, in->overlap, in->n, vc, dt, ft, &kt_prev, &fn_prev, f);
+    store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, in->overlap, in->n);
+    cross3(r_i, f, t);
+    if (add_to_sphere(s, ctx, i, f, t)) return -1;
+    /* the reaction -f on the wall, summed after the pass */
+    int32_t index = in->kind == DEM_CONTACT_MESH ? in->aux : in->j;
+    return spill_add(ctx->spill, in->kind, index, in->weight, f, NULL);
 }
 
 /* Pair properties of sphere i against a wall with modulus e, ν, shear g, damping zeta_w and
@@ -181,21 +250,52 @@ static void wall_pair(const dem_sim *s, size_t i, double e, double nu, double g,
                                                          : sqrt(s->prm.linear_kt_ratio);
 }
 
+/* The same from the table made by dem_contacts_prepare (no divisions per contact). */
 static void material_wall_pair(const dem_sim *s, size_t i, int material, dem_pair *p)
 {
-    const dem_material *w = &s->materials[material];
-    wall_pair(s, i, w->youngs_modulus_pa, w->poisson_ratio, w->shear_modulus_pa, w->zeta,
-              w->friction, p);
+    *p = s->wall_pairs[(size_t)s->sph.material[i] * s->n_materials + (size_t)material];
+    p->r_star = s->sph.radius[i];
+    p->m_star = s->bod.mass[s->sph.body[i]];
+}
+
+int dem_contacts_prepare(dem_sim *s, nc_error *err)
+{
+    size_t nm = s->n_materials;
+    free(s->wall_pairs);
+    s->wall_pairs = malloc((nm ? nm * nm : 1) * sizeof *s->wall_pairs);
+    if (!s->wall_pairs) return nc_error_set(err, 1, "dem: out of memory for the material pairs");
+    for (size_t a = 0; a < nm; a++)
+        for (size_t b = 0; b < nm; b++) {
+            const dem_material *m = &s->materials[a], *w = &s->materials[b];
+            dem_pair *p = &s->wall_pairs[a * nm + b];
+            p->e_star = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
+                                              w->youngs_modulus_pa, w->poisson_ratio);
+            p->g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio,
+                                            w->shear_modulus_pa, w->poisson_ratio);
+            p->r_star = p->m_star = 0.0;
+            p->zeta = 0.5 * (m->zeta + (w->zeta >= 0.0 ? w->zeta : m->zeta));
+            p->mu = 0.5 * (m->friction + w->friction);
+            p->kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
+                                                                 : sqrt(s->prm.linear_kt_ratio);
+        }
+    return 0;
 }
 
 /* ---- per-sphere detection ------------------------------------------------------------------- */
 
-/* Contacts of sphere i with its Verlet neighbours j > i (eq. (13)). */
-static int sphere_sphere(const dem_sim *s, emit_ctx *out, size_t i, double dt)
+/* Contacts of sphere i with its Verlet neighbours j > i (eq. (13)): the hot loop, with the
+ * contact data kept in registers (no contact_in record). */
+static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
 {
     const double *pi = s->sph.pos + 3 * i;
     double ri = s->sph.radius[i];
     int32_t bi = s->sph.body[i];
+    int32_t mat_i = s->sph.material[i];
+    const dem_material *mi = &s->materials[mat_i];
+    double m_i = s->bod.mass[bi];
+    const double *v_i = s->sph.vel + 3 * i;
+    const double *w_i = s->bod.omega + 3 * (size_t)bi;
+    int shared_i = s->shared_sphere[i];
     for (int32_t q = s->nbr_first[i]; q < s->nbr_first[i + 1]; q++) {
         size_t j = (size_t)s->nbr[q];
         const double *pj = s->sph.pos + 3 * j;
@@ -205,49 +305,86 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *out, size_t i, double dt)
         double rs = ri + rj;
         if (d2 >= rs * rs || d2 == 0.0) continue; /* (13) */
         double dist = sqrt(d2);
-        contact_in in;
-        in.kind = DEM_CONTACT_SPHERE;
-        in.j = (int32_t)j;
-        in.aux = 0;
-        in.overlap = rs - dist; /* (A.1) */
-        for (int k = 0; k < 3; k++) in.n[k] = d[k] / dist;
-        in.lever_i = ri - 0.5 * in.overlap;
-        in.lever_j = rj - 0.5 * in.overlap;
+        double overlap = rs - dist; /* (A.1) */
+        double inv_dist = 1.0 / dist; /* one division instead of three */
+        double n[3] = {d[0] * inv_dist, d[1] * inv_dist, d[2] * inv_dist};
+        double lever_i = ri - 0.5 * overlap;
+        double lever_j = rj - 0.5 * overlap;
+        int32_t bj = s->sph.body[j];
         const double *vj = s->sph.vel + 3 * j;
-        const double *wj = s->bod.omega + 3 * (size_t)s->sph.body[j];
-        double rj_vec[3] = {-in.lever_j * in.n[0], -in.lever_j * in.n[1], -in.lever_j * in.n[2]};
+        const double *wj = s->bod.omega + 3 * (size_t)bj;
+        double rj_vec[3] = {-lever_j * n[0], -lever_j * n[1], -lever_j * n[2]};
         double wr[3];
         cross3(wj, rj_vec, wr);
-        for (int k = 0; k < 3; k++) in.v_other[k] = vj[k] + wr[k];
-        in.weight = 0.0;
-        const dem_material *mi = &s->materials[s->sph.material[i]];
-        const dem_material *mj = &s->materials[s->sph.material[j]];
-        double m_i = s->bod.mass[bi], m_j = s->bod.mass[s->sph.body[j]];
-        if (s->sph.material[i] == s->sph.material[j]) { /* common case: no divisions */
-            in.pair.e_star = mi->pair_e_star;
-            in.pair.g_star = mi->pair_g_star;
-            in.pair.kt_kn_root = mi->pair_kt_kn_root;
+        double v_other[3] = {vj[0] + wr[0], vj[1] + wr[1], vj[2] + wr[2]};
+        dem_pair pair;
+        int32_t mat_j = s->sph.material[j];
+        const dem_material *mj = &s->materials[mat_j];
+        double m_j = s->bod.mass[bj];
+        if (mat_i == mat_j) { /* common case: no divisions */
+            pair.e_star = mi->pair_e_star;
+            pair.g_star = mi->pair_g_star;
+            pair.kt_kn_root = mi->pair_kt_kn_root;
         } else {
-            in.pair.e_star = dem_effective_modulus(mi->youngs_modulus_pa, mi->poisson_ratio,
-                                                   mj->youngs_modulus_pa, mj->poisson_ratio);
-            in.pair.g_star = dem_effective_shear(mi->shear_modulus_pa, mi->poisson_ratio,
-                                                 mj->shear_modulus_pa, mj->poisson_ratio);
-            in.pair.kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN
-                                     ? sqrt(4.0 * in.pair.g_star / in.pair.e_star)
-                                     : sqrt(s->prm.linear_kt_ratio);
+            pair.e_star = dem_effective_modulus(mi->youngs_modulus_pa, mi->poisson_ratio,
+                                                mj->youngs_modulus_pa, mj->poisson_ratio);
+            pair.g_star = dem_effective_shear(mi->shear_modulus_pa, mi->poisson_ratio,
+                                              mj->shear_modulus_pa, mj->poisson_ratio);
+            pair.kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN
+                                  ? sqrt(4.0 * pair.g_star / pair.e_star)
+                                  : sqrt(s->prm.linear_kt_ratio);
         }
-        in.pair.r_star = ri * rj / rs;
-        in.pair.m_star = m_i * m_j / (m_i + m_j);
-        in.pair.zeta = 0.5 * (mi->zeta + mj->zeta);
-        in.pair.mu = 0.5 * (mi->friction + mj->friction);
-        if (emit(s, out, i, &in, dt)) return -1;
+        pair.r_star = ri * rj / rs;
+        pair.m_star = m_i * m_j / (m_i + m_j);
+        pair.zeta = 0.5 * (mi->zeta + mj->zeta);
+        pair.mu = 0.5 * (mi->friction + mj->friction);
+
+        double ft[3], kt_prev, fn_prev;
+        int32_t p;
+        long c = new_record(s, ctx, i, DEM_CONTACT_SPHERE, (int32_t)j, 0, ft, &kt_prev, &fn_prev, &p);
+        if (c < 0) return -1;
+        double r_i[3] = {lever_i * n[0], lever_i * n[1], lever_i * n[2]};
+        cross3(w_i, r_i, wr);
+        double vc[3] = {v_other[0] - (v_i[0] + wr[0]), v_other[1] - (v_i[1] + wr[1]),
+                        v_other[2] - (v_i[2] + wr[2])}; /* (A.2) */
+        double f[3];
+        dem_contact_force(&s->prm, &pair, overlap, n, vc, dt, ft, &kt_prev, &fn_prev, f);
+        store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, overlap, n);
+        double ti[3], tj[3];
+        cross3(r_i, f, ti);
+        /* force -f at -r_j: torque = (-r_j) x (-f) = r_j x f */
+        double r_j[3] = {lever_j * n[0], lever_j * n[1], lever_j * n[2]};
+        cross3(r_j, f, tj);
+        if (shared_i) {
+            if (spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)i, 0.0, f, ti)) return -1;
+        } else {
+            double *fi = s->sph.force + 3 * i, *tq = s->sph.torque + 3 * i;
+            fi[0] += f[0];
+            fi[1] += f[1];
+            fi[2] += f[2];
+            tq[0] += ti[0];
+            tq[1] += ti[1];
+            tq[2] += ti[2];
+        }
+        if (s->shared_sphere[j]) {
+            double mf[3] = {-f[0], -f[1], -f[2]}; /* x + (-f) rounds exactly as x - f */
+            if (spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)j, 0.0, mf, tj)) return -1;
+        } else {
+            double *fj = s->sph.force + 3 * j, *tq = s->sph.torque + 3 * j;
+            fj[0] -= f[0];
+            fj[1] -= f[1];
+            fj[2] -= f[2];
+            tq[0] += tj[0];
+            tq[1] += tj[1];
+            tq[2] += tj[2];
+        }
     }
     return 0;
 }
 
-/* Counts (out == NULL) or lists the neighbours j > i of sphere i within r_i + r_j + skin,
- * other bodies only, from the cell grid. */
-static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *out)
+/* Counts the neighbours j > i of sphere i within r_i + r_j + skin, other bodies only, from
+ * the cell grid, and lists the first `room` of them in out (if not NULL). */
+static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *out, size_t room)
 {
     const double *pi = s->sph.pos + 3 * i;
     double ri = s->sph.radius[i];
@@ -265,14 +402,19 @@ static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *o
                 int x = c[0] + dx;
                 if (x < 0 || x >= g->dims[0]) continue;
                 size_t cell = ((size_t)z * (size_t)g->dims[1] + (size_t)y) * (size_t)g->dims[0] + (size_t)x;
-                for (int32_t q = g->cell_start[cell]; q < g->cell_start[cell + 1]; q++) {
+                /* items of a cell are in increasing order: skip to those above i (one
+                 * mispredicted branch per cell instead of one per item) */
+                int32_t q0 = g->cell_start[cell], q1 = g->cell_start[cell + 1];
+                int32_t first = q1;
+                while (first > q0 && (size_t)g->cell_items[first - 1] > i) first--;
+                for (int32_t q = first; q < q1; q++) {
                     int32_t j = g->cell_items[q];
-                    if ((size_t)j <= i || s->sph.body[j] == bi) continue;
+                    if (s->sph.body[j] == bi) continue;
                     const double *pj = s->sph.pos + 3 * (size_t)j;
                     double d[3] = {pj[0] - pi[0], pj[1] - pi[1], pj[2] - pi[2]};
                     double cut = ri + s->sph.radius[j] + skin;
                     if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= cut * cut) continue;
-                    if (out) out[count] = j;
+                    if (out && (size_t)count < room) out[count] = j;
                     count++;
                 }
             }
@@ -282,7 +424,8 @@ static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *o
 }
 
 /* Rebuilds the Verlet list when forced or when a sphere moved more than skin/2 since the
- * last build. Two passes (count, fill) keep the list independent of the thread count. */
+ * last build. Each thread lists its fixed range of spheres into its own part, the parts are
+ * then joined in range order: the list does not depend on the thread count. */
 static int update_neighbour_list(dem_sim *s, nc_error *err)
 {
     size_t n = s->sph.n;
@@ -291,21 +434,92 @@ static int update_neighbour_list(dem_sim *s, nc_error *err)
     if (!(s->max_disp2 <= 0.25 * s->skin_m * s->skin_m)) s->rebuild = 1; /* also NaN */
     if (!s->rebuild) return 0;
     if (dem_cell_grid_build(&s->grid, n, s->sph.pos, 2.0 * s->r_max + s->skin_m, err)) return -1;
-    long nl = (long)n;
-#pragma omp parallel for schedule(static) num_threads(nb) if (nl >= DEM_PARALLEL_MIN)
-    for (long i = 0; i < nl; i++) s->nbr_first[i + 1] = neighbours_of(s, (size_t)i, s->skin_m, NULL);
+    int failed = 0;
+#pragma omp parallel num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
+    {
+        int t = 0;
+#ifdef _OPENMP
+        t = omp_get_thread_num();
+        int nt = omp_get_num_threads();
+#else
+        int nt = 1;
+#endif
+        for (int b = t; b < nb; b += nt) {
+            struct dem_nbr_part *part = &s->nbr_part[b];
+            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+            size_t used = 0;
+            for (size_t i = lo; i < hi && !failed; i++) {
+                size_t room = part->cap - used;
+                int32_t count = neighbours_of(s, i, s->skin_m, part->a ? part->a + used : NULL, room);
+                if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
+                    size_t cap = 2 * (used + (size_t)count) + 1024;
+                    int32_t *a = realloc(part->a, cap * sizeof *a);
+                    if (!a) {
+                        failed = 1;
+                        break;
+                    }
+                    part->a = a;
+                    part->cap = cap;
+                    if ((size_t)count > room) neighbours_of(s, i, s->skin_m, part->a + used, (size_t)count);
+                }
+                s->nbr_first[i + 1] = count;
+                used += (size_t)count;
+            }
+        }
+    }
+    if (failed) return nc_error_set(err, 1, "dem: out of memory for the neighbour list");
     s->nbr_first[0] = 0;
     for (size_t i = 0; i < n; i++) s->nbr_first[i + 1] += s->nbr_first[i];
     size_t total = (size_t)s->nbr_first[n];
-    if (total > s->nbr_cap) {
-        size_t cap = total + total / 4 + 64;
-        int32_t *p = realloc(s->nbr, cap * sizeof *p);
-        if (!p) return nc_error_set(err, 1, "dem: out of memory for %zu neighbour pairs", cap);
-        s->nbr = p;
-        s->nbr_cap = cap;
+    if (nb == 1) { /* the single part is the list: no copy */
+        int32_t *a = s->nbr;
+        size_t cap = s->nbr_cap;
+        s->nbr = s->nbr_part[0].a;
+        s->nbr_cap = s->nbr_part[0].cap;
+        s->nbr_part[0].a = a;
+        s->nbr_part[0].cap = cap;
+    } else {
+        if (total > s->nbr_cap) {
+            size_t cap = total + total / 4 + 64;
+            int32_t *p = realloc(s->nbr, cap * sizeof *p);
+            if (!p) return nc_error_set(err, 1, "dem: out of memory for %zu neighbour pairs", cap);
+            s->nbr = p;
+            s->nbr_cap = cap;
+        }
+#pragma omp parallel for schedule(static, 1) num_threads(nb) if (total >= DEM_PARALLEL_MIN)
+        for (int b = 0; b < nb; b++) {
+            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+            size_t from = (size_t)s->nbr_first[lo], count = (size_t)s->nbr_first[hi] - from;
+            if (count) memcpy(s->nbr + from, s->nbr_part[b].a, count * sizeof(int32_t));
+        }
     }
-#pragma omp parallel for schedule(static) num_threads(nb) if (nl >= DEM_PARALLEL_MIN)
-    for (long i = 0; i < nl; i++) neighbours_of(s, (size_t)i, s->skin_m, s->nbr + s->nbr_first[i]);
+    /* new ranges for the contact passes, balanced by the expected work of each sphere: its
+     * neighbours and (weighing more) its contacts of the last step */
+    if (nb > 1) {
+        double work = 0.0;
+        for (size_t i = 0; i < n; i++)
+            work += 1.0 + (double)(s->nbr_first[i + 1] - s->nbr_first[i]) +
+                    4.0 * (double)(s->prev_first[i + 1] - s->prev_first[i]);
+        double acc = 0.0;
+        int b = 1;
+        s->range_first[0] = 0;
+        for (size_t i = 0; i < n && b < nb; i++) {
+            while (b < nb && acc >= work * (double)b / (double)nb) s->range_first[b++] = i;
+            acc += 1.0 + (double)(s->nbr_first[i + 1] - s->nbr_first[i]) +
+                   4.0 * (double)(s->prev_first[i + 1] - s->prev_first[i]);
+        }
+        while (b < nb) s->range_first[b++] = n;
+        s->range_first[nb] = n;
+    }
+    /* spheres with a neighbour in another thread's range get their force sums through the
+     * spills (the ranges are those of dem_compute_contacts) */
+    memset(s->shared_sphere, 0, n * sizeof *s->shared_sphere);
+    for (int b = 0; b + 1 < nb; b++) {
+        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        for (size_t i = lo; i < hi; i++)
+            for (int32_t q = s->nbr_first[i]; q < s->nbr_first[i + 1]; q++)
+                if ((size_t)s->nbr[q] >= hi) s->shared_sphere[s->nbr[q]] = 1;
+    }
     memcpy(s->pos_at_build, s->sph.pos, 3 * n * sizeof(double));
     s->max_disp2 = 0.0;
     s->rebuild = 0;
@@ -321,7 +535,7 @@ static int sphere_planes(const dem_sim *s, emit_ctx *out, size_t i, double dt)
         const dem_plane *pl = &s->planes[w];
         double d = (p[0] - pl->point[0]) * pl->normal[0] + (p[1] - pl->point[1]) * pl->normal[1] +
                    (p[2] - pl->point[2]) * pl->normal[2];
-        if (d >= r || d <= -r) continue; /* one-sided: centres behind the plane are ignored */
+        if (fabs(d) >= r) continue; /* one-sided: centres behind the plane are ignored */
         contact_in in;
         in.kind = DEM_CONTACT_PLANE;
         in.j = (int32_t)w;
@@ -505,7 +719,7 @@ int dem_contacts_close_pairs(dem_sim *s, double gap, long *count, nc_error *err)
     if (dem_cell_grid_build(&s->grid, n, s->sph.pos, 2.0 * s->r_max + gap, err)) return -1;
     long nl = (long)n, total = 0;
 #pragma omp parallel for schedule(static) reduction(+ : total) num_threads(s->n_buffers) if (nl >= DEM_PARALLEL_MIN)
-    for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL);
+    for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL, 0);
     *count = total;
     s->rebuild = 1; /* the grid now has another cell size */
     return 0;
@@ -539,12 +753,17 @@ int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
 #endif
         /* Fixed contiguous ranges per buffer: the concatenation order never changes. */
         for (int b = t; b < nb; b += nt) {
-            emit_ctx out = {&s->buffers[b], 0};
+            emit_ctx out = {&s->buffers[b], &s->spills[b], 0};
             out.out->n = 0;
+            out.spill->n = 0;
             s->buffer_overflow[b] = 0;
-            size_t lo = n * (size_t)b / (size_t)nb, hi = n * (size_t)(b + 1) / (size_t)nb;
+            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+            /* only this range writes the sums of its unshared spheres */
+            memset(s->sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+            memset(s->sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
             for (size_t i = lo; i < hi && !failed; i++) {
                 out.first = out.out->n;
+                s->contact_first[i] = (int32_t)out.first; /* + the buffer's offset, below */
                 if (sphere_sphere(s, &out, i, dt) || sphere_planes(s, &out, i, dt) ||
                     (s->n_meshes && sphere_meshes(s, &out, i, dt, &s->buffer_overflow[b])) ||
                     (s->net.active && sphere_net(s, &out, i, dt, &s->buffer_overflow[b])))
@@ -575,60 +794,60 @@ int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
         s->contacts.n = total;
     }
 
-    /* CSR index by sphere (the list is ordered by i) */
-    const dem_contacts *c = &s->contacts;
-    size_t pos = 0;
-    for (size_t i = 0; i <= n; i++) {
-        while (pos < total && (size_t)c->i[pos] < i) pos++;
-        s->contact_first[i] = (int32_t)pos;
+    /* CSR index by sphere: each buffer's local first contacts, shifted by its offset */
+    if (nb > 1) {
+        size_t off = 0;
+        for (int b = 0; b < nb; b++) {
+            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+            for (size_t i = lo; i < hi; i++) s->contact_first[i] += (int32_t)off;
+            off += s->buffers[b].n;
+        }
     }
+    s->contact_first[n] = (int32_t)total;
 
-    /* deterministic reduction in contact order */
-    memset(s->sph.force, 0, 3 * n * sizeof(double));
-    memset(s->sph.torque, 0, 3 * n * sizeof(double));
+    /* the sums that cross ranges, in contact order (thread ranges are in sphere order) */
     memset(s->wall_force, 0, 3 * s->n_walls * sizeof(double));
     if (s->net.active) memset(s->net.force, 0, 3 * s->net.n_nodes * sizeof(double));
     double *net_total = s->wall_force + 3 * (s->n_planes + s->n_meshes);
-    for (size_t k = 0; k < total; k++) {
-        size_t i = (size_t)c->i[k];
-        const double *f = c->force + 3 * k;
-        for (int d = 0; d < 3; d++) {
-            s->sph.force[3 * i + d] += f[d];
-            s->sph.torque[3 * i + d] += c->torque_i[3 * k + d];
-        }
-        switch (c->kind[k]) {
-        case DEM_CONTACT_SPHERE: {
-            size_t j = (size_t)c->j[k];
-            for (int d = 0; d < 3; d++) {
-                s->sph.force[3 * j + d] -= f[d];
-                s->sph.torque[3 * j + d] += c->torque_j[3 * k + d];
+    for (int b = 0; b < nb; b++) {
+        const dem_spills *sp = &s->spills[b];
+        for (size_t k = 0; k < sp->n; k++) {
+            const dem_spill *r = &sp->r[k];
+            const double *f = r->f;
+            switch (r->kind) {
+            case DEM_CONTACT_SPHERE: {
+                double *fs = s->sph.force + 3 * (size_t)r->index, *ts = s->sph.torque + 3 * (size_t)r->index;
+                for (int d = 0; d < 3; d++) {
+                    fs[d] += f[d];
+                    ts[d] += r->t[d];
+                }
+                break;
             }
-            break;
-        }
-        case DEM_CONTACT_PLANE:
-            for (int d = 0; d < 3; d++) s->wall_force[3 * (size_t)c->j[k] + d] -= f[d];
-            break;
-        case DEM_CONTACT_MESH:
-            for (int d = 0; d < 3; d++) s->wall_force[3 * (s->n_planes + (size_t)c->aux[k]) + d] -= f[d];
-            break;
-        case DEM_CONTACT_NET_EDGE: { /* consistent nodal loads: (1-t) f, t f */
-            const int32_t *e = s->net.edges + 2 * (size_t)c->j[k];
-            double t = c->weight[k];
-            for (int d = 0; d < 3; d++) {
-                s->net.force[3 * (size_t)e[0] + d] -= (1.0 - t) * f[d];
-                s->net.force[3 * (size_t)e[1] + d] -= t * f[d];
-                net_total[d] -= f[d];
+            case DEM_CONTACT_PLANE:
+                for (int d = 0; d < 3; d++) s->wall_force[3 * (size_t)r->index + d] -= f[d];
+                break;
+            case DEM_CONTACT_MESH:
+                for (int d = 0; d < 3; d++) s->wall_force[3 * (s->n_planes + (size_t)r->index) + d] -= f[d];
+                break;
+            case DEM_CONTACT_NET_EDGE: { /* consistent nodal loads: (1-t) f, t f */
+                const int32_t *e = s->net.edges + 2 * (size_t)r->index;
+                double t = r->weight;
+                for (int d = 0; d < 3; d++) {
+                    s->net.force[3 * (size_t)e[0] + d] -= (1.0 - t) * f[d];
+                    s->net.force[3 * (size_t)e[1] + d] -= t * f[d];
+                    net_total[d] -= f[d];
+                }
+                break;
             }
-            break;
-        }
-        case DEM_CONTACT_NET_NODE:
-            for (int d = 0; d < 3; d++) {
-                s->net.force[3 * (size_t)c->j[k] + d] -= f[d];
-                net_total[d] -= f[d];
+            case DEM_CONTACT_NET_NODE:
+                for (int d = 0; d < 3; d++) {
+                    s->net.force[3 * (size_t)r->index + d] -= f[d];
+                    net_total[d] -= f[d];
+                }
+                break;
+            default:
+                break;
             }
-            break;
-        default:
-            break;
         }
     }
 

@@ -72,6 +72,8 @@ typedef struct dem_bodies {
     double *mass, *inv_mass;
     double *inv_inertia_body; /* 9n: inverse inertia tensor in the body frame, row-major */
     double *inertia_body;     /* 9n */
+    double *inv_inertia_iso;  /* n: 1/I of a free sphere (the diagonal of inv_inertia_body, kept
+                                 compact for the integration loop); 0 for clusters */
     double *pos;              /* 3n: centre of mass */
     double *vel;              /* 3n */
     double *omega;            /* 3n: angular velocity, world frame */
@@ -142,7 +144,9 @@ enum {
 };
 
 /* A list of contacts, ordered by sphere i (then by discovery order, which is deterministic).
- * History (ft, kt_prev, fn_prev) survives from one step to the next through the key. */
+ * History (ft, kt_prev, fn_prev) survives from one step to the next through the key. The
+ * contact forces themselves are summed onto spheres and walls while the list is built (see
+ * dem_contacts.h) and not stored. */
 typedef struct dem_contacts {
     size_t n, cap;
     int32_t *i, *kind, *j;
@@ -150,12 +154,26 @@ typedef struct dem_contacts {
     double *ft;            /* 3n: elastic tangential force on i (history) */
     double *kt_prev;       /* tangential stiffness of the previous step */
     double *fn_prev;       /* normal force of the previous step */
-    double *force;         /* 3n: total contact force on sphere i */
-    double *torque_i;      /* 3n: torque on sphere i about its centre */
-    double *torque_j;      /* 3n: torque on sphere j about its centre (sphere contacts) */
-    double *weight;        /* net edge parameter t in [0,1] (force to nodes (1-t), t) */
     double *overlap;       /* m */
     double *normal;        /* 3n: unit normal from sphere i towards the other body */
 } dem_contacts;
+
+/* A contact force contribution summed after the parallel contact pass, in a fixed order:
+ * forces on walls and net nodes, and forces on the spheres that receive contributions from
+ * more than one thread's range of spheres (so that every sum runs in the same order whatever
+ * the thread count). */
+typedef struct dem_spill {
+    int32_t kind;          /* DEM_CONTACT_SPHERE (force and torque on sphere `index`), _PLANE,
+                              _MESH (wall `index`), _NET_EDGE (edge `index`, weight), _NET_NODE */
+    int32_t index;
+    double weight;         /* net edge parameter t */
+    double f[3];           /* force to add */
+    double t[3];           /* torque to add (spheres) */
+} dem_spill;
+
+typedef struct dem_spills {
+    size_t n, cap;
+    dem_spill *r;
+} dem_spills;
 
 #endif

@@ -68,7 +68,7 @@ void dem_sim_free(dem_sim *s)
     free(p->pos); free(p->vel); free(p->force); free(p->torque);
     dem_bodies *b = &s->bod;
     free(b->first_sphere); free(b->n_spheres); free(b->is_cluster); free(b->mass);
-    free(b->inv_mass); free(b->inv_inertia_body); free(b->inertia_body); free(b->pos);
+    free(b->inv_mass); free(b->inv_inertia_body); free(b->inertia_body); free(b->inv_inertia_iso); free(b->pos);
     free(b->vel); free(b->omega); free(b->angmom); free(b->quat); free(b->force); free(b->torque);
     free(s->planes);
     for (size_t m = 0; m < s->n_meshes; m++) dem_mesh_free(&s->meshes[m]);
@@ -80,9 +80,18 @@ void dem_sim_free(dem_sim *s)
     free(s->prev_first);
     free(s->nbr_first);
     free(s->nbr);
+    if (s->nbr_part)
+        for (int k = 0; k < s->n_buffers; k++) free(s->nbr_part[k].a);
+    free(s->nbr_part);
     free(s->pos_at_build);
     for (int k = 0; k < s->n_buffers; k++) dem_contacts_free(&s->buffers[k]);
     free(s->buffers);
+    if (s->spills)
+        for (int k = 0; k < s->n_buffers; k++) free(s->spills[k].r);
+    free(s->spills);
+    free(s->shared_sphere);
+    free(s->range_first);
+    free(s->wall_pairs);
     free(s->buffer_overflow);
     dem_cell_grid_free(&s->grid);
     free(s->wall_force);
@@ -120,7 +129,7 @@ static int reserve_bodies(dem_sim *s, size_t need, nc_error *err)
     while (cap < need) cap *= 2;
     GROWV(b->first_sphere, 1, cap); GROWV(b->n_spheres, 1, cap); GROWV(b->is_cluster, 1, cap);
     GROWV(b->mass, 1, cap); GROWV(b->inv_mass, 1, cap); GROWV(b->inv_inertia_body, 9, cap);
-    GROWV(b->inertia_body, 9, cap); GROWV(b->pos, 3, cap); GROWV(b->vel, 3, cap);
+    GROWV(b->inertia_body, 9, cap); GROWV(b->inv_inertia_iso, 1, cap); GROWV(b->pos, 3, cap); GROWV(b->vel, 3, cap);
     GROWV(b->omega, 3, cap); GROWV(b->angmom, 3, cap); GROWV(b->quat, 4, cap);
     GROWV(b->force, 3, cap); GROWV(b->torque, 3, cap);
     b->cap = cap;
@@ -268,6 +277,7 @@ static void body_mass_properties(dem_sim *s, size_t b)
     if (B->is_cluster[b]) {
         memcpy(B->pos + 3 * b, com, sizeof com);
         invert3(I, B->inv_inertia_body + 9 * b); /* each sphere adds 2/5 m r² 1: invertible */
+        B->inv_inertia_iso[b] = 0.0;
         const double *w = B->omega + 3 * b;
         for (int a = 0; a < 3; a++)
             B->angmom[3 * b + a] = I[3 * a] * w[0] + I[3 * a + 1] * w[1] + I[3 * a + 2] * w[2];
@@ -275,6 +285,7 @@ static void body_mass_properties(dem_sim *s, size_t b)
         double *inv = B->inv_inertia_body + 9 * b;
         memset(inv, 0, 9 * sizeof *inv);
         inv[0] = inv[4] = inv[8] = 1.0 / I[0];
+        B->inv_inertia_iso[b] = inv[0];
     }
 }
 
@@ -427,7 +438,13 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     s->n_buffers = nb;
     s->buffers = calloc((size_t)nb, sizeof *s->buffers);
     s->buffer_overflow = calloc((size_t)nb, sizeof *s->buffer_overflow);
+    s->spills = calloc((size_t)nb, sizeof *s->spills);
+    s->nbr_part = calloc((size_t)nb, sizeof *s->nbr_part);
     size_t n = s->sph.n;
+    s->shared_sphere = calloc(n + 1, sizeof *s->shared_sphere);
+    s->range_first = malloc(((size_t)nb + 1) * sizeof *s->range_first);
+    if (s->range_first)
+        for (int b = 0; b <= nb; b++) s->range_first[b] = n * (size_t)b / (size_t)nb;
     s->contact_first = calloc(n + 1, sizeof *s->contact_first);
     s->nbr_first = calloc(n + 1, sizeof *s->nbr_first);
     s->pos_at_build = malloc((3 * n + 1) * sizeof *s->pos_at_build);
@@ -446,7 +463,7 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     p->sph_pos = malloc(3 * nsph * sizeof(double));
     p->sph_vel = malloc(3 * nsph * sizeof(double));
     p->contact_first = malloc((n + 1) * sizeof(int32_t));
-    if (!s->buffers || !s->buffer_overflow || !s->contact_first || !s->prev_first ||
+    if (!s->buffers || !s->buffer_overflow || !s->spills || !s->nbr_part || !s->shared_sphere || !s->range_first || !s->contact_first || !s->prev_first ||
         !s->nbr_first || !s->pos_at_build ||
         !s->wall_force || !p->body_pos || !p->body_vel || !p->body_omega || !p->body_angmom ||
         !p->body_quat || !p->sph_pos || !p->sph_vel || !p->contact_first)
@@ -457,6 +474,7 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     if (dem_contacts_reserve(&s->contacts, 8 * n + 64, err) ||
         dem_contacts_reserve(&s->prev, 8 * n + 64, err))
         return -1;
+    if (dem_contacts_prepare(s, err)) return -1;
     s->prepared = 1;
     return 0;
 }

@@ -48,7 +48,16 @@ typedef struct dem_sim {
     int32_t *contact_first, *prev_first; /* n_spheres + 1: first contact of each sphere */
     int n_buffers;
     dem_contacts *buffers;         /* one per thread, concatenated in order */
+    dem_spills *spills;            /* one per thread: sums done after the parallel pass */
     int *buffer_overflow;
+    struct dem_pair *wall_pairs;   /* n_materials²: sphere material a against a wall of
+                                      material b (r_star, m_star filled per contact) */
+    size_t *range_first;           /* n_buffers + 1: the spheres of buffer b are
+                                      range_first[b] .. range_first[b+1]-1, balanced by the
+                                      expected work at every neighbour-list build (results do
+                                      not depend on the ranges) */
+    uint8_t *shared_sphere;        /* per sphere: 1 if a Verlet neighbour lies in another
+                                      thread's range (its force sum goes through the spills) */
 
     dem_cell_grid grid;
     /* Verlet neighbour list of sphere pairs (j > i) within r_i + r_j + skin, rebuilt when a
@@ -59,6 +68,10 @@ typedef struct dem_sim {
     int32_t *nbr_first;            /* n_spheres + 1 */
     int32_t *nbr;                  /* neighbour indices */
     size_t nbr_cap;
+    struct dem_nbr_part {          /* one per thread: its range's lists while building */
+        int32_t *a;
+        size_t cap;
+    } *nbr_part;
     double *pos_at_build;          /* 3 per sphere */
     double max_disp2;              /* largest squared sphere displacement since the build */
     long n_builds;

@@ -84,17 +84,24 @@ static void test_save_restore_bit_identical(void **state)
 static void test_threads_do_not_change_results(void **state)
 {
     (void)state;
-    dem_sim a, b;
+    dem_sim a, b, c;
     build_pile(&a, 1);
     build_pile(&b, 2);
+    build_pile(&c, 3); /* 3 ranges: spheres summed across range boundaries (random order) */
     assert_true(a.sph.n >= DEM_PARALLEL_MIN); /* large enough to run in parallel */
     assert_int_equal(a.n_buffers, 1);
     assert_int_equal(b.n_buffers, 2);
+    assert_int_equal(c.n_buffers, 3);
     run(&a, 2000);
     run(&b, 2000);
+    run(&c, 2000);
     assert_same_state(&a, &b);
+    assert_same_state(&a, &c);
+    assert_memory_equal(a.wall_force, b.wall_force, 3 * a.n_walls * sizeof(double));
+    assert_memory_equal(a.wall_force, c.wall_force, 3 * a.n_walls * sizeof(double));
     dem_sim_free(&a);
     dem_sim_free(&b);
+    dem_sim_free(&c);
 }
 
 static void test_coupled_restore_identical_forces(void **state)
