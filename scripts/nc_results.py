@@ -4,6 +4,7 @@ Only the dataset names that the programs document as stable are used:
 fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3)
 coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact}
              /iterations/{step,iteration,residual,alpha,contact_force}
+contact_intervals / contact_free_time: contact windows of coupled runs or of a fine-step reference
 """
 import os
 
@@ -54,7 +55,12 @@ class Coupling:
 
     @property
     def end_time(self):
-        return self.time + self.dt
+        """/steps/time is the END time of each step (coupler/README.md)."""
+        return self.time
+
+    @property
+    def start_time(self):
+        return self.time - self.dt
 
     def force_magnitude(self):
         return np.linalg.norm(self.contact_force, axis=1)
@@ -82,3 +88,33 @@ def contact_lost_and_regained(coupling, threshold=1e-9):
     # a gap: some False after the first True, followed by True again
     gaps = np.where(~after)[0]
     return bool(len(gaps) and after[gaps[0]:].any())
+
+
+def contact_intervals(start, end, force, threshold=1e-9):
+    """Time spans [t0, t1] with a contact force above threshold.
+
+    start, end: per-sample start and end times (coupling steps: start_time, end_time; the force is
+    the step average, so a contact step covers its whole step); force: magnitudes.
+    Consecutive contact samples merge into one interval."""
+    on = np.asarray(force) > threshold
+    intervals = []
+    k = 0
+    n = len(on)
+    while k < n:
+        if on[k]:
+            j = k
+            while j + 1 < n and on[j + 1]:
+                j += 1
+            intervals.append((float(start[k]), float(end[j])))
+            k = j + 1
+        else:
+            k += 1
+    return intervals
+
+
+def contact_free_time(intervals, t0, t1):
+    """Seconds of [t0, t1] not covered by any of the contact intervals."""
+    covered = 0.0
+    for a, b in intervals:
+        covered += max(0.0, min(b, t1) - max(a, t0))
+    return max(0.0, (t1 - t0) - covered)

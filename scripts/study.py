@@ -111,7 +111,7 @@ def plot_iterations(results, labels, path, title):
             c = nc_results.load_coupling(run_dir)
         except (OSError, KeyError):
             continue
-        ax.step(c.end_time, c.iterations, where="post", label=label, lw=1)
+        ax.step(c.end_time, c.iterations, where="pre", label=label, lw=1)  # value of step (t - dt, t]
     ax.set_xlabel("time [s]")
     ax.set_ylabel("interface iterations per step")
     ax.set_title(title)
@@ -234,7 +234,7 @@ def study_cable_impact(out, jobs, end_time):
             axes[0].set_ylabel("contact force [N]")
             axes[0].grid(True, alpha=0.3)
             print("  first-iteration force / converged force at that step: %.2f" % (force[0] / max(force[-1], 1e-30)))
-        axes[1].step(c.end_time, c.iterations, where="post")
+        axes[1].step(c.end_time, c.iterations, where="pre")
         axes[1].set_xlabel("time [s]")
         axes[1].set_ylabel("interface iterations per step")
         axes[1].grid(True, alpha=0.3)
@@ -250,11 +250,85 @@ def study_cable_impact(out, jobs, end_time):
     summary(results, labels)
 
 
+CENTRE_NODE = 220  # cases/angled_net: node at the origin, monitored (fem.json node set "center")
+
+
+def study_angled_net(out, jobs, end_time):
+    """7.5, fig. 20: angled net, weak 1e-4 / weak 2e-4 / strong 2e-4, centre node and iterations."""
+    variants = [("weak_dt1e-4", ["coupler.scheme=weak", "coupler.dt=1e-4", "fem.analysis.dt_s=1e-4"]),
+                ("weak_dt2e-4", ["coupler.scheme=weak", "coupler.dt=2e-4", "fem.analysis.dt_s=2e-4"]),
+                ("strong_dt2e-4", ["coupler.scheme=strong", "coupler.dt=2e-4", "fem.analysis.dt_s=2e-4"])]
+    results = run_all("angled_net", variants, out, jobs, end_time)
+    labels = [v[0] for v in variants]
+    curves, rows = {}, {}
+    for label in labels:
+        run_dir, seconds, ok = results[label]
+        try:
+            m = nc_results.load_monitor(run_dir)
+            c = nc_results.load_coupling(run_dir)
+        except (OSError, KeyError) as e:
+            print("  %-16s no results (%s)" % (label, e))
+            continue
+        curves[label] = (m.time, m.node(CENTRE_NODE), c)
+        rows[label] = dict(seconds=seconds, ok=ok, c=c)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    styles = {"weak_dt1e-4": dict(color="k", lw=1.2), "weak_dt2e-4": dict(color="tab:red", lw=1, ls="--"),
+              "strong_dt2e-4": dict(color="tab:blue", lw=1.2, ls="-.")}
+    lows = []
+    for label, (t, u, _) in curves.items():
+        axes[0].plot(t, u, label=label.replace("_dt", " ") + ("" if rows[label]["ok"] else " (failed)"),
+                     **styles[label])
+        if label != "weak_dt2e-4":
+            lows.append(u.min())
+    if lows:
+        # weak 2e-4 is flung off the rock (metres); keep the axis on the other two, as fig. 20a
+        axes[0].set_ylim(1.5 * min(lows), 0.1)
+    if "weak_dt2e-4" in curves:
+        t, u, _ = curves["weak_dt2e-4"]
+        axes[0].annotate("weak 2e-4 leaves the axis (min %.2f m):\ncontact lost, net flung off" % u.min(),
+                         xy=(0.02, 0.04), xycoords="axes fraction", fontsize=8, color="tab:red")
+    axes[0].set_xlabel("time [s]")
+    axes[0].set_ylabel("centre node vertical displacement [m]")
+    axes[0].set_title("(a) centre node (node %d)" % CENTRE_NODE)
+    axes[0].grid(True, alpha=0.3)
+    axes[0].legend(fontsize=8, loc="lower left", bbox_to_anchor=(0, 0.1))
+    if "strong_dt2e-4" in curves:
+        c = curves["strong_dt2e-4"][2]
+        axes[1].step(c.end_time, c.iterations, where="pre", color="tab:blue", lw=0.8)
+    axes[1].set_xlabel("time [s]")
+    axes[1].set_ylabel("interface iterations per step")
+    axes[1].set_title("(b) strong coupling, dt = 2e-4 s (weak: 1 per step)")
+    axes[1].grid(True, alpha=0.3)
+    fig.suptitle("angled protection net (7.5, fig. 20)")
+    save(fig, os.path.join(out, "fig20_angled_net.png"))
+    print("  %-16s %8s %8s %14s %14s %10s %8s %12s" % ("run", "wall[s]", "steps", "centre min[m]", "centre end[m]",
+                                                      "it/step", "max it", "unconverged"))
+    for label in labels:
+        if label not in curves:
+            continue
+        t, u, c = curves[label]
+        # weak coupling does one exchange per step: its converged flag says nothing
+        unconverged = "-" if label.startswith("weak") else str(int((c.converged == 0).sum()))
+        print("  %-16s %8.1f %8d %14.4f %14.4f %10.2f %8d %12s%s" % (
+            label, rows[label]["seconds"], len(c.iterations), u.min(), u[-1], c.iterations.mean(),
+            c.iterations.max(), unconverged, "" if rows[label]["ok"] else "  FAILED"))
+    if "weak_dt1e-4" in curves:
+        t1, u1, _ = curves["weak_dt1e-4"]
+        peak = np.abs(u1).max()
+        for label in ("strong_dt2e-4", "weak_dt2e-4"):
+            if label in curves:
+                t, u, _ = curves[label]
+                diff = np.abs(u - np.interp(t, t1, u1)).max()
+                print("  max |%s - weak_dt1e-4| at the centre node: %.4f m (%.1f %% of the peak %.3f m)"
+                      % (label, diff, 100 * diff / peak, peak))
+
+
 STUDIES = {
     "timestep": study_timestep,
     "relaxation": study_relaxation,
     "restitution": study_restitution,
     "cable_impact": study_cable_impact,
+    "angled_net": study_angled_net,
 }
 
 

@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# Paper 7.1/7.2 claim (issue 6): "at dt = 1e-2 s weak coupling loses contact after the first
+# impact (the contact force drops to zero and returns) while strong keeps it; weak at 1e-3
+# does not lose it". cases/rest_position, COR 1 (the case's value), runs shortened to 0.8 s
+# (the first impact lasts 0.25-0.7 s), compared with the independent fine-step reference
+# scripts/diagnostics/reference_explicit.py (no coupling, dt 2e-5 s, about 2 s of CPU).
+#
+# What "keeps contact" means here. With COR 1 the undamped sphere chatters PHYSICALLY at the
+# start and end of the impact: the reference has 11 contact windows before 0.75 s, the main
+# one W = [0.376, 0.606] s (its longest). So no scheme can or should show a single contact
+# window; the test uses W (computed from the reference, not hard-coded):
+#  - strong 1e-2 keeps contact: non-zero contact force (coupling.h5 /steps/contact_force,
+#    step average) in every coupling step overlapping W (contact-free time in W < 1e-6 s;
+#    measured 0: its window [0.34, 0.67] covers W).
+#  - weak 1e-2 loses contact and regains it with a jump: contact-free time in W > 25 % of W
+#    (measured 57 %: 1-2 steps on, 1-2 off, longest contact 30 ms = 13 % of W) and the force on
+#    return > 3x the reference's maximum (measured 148 kN vs 20.9 kN, 7x).
+#  - weak 1e-3 does not lose contact in the paper's sense, i.e. it follows the reference's
+#    contact pattern: contact-free time in W < 25 % of W (measured 12 %: the reference's own
+#    chatter right after W, shifted by a few ms), longest contact >= 50 % of W (measured 71 %),
+#    max force within 50 % of the reference's (measured +26 %), peak u_A within 1 % of the
+#    reference's (measured -0.5512 vs -0.5511 m). It does NOT have one continuous contact over
+#    W (7 short gaps of 1-8 ms); neither has the reference around W's ends.
+# Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
+# (a factor >= 2 away from each measurement).
+set -u
+: "${NC_BIN:?}" "${NC_TMP:?}"
+PY=${PYTHON:-/usr/bin/python3}
+for p in fem_solver dem_solver coupler; do
+  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
+done
+fail() { echo "FAIL: $*"; exit 1; }
+case_dir=cases/rest_position
+[ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
+T=0.8
+
+"$PY" scripts/diagnostics/reference_explicit.py $T 2e-5 1.0 --save "$NC_TMP/ref.npz" \
+  > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
+
+run() {   # name scheme dt
+  scripts/run_case.sh "$case_dir" --out "$NC_TMP/$1" --quiet --set coupler.scheme=$2 \
+    --set coupler.dt=$3 --set fem.analysis.dt_s=$3 --set coupler.end_time=$T \
+    --set fem.analysis.end_time_s=$T --set dem.materials.0.restitution=1.0 > "$NC_TMP/$1.out" 2>&1 \
+    || { tail -n 20 "$NC_TMP/$1.out" "$NC_TMP/$1"/*.log; fail "$1: run_case.sh failed"; }
+}
+run weak_dt1e-2 weak 1e-2
+run weak_dt1e-3 weak 1e-3
+run strong_dt1e-2 strong 1e-2
+
+"$PY" - "$NC_TMP" <<'PY' || exit 1
+import sys
+import numpy as np
+sys.path.insert(0, "scripts")
+import nc_results as R
+tmp = sys.argv[1]
+UNTIL = 0.75    # end of the first impact window (damped_contact.md)
+ref = np.load(tmp + "/ref.npz")
+m = ref["t"] <= UNTIL
+ref_iv = R.contact_intervals(ref["t"][m], ref["t"][m] + 2e-5, np.abs(ref["fz"][m]))
+W = max(ref_iv, key=lambda iv: iv[1] - iv[0])
+L = W[1] - W[0]
+ref_fmax = np.abs(ref["fz"][m]).max()
+ref_peak = ref["uA"].min()
+print("reference: %d contact windows before %.2f s, main window W = [%.3f, %.3f] s, max |F| %.0f N, "
+      "peak u_A %.4f m" % (len(ref_iv), UNTIL, W[0], W[1], ref_fmax, ref_peak))
+assert 0.1 < L < 0.5, "reference main contact window implausible: %s" % (W,)
+
+res = {}
+for name in ("weak_dt1e-2", "weak_dt1e-3", "strong_dt1e-2"):
+    c = R.load_coupling(tmp + "/" + name)
+    k = c.end_time <= UNTIL
+    f = c.force_magnitude()[k]
+    iv = R.contact_intervals(c.start_time[k], c.end_time[k], f)
+    longest = max((b - a for a, b in iv), default=0.0)
+    r = dict(free=R.contact_free_time(iv, *W), longest=longest, fmax=f.max(),
+             peak=R.load_monitor(tmp + "/" + name).node(1).min(), n=len(iv),
+             lost=R.contact_lost_and_regained(c))
+    res[name] = r
+    print("%-14s %2d windows, contact-free in W %.4f s (%3.0f %%), longest %.3f s (%3.0f %% of W), "
+          "max |F| %7.0f N (%.2fx ref), peak u_A %.4f m"
+          % (name, r["n"], r["free"], 100 * r["free"] / L, longest, 100 * longest / L, r["fmax"],
+             r["fmax"] / ref_fmax, r["peak"]))
+
+s, w2, w3 = res["strong_dt1e-2"], res["weak_dt1e-2"], res["weak_dt1e-3"]
+assert s["free"] < 1e-6, "strong 1e-2 lost contact inside the reference's main window"
+assert w2["free"] > 0.25 * L, "weak 1e-2 did not lose contact inside the main window"
+assert w2["lost"], "weak 1e-2: contact force never dropped to zero and returned"
+assert w2["fmax"] > 3 * ref_fmax, "weak 1e-2 regained contact without a force jump"
+assert w3["free"] < 0.25 * L, "weak 1e-3 lost contact inside the main window"
+assert w3["longest"] >= 0.5 * L, "weak 1e-3 has no sustained contact"
+assert abs(w3["fmax"] - ref_fmax) < 0.5 * ref_fmax, "weak 1e-3 contact force far from the reference"
+assert abs(w3["peak"] - ref_peak) < 0.01 * abs(ref_peak), "weak 1e-3 peak u_A not within 1 % of the reference"
+PY
+echo PASS
