@@ -8,6 +8,7 @@
 
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,51 +37,109 @@ size_t proto_dtype_size(proto_dtype dtype)
     return dtype == PROTO_F64 ? 8 : 4;
 }
 
+/* A growing text buffer for the header: written directly, because building a cJSON tree and
+ * printing it costs several microseconds per message (its number printing re-parses every
+ * value), a noticeable share of a solve round trip. */
+typedef struct text_buffer {
+    char *data;
+    size_t length, capacity;
+    int failed;
+} text_buffer;
+
+static void put(text_buffer *b, const char *format, ...) __attribute__((format(printf, 2, 3)));
+static void put(text_buffer *b, const char *format, ...)
+{
+    if (b->failed) return;
+    for (;;) {
+        va_list args;
+        va_start(args, format);
+        int n = vsnprintf(b->data + b->length, b->capacity - b->length, format, args);
+        va_end(args);
+        if (n < 0) {
+            b->failed = 1;
+            return;
+        }
+        if ((size_t)n < b->capacity - b->length) {
+            b->length += (size_t)n;
+            return;
+        }
+        size_t grown = 2 * b->capacity + (size_t)n;
+        char *data = realloc(b->data, grown);
+        if (!data) {
+            b->failed = 1;
+            return;
+        }
+        b->data = data;
+        b->capacity = grown;
+    }
+}
+
+/* A JSON string literal: quotes, backslashes and control characters escaped. */
+static void put_string(text_buffer *b, const char *text)
+{
+    put(b, "\"");
+    for (const unsigned char *c = (const unsigned char *)text; *c; c++) {
+        if (*c == '"' || *c == '\\') put(b, "\\%c", *c);
+        else if (*c == '\n') put(b, "\\n");
+        else if (*c == '\t') put(b, "\\t");
+        else if (*c < 0x20) put(b, "\\u%04x", *c);
+        else put(b, "%c", *c);
+    }
+    put(b, "\"");
+}
+
 int proto_encode_header(const proto_message *m, char **json, size_t *length, nc_error *err)
 {
     *json = NULL;
     *length = 0;
     if ((int)m->type <= PROTO_MSG_INVALID || m->type >= PROTO_MSG_COUNT)
         return nc_error_set(err, PROTO_ERR_USAGE, "cannot encode a message of invalid type %d", (int)m->type);
-    cJSON *root = cJSON_CreateObject();
-    if (!root) return nc_error_set(err, PROTO_ERR_USAGE, "out of memory encoding a header");
-    cJSON_AddStringToObject(root, "type", proto_type_name(m->type));
-    cJSON_AddNumberToObject(root, "version", m->version ? m->version : PROTO_VERSION);
-    cJSON_AddBoolToObject(root, "reply", m->is_reply);
-    cJSON_AddNumberToObject(root, "step", (double)m->step);
-    cJSON_AddNumberToObject(root, "iteration", m->iteration);
-    cJSON_AddNumberToObject(root, "time", isfinite(m->time_s) ? m->time_s : 0.0);
-    cJSON_AddNumberToObject(root, "dt", isfinite(m->dt_s) ? m->dt_s : 0.0);
-    cJSON_AddStringToObject(root, "status", m->type == PROTO_MSG_ERROR ? "error" : "ok");
-    if (m->role[0]) cJSON_AddStringToObject(root, "role", m->role);
-    if (m->name[0]) cJSON_AddStringToObject(root, "name", m->name);
-    if (m->text[0]) cJSON_AddStringToObject(root, "text", m->text);
-    cJSON *arrays = cJSON_AddArrayToObject(root, "arrays");
-    for (size_t i = 0; i < m->n_arrays; i++) {
-        const proto_array *a = &m->arrays[i];
-        cJSON *item = cJSON_CreateObject();
-        cJSON_AddStringToObject(item, "name", a->name);
-        cJSON_AddStringToObject(item, "dtype", a->dtype == PROTO_F64 ? "f64" : "i32");
-        cJSON *shape = cJSON_AddArrayToObject(item, "shape");
-        cJSON_AddItemToArray(shape, cJSON_CreateNumber((double)a->shape[0]));
-        if (a->ndim == 2) cJSON_AddItemToArray(shape, cJSON_CreateNumber((double)a->shape[1]));
-        cJSON_AddItemToArray(arrays, item);
-    }
-    cJSON *values = cJSON_AddObjectToObject(root, "values");
     for (size_t i = 0; i < m->n_values; i++) {
         /* JSON has no NaN/Inf: a non-finite value is an encoding error, not a silent null */
-        if (!isfinite(m->values[i].value)) {
-            cJSON_Delete(root);
+        if (!isfinite(m->values[i].value))
             return nc_error_set(err, PROTO_ERR_USAGE, "%s message: value '%s' is not finite",
                                 proto_type_name(m->type), m->values[i].name);
-        }
-        cJSON_AddNumberToObject(values, m->values[i].name, m->values[i].value);
     }
-    char *text = cJSON_PrintUnformatted(root);
-    cJSON_Delete(root);
-    if (!text) return nc_error_set(err, PROTO_ERR_USAGE, "out of memory encoding a header");
-    *json = text;
-    *length = strlen(text);
+    text_buffer b = {malloc(512), 0, 512, 0};
+    if (!b.data) return nc_error_set(err, PROTO_ERR_USAGE, "out of memory encoding a header");
+    /* %.17g: every double survives the round trip through text exactly */
+    put(&b, "{\"type\":\"%s\",\"version\":%d,\"reply\":%s,\"step\":%ld,\"iteration\":%d,"
+            "\"time\":%.17g,\"dt\":%.17g,\"status\":\"%s\"",
+        proto_type_name(m->type), m->version ? m->version : PROTO_VERSION,
+        m->is_reply ? "true" : "false", m->step, m->iteration,
+        isfinite(m->time_s) ? m->time_s : 0.0, isfinite(m->dt_s) ? m->dt_s : 0.0,
+        m->type == PROTO_MSG_ERROR ? "error" : "ok");
+    const char *texts[3][2] = {{"role", m->role}, {"name", m->name}, {"text", m->text}};
+    for (int t = 0; t < 3; t++) {
+        if (!texts[t][1][0]) continue;
+        put(&b, ",\"%s\":", texts[t][0]);
+        put_string(&b, texts[t][1]);
+    }
+    put(&b, ",\"arrays\":[");
+    for (size_t i = 0; i < m->n_arrays; i++) {
+        const proto_array *a = &m->arrays[i];
+        put(&b, "%s{\"name\":", i ? "," : "");
+        put_string(&b, a->name);
+        if (a->ndim == 2)
+            put(&b, ",\"dtype\":\"%s\",\"shape\":[%zu,%zu]}", a->dtype == PROTO_F64 ? "f64" : "i32",
+                a->shape[0], a->shape[1]);
+        else
+            put(&b, ",\"dtype\":\"%s\",\"shape\":[%zu]}", a->dtype == PROTO_F64 ? "f64" : "i32",
+                a->shape[0]);
+    }
+    put(&b, "],\"values\":{");
+    for (size_t i = 0; i < m->n_values; i++) {
+        put(&b, "%s", i ? "," : "");
+        put_string(&b, m->values[i].name);
+        put(&b, ":%.17g", m->values[i].value);
+    }
+    put(&b, "}}");
+    if (b.failed) {
+        free(b.data);
+        return nc_error_set(err, PROTO_ERR_USAGE, "out of memory encoding a header");
+    }
+    *json = b.data;
+    *length = b.length;
     return 0;
 }
 

@@ -17,7 +17,7 @@
 #define ARRAYS 3
 #define WARMUP 50
 #define ROUNDS 300
-#define TRIALS 3
+#define TRIALS 5
 
 static double now_s(void)
 {
@@ -255,7 +255,7 @@ int main(void)
     const char *transports[2][3] = {{"tcp", "tcp://127.0.0.1:*", "tcp://127.0.0.1:*"},
                                     {"ipc", ipc_raw, ipc_proto}};
     for (int t = 0; t < 2; t++) {
-        /* alternate the two, three times each, and keep each one's best median */
+        /* alternate the two, TRIALS times each, and keep each one's best median */
         double raw = 1e30, proto = 1e30;
         for (int trial = 0; trial < TRIALS; trial++) {
             double r = run(raw_server, raw_client, transports[t][1]);

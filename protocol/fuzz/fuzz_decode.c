@@ -37,10 +37,21 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     nc_error err;
     if (proto_decode(&message, data + offset, size - offset, frames, lengths, n, 1u << 20,
                      &err) == 0) {
-        /* a decoded message must re-encode; reading its arrays must stay in bounds */
+        /* a decoded message must re-encode to a header that decodes to the same message;
+         * reading its arrays must stay in bounds */
+        static proto_message again;
         char *header;
         size_t length;
-        if (proto_encode_header(&message, &header, &length, &err) == 0) free(header);
+        if (proto_encode_header(&message, &header, &length, &err) != 0) __builtin_trap();
+        if (proto_decode(&again, header, length, frames, lengths, n, 1u << 20, &err) != 0)
+            __builtin_trap();
+        free(header);
+        if (again.type != message.type || again.step != message.step ||
+            again.iteration != message.iteration || again.time_s != message.time_s ||
+            again.dt_s != message.dt_s || again.n_arrays != message.n_arrays ||
+            again.n_values != message.n_values || strcmp(again.text, message.text) != 0 ||
+            strcmp(again.role, message.role) != 0 || strcmp(again.name, message.name) != 0)
+            __builtin_trap();
         double sum = 0;
         for (size_t i = 0; i < message.n_arrays; i++) {
             const proto_array *a = &message.arrays[i];

@@ -84,7 +84,8 @@ static void test_round_trip_text_fields(void **state)
     memset(&in, 0, sizeof in);
     proto_message_init(&out, PROTO_MSG_ERROR);
     out.is_reply = 1;
-    snprintf(out.text, sizeof out.text, "Newton did not converge: \"residual\" = 3e-2\n");
+    snprintf(out.text, sizeof out.text,
+             "Newton did not converge: \"residual\" = 3e-2\n\tpath C:\\x \x01 \xc2\xb5m (UTF-8 kept)");
     snprintf(out.role, sizeof out.role, "fem");
     char *header;
     size_t length;
