@@ -1,4 +1,5 @@
-/* proto_codec — the wire format: JSON header (cJSON) + little-endian binary array frames.
+/* proto_codec — the wire format: a JSON header (written directly, parsed with cJSON) and
+ * little-endian binary array frames.
  *
  * Decoding trusts nothing: every field is type-checked, every length is checked against the
  * frame that carries it (with overflow-safe arithmetic), sizes are capped, and f64 arrays are
