@@ -47,15 +47,23 @@ LDFLAGS += -fopenmp $(SAN_FLAGS)
 MODULES := common protocol fem_solver dem_solver coupler
 PROGRAMS := fem_solver dem_solver coupler
 
-.PHONY: all test bench demo fuzz install clean deps check-deps check-bench-deps
-all: check-deps programs
+.PHONY: all test run-tests bench run-bench demo fuzz install clean deps check-deps check-bench-deps
+# The user-facing targets install missing packages first, then run a fresh make: compiler
+# flags come from pkg-config when the Makefile is read, which on a new machine is before the
+# packages exist.
+all: check-deps
+	@$(MAKE) --no-print-directory programs
 
 # Build and run the whole test suite; the last line counts tests ("N passed, N failed").
-test: check-deps programs tests
+test: check-deps
+	@$(MAKE) --no-print-directory run-tests
+
+run-tests: programs tests
 	@scripts/run_tests.sh "$(BUILD)/tests" "$(BIN)"
 
 # Runs the default case and writes its plots (scripts/demo.sh says where everything is).
-demo: check-deps programs
+demo: check-deps
+	@$(MAKE) --no-print-directory programs
 	@scripts/demo.sh
 
 check-deps:
@@ -128,7 +136,10 @@ tests: $(TEST_BINS)
 BENCH_TARGETS :=
 -include $(wildcard */module.mk)
 
-bench: check-bench-deps programs $(BENCH_TARGETS)
+bench: check-bench-deps
+	@$(MAKE) --no-print-directory run-bench
+
+run-bench: programs $(BENCH_TARGETS)
 
 check-bench-deps:
 	@scripts/check_deps.sh --bench >/dev/null 2>&1 || scripts/install_deps.sh --bench

@@ -323,12 +323,299 @@ def study_angled_net(out, jobs, end_time):
                       % (label, diff, 100 * diff / peak, peak))
 
 
+
+# ---- 7.6 / 7.7: terrain, curtain, cluster, sieve (one run each, the cases as they are) ------
+
+def load_dem(run_dir):
+    """Sphere (and cluster) positions of dem.h5: time [k], position [k, p, 3], velocity, radius."""
+    import h5py
+    r = {}
+    with h5py.File(os.path.join(run_dir, "dem.h5"), "r") as f:
+        keys = sorted(f["steps"].keys())
+        r["t"] = np.array(f["/time"])
+        r["pos"] = np.array([f["steps"][k]["position"][:] for k in keys])
+        r["vel"] = np.array([f["steps"][k]["velocity"][:] for k in keys])
+        r["radius"] = np.array(f["/particles/radius"])
+        if "cluster_position" in f["steps"][keys[0]]:
+            r["cpos"] = np.array([f["steps"][k]["cluster_position"][:] for k in keys])
+    return r
+
+
+def load_fem_output(run_dir):
+    """FEM output steps: time [k], displacement [k, n, 3], reference coordinates [n, 3], element sets."""
+    import h5py
+    with h5py.File(os.path.join(run_dir, "fem.h5"), "r") as f:
+        return dict(t=np.array(f["/output/time"]), u=np.array(f["/output/displacement"]),
+                    x=np.array(f["/mesh/coordinates"]), elements=np.array(f["/mesh/elements"]),
+                    element_set=np.array(f["/mesh/element_set"]))
+
+
+def terrain_section(stl_path, y0=0.0):
+    """Terrain profile z(x) at y = y0 from the case's STL (its grid has vertices on y = 0)."""
+    pts = {}
+    with open(stl_path) as f:
+        for line in f:
+            w = line.split()
+            if w and w[0] == "vertex" and abs(float(w[2]) - y0) < 1e-6:
+                pts[round(float(w[1]), 6)] = float(w[3])
+    xs = np.array(sorted(pts))
+    return xs, np.array([pts[x] for x in xs])
+
+
+def max_deflection(fem, nodes):
+    """Largest displacement magnitude among NODES at every FEM output step."""
+    return np.linalg.norm(fem["u"][:, nodes, :], axis=2).max(axis=1)
+
+
+def section_nodes(fem, axis, value, nodes=None, tol=1e-6):
+    """Nodes whose reference coordinate AXIS equals VALUE (a line of the net), optionally among NODES."""
+    idx = np.nonzero(np.abs(fem["x"][:, axis] - value) < tol)[0]
+    if nodes is not None:
+        idx = np.intersect1d(idx, nodes)
+    return idx
+
+
+def contact_spans(ax, run_dir, **kw):
+    """Shades the coupling steps in contact on AX."""
+    c = nc_results.load_coupling(run_dir)
+    for t0, t1 in nc_results.contact_intervals(c.start_time, c.end_time, c.in_contact.astype(float), 0.5):
+        ax.axvspan(t0, t1, **kw)
+    return c
+
+
+def _terrain_case_figure(case, run_dir, ok, path, title):
+    """x-z path of the rock over the terrain section y = 0 and the net(s) at the largest
+    deflection; max net deflection over time. Returns the numbers printed in the summary."""
+    dem, fem = load_dem(run_dir), load_fem_output(run_dir)
+    tx, tz = terrain_section(os.path.join(ROOT, "cases", case, "terrain.stl"))
+    c = nc_results.load_coupling(run_dir)
+    sets = {}
+    for e, s in zip(fem["elements"], fem["element_set"]):
+        sets.setdefault(int(s), set()).update(int(n) for n in e)
+    sets = {s: np.array(sorted(n)) for s, n in sets.items()}
+    # the protection net is the structure at x = 6 m, the curtain (if any) the other one
+    structures = {}
+    for s, nodes in sets.items():
+        name = "protection net" if np.allclose(fem["x"][nodes, 0], 6.0) else "curtain"
+        structures[name] = nodes
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw=dict(width_ratios=[1.5, 1]))
+    ax = axes[0]
+    ax.fill_between(tx, tz, -0.5, color="0.85", lw=0)
+    ax.plot(tx, tz, color="0.4", lw=1, label="terrain (STL section y = 0)")
+    p = dem["pos"][:, 0, :]
+    R = dem["radius"][0]
+    ax.plot(p[:, 0], p[:, 2], color="tab:brown", lw=1.2, label="rock centre (R %.2f m)" % R)
+    k_max = int(np.argmax(p[:, 0]))
+    ax.add_patch(plt.Circle((p[k_max, 0], p[k_max, 2]), R, fill=False, color="tab:brown", ls="--"))
+    ax.plot(p[0, 0], p[0, 2], "o", color="tab:brown", ms=4)
+    numbers = dict(x_max=p[k_max, 0], t_x_max=dem["t"][k_max],
+                   iterations=c.iterations.mean(), it_max=int(c.iterations.max()),
+                   unconverged=int((c.converged == 0).sum()), ok=ok, end=dem["t"][-1])
+    colours = {"protection net": "tab:blue", "curtain": "tab:green"}
+    right = axes[1]
+    for name, nodes in sorted(structures.items()):
+        d = max_deflection(fem, nodes)
+        k = int(np.argmax(d))
+        line = section_nodes(fem, 1, 0.0, nodes)
+        line = line[np.argsort(fem["x"][line, 2])]
+        x0 = fem["x"][line]
+        ax.plot(x0[:, 0], x0[:, 2], color=colours[name], lw=1, ls=":", label=name + " (y = 0), at rest")
+        xd = x0 + fem["u"][k, line, :]
+        ax.plot(xd[:, 0], xd[:, 2], color=colours[name], lw=1.5,
+                label="%s at t = %.2f s (largest deflection)" % (name, fem["t"][k]))
+        right.plot(fem["t"], d, color=colours[name], lw=1.2, label=name + ": max |u| over its nodes")
+        numbers[name] = (d[k], fem["t"][k])
+    ax.set_aspect("equal")
+    ax.set_xlim(-0.3, 7.0)
+    ax.set_ylim(-0.3, 3.2)
+    ax.set_xlabel("x [m] (downhill)")
+    ax.set_ylabel("z [m]")
+    ax.set_title("(a) rock path (x-z) and nets, section y = 0")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.grid(True, alpha=0.3)
+    for t0, t1 in nc_results.contact_intervals(c.start_time, c.end_time, c.in_contact.astype(float), 0.5):
+        right.axvspan(t0, t1, color="tab:orange", alpha=0.25, lw=0)
+    right.plot([], [], color="tab:orange", alpha=0.4, lw=6, label="rock in contact with a net")
+    right.set_xlabel("time [s]")
+    right.set_ylabel("largest net displacement [m]")
+    right.set_title("(b) net deflection over time")
+    right.grid(True, alpha=0.3)
+    right.legend(fontsize=7, loc="upper right")
+    fig.suptitle(title)
+    save(fig, path)
+    return numbers
+
+
+def study_terrain(out, jobs, end_time):
+    """7.6, figs. 21-22: rock rolling down an STL terrain into a net (terrain_net, terrain_curtain)."""
+    for case, fig_name, title in (
+            ("terrain_net", "fig22_terrain_net.png",
+             "terrain_net (7.6, fig. 22): rock rolls down the STL terrain and is stopped by the net"),
+            ("terrain_curtain", "fig21_terrain_curtain.png",
+             "terrain_curtain (7.6, fig. 21): curtain (free lower edge) on the slope, protection net at the foot")):
+        results = run_all(case, [(case, [])], out, 1, end_time)
+        run_dir, seconds, ok = results[case]
+        try:
+            n = _terrain_case_figure(case, run_dir, ok, os.path.join(out, fig_name), title)
+        except (OSError, KeyError) as e:
+            print("  %-16s no results (%s)" % (case, e))
+            continue
+        print("  %s: %.2f s simulated in %.1f s wall%s; rock centre x max %.3f m at %.3f s;"
+              " %.2f iterations/step (max %d), %d unconverged"
+              % (case, n["end"], seconds, "" if ok else " FAILED", n["x_max"], n["t_x_max"], n["iterations"],
+                 n["it_max"], n["unconverged"]))
+        for name in ("curtain", "protection net"):
+            if name in n:
+                print("    %s: largest displacement %.3f m at %.2f s" % (name, n[name][0], n[name][1]))
+
+
+def _net_section(ax, fem, k, axis_fixed, value, colour, label):
+    """Draws the net's line AXIS_FIXED = VALUE (x-z view) at rest and at output step K."""
+    line = section_nodes(fem, axis_fixed, value)
+    line = line[np.argsort(fem["x"][line, 0])]
+    x0 = fem["x"][line]
+    xd = x0 + fem["u"][k, line, :]
+    ax.plot(x0[:, 0], x0[:, 2], color=colour, lw=1, ls=":")
+    ax.plot(xd[:, 0], xd[:, 2], color=colour, lw=1.5, marker=".", ms=3,
+            label="%s at t = %.3f s" % (label, fem["t"][k]))
+
+
+def study_special(out, jobs, end_time):
+    """7.7, figs. 24-25: a rigid cluster of spheres (rock_cluster) and a coarse net as a sieve (net_sieve)."""
+    # ---- rock_cluster, fig. 24
+    case = "rock_cluster"
+    results = run_all(case, [(case, [])], out, 1, end_time)
+    run_dir, seconds, ok = results[case]
+    try:
+        dem, fem = load_dem(run_dir), load_fem_output(run_dir)
+        m = nc_results.load_monitor(run_dir)
+        c = nc_results.load_coupling(run_dir)
+    except (OSError, KeyError) as e:
+        print("  %-16s no results (%s)" % (case, e))
+    else:
+        cp = dem["cpos"][:, 0, :]
+        centre = m.node(220)
+        all_nodes = np.arange(fem["x"].shape[0])
+        d = max_deflection(fem, all_nodes)
+        kd = int(np.argmax(d))
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
+        ax = axes[0]
+        for p in range(dem["pos"].shape[1]):
+            ax.plot(dem["pos"][:, p, 0], dem["pos"][:, p, 2], color="0.7", lw=0.6,
+                    label="the 5 spheres' centres" if p == 0 else None)
+        ax.plot(cp[:, 0], cp[:, 2], color="tab:brown", lw=1.5, label="cluster centre of mass")
+        ax.plot(cp[0, 0], cp[0, 2], "o", color="tab:brown", ms=4)
+        kz = int(np.argmin(cp[:, 2]))
+        for p in range(dem["pos"].shape[1]):
+            ax.add_patch(plt.Circle((dem["pos"][kz, p, 0], dem["pos"][kz, p, 2]), dem["radius"][p], fill=False,
+                                    color="tab:brown", ls="--", lw=0.8))
+        y_line = fem["x"][section_nodes(fem, 0, 0.0), 1]
+        y_line = y_line[np.argmin(np.abs(y_line - cp[kz, 1]))]
+        _net_section(ax, fem, kd, 1, y_line, "tab:blue", "net line y = %.2f m" % y_line)
+        ax.set_aspect("equal")
+        ax.set_xlim(-1.6, 1.6)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("z [m]")
+        ax.set_title("(a) x-z paths; rock (dashed) at its lowest, t = %.3f s" % dem["t"][kz])
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+        ax = axes[1]
+        for t0, t1 in nc_results.contact_intervals(c.start_time, c.end_time, c.in_contact.astype(float), 0.5):
+            ax.axvspan(t0, t1, color="tab:orange", alpha=0.25, lw=0)
+        ax.plot([], [], color="tab:orange", alpha=0.4, lw=6, label="rock in contact with the net")
+        ax.plot(dem["t"], cp[:, 2], color="tab:brown", lw=1.2, label="cluster centre of mass z")
+        ax.plot(m.time, centre, color="tab:blue", lw=1.2, label="net centre node 220 u_z")
+        ax.plot(fem["t"], -d, color="tab:blue", lw=0.8, ls="--", label="- max |u| over all net nodes")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("[m]")
+        ax.set_title("(b) rock height and net deflection")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+        fig.suptitle("rock_cluster (7.7, fig. 24): a rigid cluster of 5 spheres caught by a horizontal net")
+        save(fig, os.path.join(out, "fig24_rock_cluster.png"))
+        first = c.end_time[np.argmax(c.in_contact > 0)] if c.in_contact.any() else float("nan")
+        k2 = kz + int(np.argmax(cp[kz:, 2]))
+        print("  %s: %.2f s simulated in %.1f s wall%s; first contact %.3f s; centre of mass z: start %.3f,"
+              " min %.3f at %.3f s, rebound max %.3f at %.3f s, end %.3f m; centre node min %.3f m at %.3f s,"
+              " end %.3f m; max |u| %.3f m at %.3f s; |x|,|y| of the centre <= %.3f m; %.2f it/step (max %d),"
+              " %d unconverged"
+              % (case, dem["t"][-1], seconds, "" if ok else " FAILED", first, cp[0, 2], cp[kz, 2], dem["t"][kz],
+                 cp[k2, 2], dem["t"][k2], cp[-1, 2], centre.min(), m.time[np.argmin(centre)], centre[-1],
+                 d[kd], fem["t"][kd], np.abs(cp[:, :2]).max(), c.iterations.mean(), c.iterations.max(),
+                 int((c.converged == 0).sum())))
+    # ---- net_sieve, fig. 25
+    case = "net_sieve"
+    results = run_all(case, [(case, [])], out, 1, end_time)
+    run_dir, seconds, ok = results[case]
+    try:
+        dem, fem = load_dem(run_dir), load_fem_output(run_dir)
+        m = nc_results.load_monitor(run_dir)
+        c = nc_results.load_coupling(run_dir)
+    except (OSError, KeyError) as e:
+        print("  %-16s no results (%s)" % (case, e))
+        return
+    names = {0: ("big sphere", "tab:red"), 1: ("small sphere", "tab:green")}
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
+    ax = axes[0]
+    # the x-z view of each sphere's path, with the net line y = -0.25 m (a cable the big one strikes)
+    d = max_deflection(fem, np.arange(fem["x"].shape[0]))
+    kd = int(np.argmax(d))
+    _net_section(ax, fem, kd, 1, -0.25, "tab:blue", "net cable y = -0.25 m")
+    cables_x = np.unique(np.round(fem["x"][:, 0], 6))
+    ax.plot(cables_x, np.zeros_like(cables_x), "|", color="tab:blue", ms=10, label="cables along y (x positions)")
+    for p, (name, colour) in names.items():
+        pos = dem["pos"][:, p, :]
+        R = dem["radius"][p]
+        ax.plot(pos[:, 0], pos[:, 2], color=colour, lw=1.5, label="%s (R %.2f m) centre" % (name, R))
+        for k in (0, len(dem["t"]) - 1):
+            ax.add_patch(plt.Circle((pos[k, 0], pos[k, 2]), R, fill=False, color=colour, lw=0.8,
+                                    ls="-" if k == 0 else "--"))
+        if p == 0:
+            kz = int(np.argmin(pos[:, 2]))
+            ax.add_patch(plt.Circle((pos[kz, 0], pos[kz, 2]), R, fill=False, color=colour, lw=0.8, ls=":"))
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.1, 1.1)
+    ax.set_ylim(-1.1, 0.8)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("z [m]")
+    ax.set_title("(a) x-z paths (circles: start, lowest, end)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="lower left")
+    ax = axes[1]
+    for t0, t1 in nc_results.contact_intervals(c.start_time, c.end_time, c.in_contact.astype(float), 0.5):
+        ax.axvspan(t0, t1, color="tab:orange", alpha=0.25, lw=0)
+    ax.plot([], [], color="tab:orange", alpha=0.4, lw=6, label="big sphere in contact")
+    for p, (name, colour) in names.items():
+        ax.plot(dem["t"], dem["pos"][:, p, 2], color=colour, lw=1.2, label=name + " z")
+        ax.plot(dem["t"], dem["vel"][:, p, 2] / 10, color=colour, lw=0.8, ls="--", label=name + " v_z / 10 [m/s]")
+    ax.plot(m.time, m.node(30), color="tab:blue", lw=1.2, label="net node 30 u_z")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("[m]")
+    ax.set_title("(b) heights, velocities and net deflection")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="lower left")
+    fig.suptitle("net_sieve (7.7, fig. 25): the small sphere falls through the coarse net, the big one is thrown back")
+    save(fig, os.path.join(out, "fig25_net_sieve.png"))
+    big_z, big_v = dem["pos"][:, 0, 2], dem["vel"][:, 0, 2]
+    small_v = dem["vel"][-1, 1, 2]
+    free_fall = -5.0 - 9.81 * dem["t"][-1]
+    first = c.end_time[np.argmax(c.in_contact > 0)] if c.in_contact.any() else float("nan")
+    print("  %s: %.3f s simulated in %.1f s wall%s; small sphere end z %.3f m, v_z %.4f m/s (free fall %.4f);"
+          " big sphere first contact %.4f s, min z %.3f m at %.3f s, end v_z %+.3f m/s (impact %.3f);"
+          " node 30 min u_z %.3f m; %.2f it/step (max %d), %d unconverged"
+          % (case, dem["t"][-1], seconds, "" if ok else " FAILED", dem["pos"][-1, 1, 2], small_v, free_fall, first,
+             big_z.min(), dem["t"][np.argmin(big_z)], big_v[-1], big_v.min(), m.node(30).min(),
+             c.iterations.mean(), c.iterations.max(), int((c.converged == 0).sum())))
+
+
 STUDIES = {
     "timestep": study_timestep,
     "relaxation": study_relaxation,
     "restitution": study_restitution,
     "cable_impact": study_cable_impact,
     "angled_net": study_angled_net,
+    "terrain": study_terrain,
+    "special": study_special,
 }
 
 
