@@ -32,6 +32,22 @@ void dem_cluster_omega(const double q[4], const double inv_inertia_body[9], cons
 }
 
 /* Rigid-body kinematics of the spheres of body k. */
+/* One explicit step of the orientation, q̇ = ½ (0, ω) ⊗ q, then renormalised. */
+static void quat_advance(double q[4], const double w[3], double h)
+{
+    double dq[4] = {-w[0] * q[1] - w[1] * q[2] - w[2] * q[3],
+                    w[0] * q[0] + w[1] * q[3] - w[2] * q[2],
+                    -w[0] * q[3] + w[1] * q[0] + w[2] * q[1],
+                    w[0] * q[2] - w[1] * q[1] + w[2] * q[0]};
+    double norm = 0.0;
+    for (int d = 0; d < 4; d++) {
+        q[d] += 0.5 * h * dq[d];
+        norm += q[d] * q[d];
+    }
+    norm = sqrt(norm);
+    for (int d = 0; d < 4; d++) q[d] /= norm;
+}
+
 static inline void place_spheres(dem_sim *s, long k)
 {
     const dem_bodies *b = &s->bod;
@@ -140,18 +156,7 @@ void dem_integrate_bodies(dem_sim *s, double dt)
             const double *ib = b->inv_inertia_body + 9 * k;
             for (int d = 0; d < 3; d++) L[d] += dt * T[d];
             dem_cluster_omega(q, ib, L, w);
-            /* q̇ = ½ (0, ω) ⊗ q */
-            double dq[4] = {-w[0] * q[1] - w[1] * q[2] - w[2] * q[3],
-                            w[0] * q[0] + w[1] * q[3] - w[2] * q[2],
-                            -w[0] * q[3] + w[1] * q[0] + w[2] * q[1],
-                            w[0] * q[2] - w[1] * q[1] + w[2] * q[0]};
-            double norm = 0.0;
-            for (int d = 0; d < 4; d++) {
-                q[d] += 0.5 * dt * dq[d];
-                norm += q[d] * q[d];
-            }
-            norm = sqrt(norm);
-            for (int d = 0; d < 4; d++) q[d] /= norm;
+            quat_advance(q, w, dt);
             dem_cluster_omega(q, ib, L, w);
         }
         place_spheres(s, k);
@@ -181,17 +186,7 @@ void dem_free_flight(dem_sim *s, double dt, long rot_substeps)
         const double *L = b->angmom + 3 * k, *ib = b->inv_inertia_body + 9 * k;
         for (long r = 0; r < rot_substeps; r++) {
             dem_cluster_omega(q, ib, L, w);
-            double dq[4] = {-w[0] * q[1] - w[1] * q[2] - w[2] * q[3],
-                            w[0] * q[0] + w[1] * q[3] - w[2] * q[2],
-                            -w[0] * q[3] + w[1] * q[0] + w[2] * q[1],
-                            w[0] * q[2] - w[1] * q[1] + w[2] * q[0]};
-            double norm = 0.0;
-            for (int d = 0; d < 4; d++) {
-                q[d] += 0.5 * h * dq[d];
-                norm += q[d] * q[d];
-            }
-            norm = sqrt(norm);
-            for (int d = 0; d < 4; d++) q[d] /= norm;
+            quat_advance(q, w, h);
         }
         dem_cluster_omega(q, ib, L, w);
     }

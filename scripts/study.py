@@ -326,6 +326,16 @@ def study_angled_net(out, jobs, end_time):
 
 # ---- 7.6 / 7.7: terrain, curtain, cluster, sieve (one run each, the cases as they are) ------
 
+def load_run(case, run_dir):
+    """(dem, fem, monitor, coupling) of a finished run, or None (reported) when it has none."""
+    try:
+        return (load_dem(run_dir), load_fem_output(run_dir), nc_results.load_monitor(run_dir),
+                nc_results.load_coupling(run_dir))
+    except (OSError, KeyError) as e:
+        print("  %-16s no results (%s)" % (case, e))
+        return None
+
+
 def load_dem(run_dir):
     """Sphere (and cluster) positions of dem.h5: time [k], position [k, p, 3], velocity, radius."""
     import h5py
@@ -486,13 +496,9 @@ def study_special(out, jobs, end_time):
     case = "rock_cluster"
     results = run_all(case, [(case, [])], out, 1, end_time)
     run_dir, seconds, ok = results[case]
-    try:
-        dem, fem = load_dem(run_dir), load_fem_output(run_dir)
-        m = nc_results.load_monitor(run_dir)
-        c = nc_results.load_coupling(run_dir)
-    except (OSError, KeyError) as e:
-        print("  %-16s no results (%s)" % (case, e))
-    else:
+    loaded = load_run(case, run_dir)
+    if loaded:
+        dem, fem, m, c = loaded
         cp = dem["cpos"][:, 0, :]
         centre = m.node(220)
         all_nodes = np.arange(fem["x"].shape[0])
@@ -547,13 +553,10 @@ def study_special(out, jobs, end_time):
     case = "net_sieve"
     results = run_all(case, [(case, [])], out, 1, end_time)
     run_dir, seconds, ok = results[case]
-    try:
-        dem, fem = load_dem(run_dir), load_fem_output(run_dir)
-        m = nc_results.load_monitor(run_dir)
-        c = nc_results.load_coupling(run_dir)
-    except (OSError, KeyError) as e:
-        print("  %-16s no results (%s)" % (case, e))
+    loaded = load_run(case, run_dir)
+    if not loaded:
         return
+    dem, fem, m, c = loaded
     names = {0: ("big sphere", "tab:red"), 1: ("small sphere", "tab:green")}
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
     ax = axes[0]
