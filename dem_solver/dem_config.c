@@ -360,8 +360,9 @@ static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_er
 {
     static const char *const keys[] = {"youngs_modulus_pa", "poisson_ratio", "friction",
                                        "restitution", "cable_radius_m", "near_distance_m",
-                                       "coupling_force", NULL};
+                                       "coupling_force", "wall_position", NULL};
     static const char *const force_kinds[] = {"average", "end_of_step", NULL};
+    static const char *const wall_positions[] = {"end", "middle", NULL};
     const cJSON *w;
     if (nc_json_object_opt(root, file, "net_wall", &w, err)) return -1;
     if (!w) return 0;
@@ -375,7 +376,8 @@ static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_er
         nc_json_number_range_opt(w, where, "restitution", -1.0, 0.0, 1.0, &n->restitution, err) ||
         nc_json_number_range_opt(w, where, "cable_radius_m", 0.0, 0.0, INFINITY, &n->cable_radius_m, err) ||
         nc_json_number_range_opt(w, where, "near_distance_m", -1.0, 0.0, INFINITY, &n->near_distance_m, err) ||
-        nc_json_choice_opt(w, where, "coupling_force", force_kinds, 0, &n->force_at_end, err))
+        nc_json_choice_opt(w, where, "coupling_force", force_kinds, 0, &n->force_at_end, err) ||
+        nc_json_choice_opt(w, where, "wall_position", wall_positions, 0, &n->wall_at_middle, err))
         return -1;
     return 0;
 }

@@ -130,6 +130,8 @@ typedef struct dem_net {
     double near_distance_m;/* "near_interface" threshold on the surface gap */
     int force_at_end;      /* coupled reply: 0 the time-averaged force of the step (impulse/dt),
                               1 the force of the last sub-step (wall at its end position) */
+    int wall_at_middle;    /* 1: in each sub-step the wall is where it is at the middle of the
+                              sub-step; 0: at its end */
     double *box_lo, *box_hi; /* 3 per edge: scratch for the grid */
     struct dem_item_grid *grid;
 } dem_net;

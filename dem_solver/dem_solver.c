@@ -741,11 +741,15 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
         if (flown) substeps = 0; /* reported as 1 step below */
     }
     for (long sub = 0; sub < substeps; sub++) {
-        /* The wall is placed where it is at the END of the sub-step: the last sub-step uses
-         * exactly the position the FEM returned, so even a single sub-step responds to the
-         * iterated interface position (strong coupling then is implicit on the interface
-         * instead of silently degenerating to the weak scheme). */
-        double frac = (double)(sub + 1) / (double)substeps;
+        /* The wall is placed where it is at the END of the sub-step (default): the last
+         * sub-step uses exactly the position the FEM returned, so even a single sub-step
+         * responds to the iterated interface position (strong coupling then is implicit on the
+         * interface instead of silently degenerating to the weak scheme). With wall_position
+         * "middle" it is where it is at the middle of the sub-step: centred in time, the
+         * average force then belongs to the whole step, which is what a structure applying it
+         * over the whole step (fem_solver coupling_load "step_constant") needs to exchange
+         * energy without creating any (scripts/diagnostics/centred_coupling.md). */
+        double frac = ((double)sub + (net->wall_at_middle ? 0.5 : 1.0)) / (double)substeps;
         for (size_t k = 0; k < 3 * nn; k++)
             net->cur[k] = net->start[k] + frac * (net->end[k] - net->start[k]);
         if (build_net_grid(s, err)) return -1;

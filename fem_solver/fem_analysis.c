@@ -35,12 +35,13 @@ static int state_alloc(fem_state *st, int ndof)
     st->v = calloc((size_t)ndof, sizeof(double));
     st->a = calloc((size_t)ndof, sizeof(double));
     st->fd = calloc((size_t)ndof, sizeof(double));
-    return (st->u && st->v && st->a && st->fd) ? 0 : -1;
+    st->fc = calloc((size_t)ndof, sizeof(double));
+    return (st->u && st->v && st->a && st->fd && st->fc) ? 0 : -1;
 }
 
 static void state_free(fem_state *st)
 {
-    free(st->u); free(st->v); free(st->a); free(st->fd);
+    free(st->u); free(st->v); free(st->a); free(st->fd); free(st->fc);
     memset(st, 0, sizeof *st);
 }
 
@@ -53,6 +54,7 @@ static void state_copy(fem_state *dst, const fem_state *src, int ndof)
     memcpy(dst->v, src->v, bytes);
     memcpy(dst->a, src->a, bytes);
     memcpy(dst->fd, src->fd, bytes);
+    memcpy(dst->fc, src->fc, bytes);
 }
 
 int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
@@ -77,7 +79,12 @@ int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
     s->cg_p = calloc(nd, sizeof(double));
     s->cg_q = calloc(nd, sizeof(double));
     s->axial = calloc(ne, sizeof(double));
-    if (!s->eq || !s->dof_of_eq || !s->slot || !elem_eq || !s->f_model || !s->f_coupling ||
+    s->mass_diag = calloc(nd, sizeof(double));
+    s->mass_x = calloc(nd, sizeof(double));
+    s->mass_y = calloc(nd, sizeof(double));
+    s->a_unshifted = calloc(nd, sizeof(double));
+    if (!s->mass_diag || !s->mass_x || !s->mass_y || !s->a_unshifted ||
+        !s->eq || !s->dof_of_eq || !s->slot || !elem_eq || !s->f_model || !s->f_coupling ||
         !s->r || !s->w || !s->rhs || !s->du || !s->u0 || !s->cg_r || !s->cg_z ||
         !s->cg_p || !s->cg_q || !s->axial || state_alloc(&s->cur, s->ndof) ||
         state_alloc(&s->start, s->ndof) || state_alloc(&s->saved, s->ndof)) {
@@ -96,6 +103,14 @@ int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
             elem_eq[6 * e + c] = s->eq[3 * m->conn[2 * e] + c];
             elem_eq[6 * e + 3 + c] = s->eq[3 * m->conn[2 * e + 1] + c];
         }
+    for (int e = 0; e < m->n_elements; e++) {
+        double m11, m12;
+        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        for (int a = 0; a < 6; a++) {
+            int q = elem_eq[6 * e + a];
+            if (q >= 0) s->mass_diag[q] += m11;
+        }
+    }
     int rc = fem_sparse_build(&s->K, s->neq, m->n_elements, elem_eq, s->slot,
                               m->settings.factorization, err);
     free(elem_eq);
@@ -123,6 +138,7 @@ void fem_solver_free(fem_solver *s)
     free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->f_model); free(s->f_coupling);
     free(s->r); free(s->w); free(s->rhs); free(s->du); free(s->u0);
     free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
+    free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
     memset(s, 0, sizeof *s);
 }
 
@@ -508,6 +524,66 @@ int fem_solver_initial_acceleration(fem_solver *s, nc_error *err)
     if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
     for (int q = 0; q < s->neq; q++) s->cur.a[s->dof_of_eq[q]] = s->du[q];
+    memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));
+    return 0;
+}
+
+/* y = M x (all dofs) */
+static void mass_multiply(const fem_solver *s, const double *x, double *y)
+{
+    const fem_model *m = s->m;
+    memset(y, 0, (size_t)s->ndof * sizeof *y);
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double m11, m12;
+        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        for (int c = 0; c < 3; c++) {
+            y[k + c] += m11 * x[k + c] + m12 * x[l + c];
+            y[l + c] += m12 * x[k + c] + m11 * x[l + c];
+        }
+    }
+}
+
+#define FEM_MASS_CG_TOL 1e-14   /* relative residual of the mass solve */
+#define FEM_MASS_CG_MAX_IT 200
+
+/* start.a += M^-1 (f_coupling - start.fc) on the free dofs: the coupling force changes at t_n
+ * from the force a_n was computed with to this step's, and the trapezoidal (Newmark) and
+ * alpha-weighted updates then use it over the whole step. Jacobi-preconditioned CG, matrix
+ * free: M of bar elements is well conditioned (spectrum of D^-1 M within [0.5, 1.5]), so
+ * this converges in a few tens of iterations (1 with a lumped mass). */
+static int shift_start_acceleration(fem_solver *s, nc_error *err)
+{
+    const int n = s->neq;
+    double *r = s->cg_r, *z = s->cg_z, *p = s->cg_p, *q = s->cg_q, *x = s->du;
+    double b2 = 0;
+    for (int e = 0; e < n; e++) {
+        int d = s->dof_of_eq[e];
+        r[e] = s->f_coupling[d] - s->start.fc[d];
+        b2 += r[e] * r[e];
+        x[e] = 0;
+    }
+    if (b2 == 0) return 0;
+    for (int e = 0; e < n; e++) { z[e] = r[e] / s->mass_diag[e]; p[e] = z[e]; }
+    double rz = dot(r, z, n);
+    const double tol2 = FEM_MASS_CG_TOL * FEM_MASS_CG_TOL * b2;
+    int it = 0;
+    for (; it < FEM_MASS_CG_MAX_IT && dot(r, r, n) > tol2; it++) {
+        memset(s->mass_x, 0, (size_t)s->ndof * sizeof(double));
+        for (int e = 0; e < n; e++) s->mass_x[s->dof_of_eq[e]] = p[e];
+        mass_multiply(s, s->mass_x, s->mass_y);
+        for (int e = 0; e < n; e++) q[e] = s->mass_y[s->dof_of_eq[e]];
+        double step = rz / dot(p, q, n);
+        for (int e = 0; e < n; e++) { x[e] += step * p[e]; r[e] -= step * q[e]; }
+        for (int e = 0; e < n; e++) z[e] = r[e] / s->mass_diag[e];
+        double rz_new = dot(r, z, n);
+        for (int e = 0; e < n; e++) p[e] = z[e] + (rz_new / rz) * p[e];
+        rz = rz_new;
+    }
+    if (it == FEM_MASS_CG_MAX_IT)
+        return nc_error_set(err, 3, "mass-matrix solve for the coupling-load shift did not converge in %d iterations",
+                            FEM_MASS_CG_MAX_IT);
+    for (int e = 0; e < n; e++) s->start.a[s->dof_of_eq[e]] += x[e];
     return 0;
 }
 
@@ -515,6 +591,13 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
 {
     const fem_settings *set = &s->m->settings;
     state_copy(&s->start, &s->cur, s->ndof);
+    if (set->coupling_load_constant) {
+        memcpy(s->a_unshifted, s->start.a, (size_t)s->ndof * sizeof(double));
+        if (shift_start_acceleration(s, err)) {
+            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+            return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
+        }
+    }
     newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
     method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
     double t1 = s->cur.time_s + dt_s;
@@ -524,6 +607,8 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
     apply_supports(s, ns.lambda);
     if (newton(s, &ns, err)) {
         /* leave the state as it was before the call */
+        if (set->coupling_load_constant)
+            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
         state_copy(&s->cur, &s->start, s->ndof);
         fem_solver_update_axial(s);
         return nc_error_prefix(err, "%s: step %ld (t = %g s -> %g s)", s->m->source,
@@ -531,6 +616,7 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
     }
     s->cur.time_s = t1;
     s->cur.step = s->start.step + 1;
+    memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));
     return 0;
 }
 

@@ -7,6 +7,10 @@
  * the state as it was before the call and return -1 with a message naming step/time,
  * iterations and residual. The extra nodal force f_coupling (N, per dof) is added to the
  * model's own loads; the coupled driver fills it from the protocol's `force` array.
+ * With analysis.coupling_load "step_constant" (the default) f_coupling acts over the whole
+ * step: the start-of-step acceleration is shifted by M^-1 (f_coupling - the force it was
+ * computed with), so the step transfers exactly f_coupling dt of momentum to the structure,
+ * the impulse the DEM gave its particles over the same step.
  */
 #ifndef FEM_ANALYSIS_H
 #define FEM_ANALYSIS_H
@@ -19,6 +23,7 @@ typedef struct fem_state {
     long step;
     double *u, *v, *a;  /* [ndof] displacement (m), velocity (m/s), acceleration (m/s^2) */
     double *fd;         /* [ndof] F_int(u) + kappa K_T(u) v at this state (alpha methods) */
+    double *fc;         /* [ndof] coupling force the acceleration a was computed with (N) */
 } fem_state;
 
 typedef struct fem_stats {
@@ -49,6 +54,9 @@ typedef struct fem_solver {
     double *w;             /* [ndof] mass-term vector (a_alpha + tau v_alpha) */
     double *cg_r, *cg_z, *cg_p, *cg_q; /* [neq] conjugate-gradient work vectors */
     double *axial;         /* [n_elements] axial force N (N) at the current state */
+    double *mass_diag;     /* [neq] diagonal of M on the free equations (Jacobi preconditioner) */
+    double *mass_x, *mass_y; /* [ndof] mass-matrix product work vectors */
+    double *a_unshifted;   /* [ndof] start-of-step acceleration before the load shift */
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
     fem_stats stats;

@@ -354,12 +354,14 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
                                        "rho_inf", "alpha_b", "dt_s", "end_time_s", "load_ramp_s",
                                        "max_iterations", "residual_tolerance_n",
                                        "relative_tolerance", "displacement_tolerance_m",
-                                       "factorization", "newton", "contraction", NULL};
+                                       "factorization", "newton", "contraction", "coupling_load",
+                                       NULL};
     static const char *const types[] = {"static", "dynamic", NULL};
     static const char *const integrators[] = {"newmark", "generalized_alpha", "bossak", NULL};
     static const char *const factorizations[] = {"auto", "ldlt", "llt", NULL};
     static const char *const newtons[] = {"modified", "full", NULL};
-    int type, integ, fact, newton;
+    static const char *const coupling_loads[] = {"end_of_step", "step_constant", NULL};
+    int type, integ, fact, newton, coupling_load;
     long steps, iters;
     if (nc_json_check_keys(o, w, keys, err) ||
         nc_json_choice_opt(o, w, "type", types, 1, &type, err) ||
@@ -367,6 +369,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
         nc_json_choice_opt(o, w, "integrator", integrators, 0, &integ, err) ||
         nc_json_choice_opt(o, w, "factorization", factorizations, 0, &fact, err) ||
         nc_json_choice_opt(o, w, "newton", newtons, 0, &newton, err) ||
+        nc_json_choice_opt(o, w, "coupling_load", coupling_loads, 0, &coupling_load, err) ||
         nc_json_number_range_opt(o, w, "contraction", 0.2, 0.0, 0.9, &s->contraction, err) ||
         nc_json_number_range_opt(o, w, "beta", 0.25, 1e-6, 0.5, &s->beta, err) ||
         nc_json_number_range_opt(o, w, "gamma", 0.5, 0.5, 1.0, &s->gamma, err) ||
@@ -385,6 +388,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
     s->load_steps = (int)steps;
     s->factorization = fact;
     s->modified_newton = newton == 0;
+    s->coupling_load_constant = coupling_load == 1;
     s->max_iterations = (int)iters;
     if (s->residual_tol_n == 0 && s->relative_tol == 0)
         return nc_error_set(err, 1, "%s: residual_tolerance_n and relative_tolerance cannot both be 0", w);

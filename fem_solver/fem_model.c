@@ -26,6 +26,7 @@ void fem_settings_default(fem_settings *s)
     s->output_interval = 1;
     s->modified_newton = 1;
     s->contraction = 0.2;
+    s->coupling_load_constant = 0;
 }
 
 void fem_model_init(fem_model *m, const char *source)

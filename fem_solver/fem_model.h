@@ -50,6 +50,8 @@ typedef struct fem_settings {
     int factorization;           /* 0 auto, 1 LDL^T (simplicial), 2 LL^T (supernodal) */
     int modified_newton;         /* 1: keep the factorisation while iterations contract */
     double contraction;          /* residual ratio below which a kept factorisation is fine */
+    int coupling_load_constant;  /* 1: the coupling force acts over the whole step (its
+                                    impulse is F dt); 0: it is a load at t_n+1 only */
 } fem_settings;
 
 typedef struct fem_model {

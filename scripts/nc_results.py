@@ -118,3 +118,28 @@ def contact_free_time(intervals, t0, t1):
     for a, b in intervals:
         covered += max(0.0, min(b, t1) - max(a, t0))
     return max(0.0, (t1 - t0) - covered)
+
+
+def reference_contact(npz_path, until):
+    """Contact statistics of a reference_explicit.py --save file up to `until` seconds:
+    dict(intervals, main (its longest window), length, fmax, peak (lowest Point A))."""
+    ref = np.load(npz_path)
+    m = ref["t"] <= until
+    dt = ref["t"][1] - ref["t"][0]
+    iv = contact_intervals(ref["t"][m], ref["t"][m] + dt, np.abs(ref["fz"][m]))
+    main = max(iv, key=lambda w: w[1] - w[0])
+    return dict(intervals=iv, main=main, length=main[1] - main[0],
+                fmax=float(np.abs(ref["fz"][m]).max()), peak=float(ref["uA"].min()))
+
+
+def run_contact(results_dir, until, window):
+    """Contact statistics of a coupled run up to `until` against a reference window [t0, t1]:
+    dict(n windows, free (contact-free seconds inside window), longest window, fmax, peak of
+    Point A (monitor node 1), lost (contact_lost_and_regained))."""
+    c = load_coupling(results_dir)
+    k = c.end_time <= until
+    f = c.force_magnitude()[k]
+    iv = contact_intervals(c.start_time[k], c.end_time[k], f)
+    return dict(n=len(iv), free=contact_free_time(iv, *window), longest=max((b - a for a, b in iv), default=0.0),
+                fmax=float(f.max()), peak=float(load_monitor(results_dir).node(1).min()),
+                lost=contact_lost_and_regained(c))

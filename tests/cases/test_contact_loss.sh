@@ -54,31 +54,19 @@ sys.path.insert(0, "scripts")
 import nc_results as R
 tmp = sys.argv[1]
 UNTIL = 0.75    # end of the first impact window (damped_contact.md)
-ref = np.load(tmp + "/ref.npz")
-m = ref["t"] <= UNTIL
-ref_iv = R.contact_intervals(ref["t"][m], ref["t"][m] + 2e-5, np.abs(ref["fz"][m]))
-W = max(ref_iv, key=lambda iv: iv[1] - iv[0])
-L = W[1] - W[0]
-ref_fmax = np.abs(ref["fz"][m]).max()
-ref_peak = ref["uA"].min()
+ref = R.reference_contact(tmp + "/ref.npz", UNTIL)
+ref_iv, W, L, ref_fmax, ref_peak = ref["intervals"], ref["main"], ref["length"], ref["fmax"], ref["peak"]
 print("reference: %d contact windows before %.2f s, main window W = [%.3f, %.3f] s, max |F| %.0f N, "
       "peak u_A %.4f m" % (len(ref_iv), UNTIL, W[0], W[1], ref_fmax, ref_peak))
 assert 0.1 < L < 0.5, "reference main contact window implausible: %s" % (W,)
 
 res = {}
 for name in ("weak_dt1e-2", "weak_dt1e-3", "strong_dt1e-2"):
-    c = R.load_coupling(tmp + "/" + name)
-    k = c.end_time <= UNTIL
-    f = c.force_magnitude()[k]
-    iv = R.contact_intervals(c.start_time[k], c.end_time[k], f)
-    longest = max((b - a for a, b in iv), default=0.0)
-    r = dict(free=R.contact_free_time(iv, *W), longest=longest, fmax=f.max(),
-             peak=R.load_monitor(tmp + "/" + name).node(1).min(), n=len(iv),
-             lost=R.contact_lost_and_regained(c))
+    r = R.run_contact(tmp + "/" + name, UNTIL, W)
     res[name] = r
     print("%-14s %2d windows, contact-free in W %.4f s (%3.0f %%), longest %.3f s (%3.0f %% of W), "
           "max |F| %7.0f N (%.2fx ref), peak u_A %.4f m"
-          % (name, r["n"], r["free"], 100 * r["free"] / L, longest, 100 * longest / L, r["fmax"],
+          % (name, r["n"], r["free"], 100 * r["free"] / L, r["longest"], 100 * r["longest"] / L, r["fmax"],
              r["fmax"] / ref_fmax, r["peak"]))
 
 s, w2, w3 = res["strong_dt1e-2"], res["weak_dt1e-2"], res["weak_dt1e-3"]

@@ -1,7 +1,8 @@
 /* test_dynamic — implicit dynamics against analytic references: the taut string's first
  * natural frequency, discrete energy conservation of Newmark (1/4, 1/2), Rayleigh decay
- * rate, numerical damping of generalized-alpha/Bossak, and bit-identical repetition of a
- * step after restoring the start-of-step state. */
+ * rate, numerical damping of generalized-alpha/Bossak, bit-identical repetition of a
+ * step after restoring the start-of-step state, and the momentum a coupling force transfers
+ * per step (analysis.coupling_load). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -254,6 +255,65 @@ static void test_restore_bitwise(void **state)
     fem_model_free(&m);
 }
 
+/* Momentum balance of a coupling force that changes every step, on a free (unsupported)
+ * 4-element truss line, no damping: internal forces cancel, so the total momentum
+ * sum_e rho A L0 / 2 (v_k + v_l) must equal the impulse the forces delivered. With
+ * coupling_load "step_constant" each step's force acts over that whole step, so after N
+ * steps the momentum is sum_n F_n dt (what a DEM gave its particles over the same steps)
+ * to the Newton tolerance (checked to 1e-9 relative), for Newmark and Bossak.
+ * "end_of_step" (a load at t_n+1) carries part of each force into the next step: the
+ * momentum then differs from sum_n F_n dt by a fraction of the last force change
+ * (checked > 1 %, so the check above can tell the two apart). */
+static void momentum_after_steps(fem_integrator integ, int step_constant, double got[3], double want[3])
+{
+    fem_model m;
+    fem_test_line(&m, 4, 4.0, 1e7, 1e-4, 7850, 0.0, FEM_TRUSS, 0);
+    m.settings.integrator = integ;
+    m.settings.alpha_b = -0.3;
+    m.settings.residual_tol_n = 1e-11;
+    m.settings.displacement_tol_m = 1e-13;
+    m.settings.coupling_load_constant = step_constant;
+    nc_error err;
+    assert_int_equal(fem_model_finalize(&m, &err), 0);
+    fem_solver s;
+    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+    assert_int_equal(fem_solver_initial_acceleration(&s, &err), 0);
+    const double dt = 2e-3;
+    for (int c = 0; c < 3; c++) want[c] = 0;
+    for (int n = 0; n < 12; n++) {
+        s.f_coupling[3 * 2 + 2] = 100.0 * (1 + n % 3);   /* node 2, z */
+        s.f_coupling[3 * 1 + 0] = -30.0 * n;             /* node 1, x */
+        s.f_coupling[3 * 3 + 1] = n < 6 ? 50.0 : 0.0;    /* node 3, y: switched off */
+        for (int i = 0; i < s.ndof; i++) want[i % 3] += s.f_coupling[i] * dt;
+        assert_int_equal(fem_solver_step(&s, dt, &err), 0);
+    }
+    for (int c = 0; c < 3; c++) got[c] = 0;
+    for (int e = 0; e < m.n_elements; e++) {
+        double half = 0.5 * m.rhoA[e] * m.L0[e];
+        for (int c = 0; c < 3; c++)
+            got[c] += half * (s.cur.v[3 * m.conn[2 * e] + c] + s.cur.v[3 * m.conn[2 * e + 1] + c]);
+    }
+    fem_solver_free(&s);
+    fem_model_free(&m);
+}
+
+static void test_coupling_load_momentum(void **state)
+{
+    (void)state;
+    const fem_integrator integrators[2] = {FEM_NEWMARK, FEM_BOSSAK};
+    for (int k = 0; k < 2; k++) {
+        double got[3], want[3];
+        momentum_after_steps(integrators[k], 1, got, want);
+        for (int c = 0; c < 3; c++)
+            assert_true(fabs(got[c] - want[c]) <= 1e-9 * fabs(want[c]));
+        momentum_after_steps(integrators[k], 0, got, want);
+        double worst = 0;
+        for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(got[c] - want[c]) / fabs(want[c]));
+        print_message("coupling load momentum, integrator %d: end_of_step off by %.1f %%\n", k, 100 * worst);
+        assert_true(worst > 1e-2);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -262,6 +322,7 @@ int main(void)
         cmocka_unit_test(test_rayleigh_decay),
         cmocka_unit_test(test_numerical_damping),
         cmocka_unit_test(test_restore_bitwise),
+        cmocka_unit_test(test_coupling_load_momentum),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
