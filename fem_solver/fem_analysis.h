@@ -7,7 +7,7 @@
  * the state as it was before the call and return -1 with a message naming step/time,
  * iterations and residual. The extra nodal force f_coupling (N, per dof) is added to the
  * model's own loads; the coupled driver fills it from the protocol's `force` array.
- * With analysis.coupling_load "step_constant" (the default) f_coupling acts over the whole
+ * With analysis.coupling_load "step_constant" (default "end_of_step") f_coupling acts over the whole
  * step: the start-of-step acceleration is shifted by M^-1 (f_coupling - the force it was
  * computed with), so the step transfers exactly f_coupling dt of momentum to the structure,
  * the impulse the DEM gave its particles over the same step.
