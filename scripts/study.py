@@ -84,40 +84,39 @@ def save(fig, path):
     print("  wrote", path)
 
 
-def plot_point_a(results, labels, path, title, static=None):
+def plot_runs(results, labels, path, title, ylabel, draw, reference=None):
+    """One curve per run: draw(ax, run_dir, label) plots it (runs without results are left
+    out); reference: (value, label) drawn as a dashed horizontal line."""
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for label in labels:
         run_dir, _, ok = results[label]
         try:
-            m = nc_results.load_monitor(run_dir)
+            draw(ax, run_dir, label + ("" if ok else " (failed)"))
         except (OSError, KeyError):
             continue
-        ax.plot(m.time, m.node(POINT_A), label=label + ("" if ok else " (failed)"), lw=1)
-    if static is not None:
-        ax.axhline(static, color="k", ls="--", lw=1, label="static (eq. 43)")
+    if reference is not None:
+        ax.axhline(reference[0], color="k", ls="--", lw=1, label=reference[1])
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("Point A vertical displacement [m]")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     save(fig, path)
+
+
+def plot_point_a(results, labels, path, title, static=None):
+    def draw(ax, run_dir, label):
+        m = nc_results.load_monitor(run_dir)
+        ax.plot(m.time, m.node(POINT_A), label=label, lw=1)
+    plot_runs(results, labels, path, title, "Point A vertical displacement [m]", draw,
+              None if static is None else (static, "static (eq. 43)"))
 
 
 def plot_iterations(results, labels, path, title):
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for label in labels:
-        run_dir, _, _ = results[label]
-        try:
-            c = nc_results.load_coupling(run_dir)
-        except (OSError, KeyError):
-            continue
+    def draw(ax, run_dir, label):
+        c = nc_results.load_coupling(run_dir)
         ax.step(c.end_time, c.iterations, where="pre", label=label, lw=1)  # value of step (t - dt, t]
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("interface iterations per step")
-    ax.set_title(title)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    save(fig, path)
+    plot_runs(results, labels, path, title, "interface iterations per step", draw)
 
 
 def summary(results, labels, static=None):

@@ -30,16 +30,19 @@ def weights(integ, par):
     return 0.25 * (1 - am + af) ** 2, 0.5 - am + af, am, af
 
 
-def step(state, u1, dt, N, off, reply, integ, par):
-    X, V, u, v, a = state
+def step(state, u1, dt, N, off, reply, integ, par, shift=0):
+    """One coupling step; state = (X, V, u, v, a, F_prev). shift = 1: the FEM's
+    coupling_load "step_constant" (a_n += (F - F_prev) / M, the force acts over the whole step)."""
+    X, V, u, v, a, Fp = state
     h = dt / N; imp = 0.0; flast = 0.0
-    X0 = X
     for j in range(N):
         w = u + (j + off) / N * (u1 - u)
         f = K * (w - X)            # on the sphere (linear, bilateral)
         V += h * f / MS; X += h * V
         imp -= h * f; flast = -f
     F = {'avg': imp / dt, 'end': -K * (u1 - X), 'last': flast}[reply]
+    if shift:
+        a = a + (F - Fp) / M
     b, g, am, af = weights(integ, par)
 
     def resid(U):
@@ -50,7 +53,7 @@ def step(state, u1, dt, N, off, reply, integ, par):
     r0 = resid(0.0)[0]; r1 = resid(1.0)[0]
     U = -r0 / (r1 - r0)
     _, a1, v1 = resid(U)
-    return np.array([X, V, U, v1, a1])
+    return np.array([X, V, U, v1, a1, F])
 
 
 def converged_step(state, dt, *args):
@@ -61,9 +64,9 @@ def converged_step(state, dt, *args):
 
 
 def modes(dt, *args):
-    A = np.zeros((5, 5))
-    for c in range(5):
-        e = np.zeros(5); e[c] = 1.0
+    A = np.zeros((6, 6))
+    for c in range(6):
+        e = np.zeros(6); e[c] = 1.0
         A[:, c] = converged_step(e, dt, *args)
     out = []
     for lam in sorted(np.linalg.eigvals(A), key=lambda z: -abs(z)):

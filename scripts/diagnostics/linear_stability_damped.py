@@ -22,18 +22,9 @@ rho_inf 0 (alpha_m -1, alpha_f 0: L-stable, load still at t_n+1)."""
 import sys
 import numpy as np
 
-MS, M, K, KC, TAU, DT_DEM = 253.0, 0.66, 5.7e5, 9000.0, 5.0, 1.36e-3
-
-
-def weights(integ, par):
-    if integ == 'newmark':
-        return 0.25, 0.5, 0.0, 0.0
-    if integ == 'bossak':
-        am = par
-        return 0.25 * (1 - am) ** 2, 0.5 - am, am, 0.0
-    rho = par  # generalized alpha (Chung & Hulbert); rho 0 -> am -1, af 0: L-stable, load at t_n+1
-    am = (2 * rho - 1) / (rho + 1); af = rho / (rho + 1)
-    return 0.25 * (1 - am + af) ** 2, 0.5 - am + af, am, af
+import os
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from linear_stability import MS, M, K, KC, TAU, DT_DEM, weights  # noqa: E402
 
 
 def step(state, u1, v1, dt, N, C, wmode, reply, integ, par):

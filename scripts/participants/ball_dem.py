@@ -25,7 +25,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from netcouple_participant import Participant, ParticipantError, IdleTimeout, log  # noqa: E402
+from netcouple_participant import Participant, ParticipantError, serve_until_shutdown  # noqa: E402
 
 ALLOWED = {"radius", "mass", "position", "velocity", "stiffness", "damping_ratio", "gravity",
            "substeps", "near_distance", "comment"}
@@ -120,18 +120,7 @@ def main():
     ball = Ball(cfg, args.output)
     p = Participant(args.endpoint, "dem", "netcouple ball_dem.py", "restore", args.idle_timeout,
                     args.endpoint_file)
-    code = 0
-    try:
-        p.serve(ball)
-    except IdleTimeout as e:
-        log("ball_dem:", e)
-        code = 1
-    except KeyboardInterrupt:
-        code = 130
-    finally:
-        ball.csv.close()
-        p.close()
-    return code
+    return serve_until_shutdown(p, ball, "ball_dem", ball.csv.close)
 
 
 if __name__ == "__main__":

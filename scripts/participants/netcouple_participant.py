@@ -18,7 +18,8 @@ type "error", status "error" and the reason in "text".
 Usage: subclass nothing — pass a handler object with methods interface(cmd),
 begin_step(cmd), solve(cmd), accept_step(cmd), each returning (arrays, values) where arrays
 is a list of (name, numpy array) and values a dict; raise ParticipantError(reason) to reply
-with an error and keep serving. serve() returns on SHUTDOWN.
+with an error and keep serving. serve() returns on SHUTDOWN; serve_until_shutdown() wraps it
+with the exit codes and clean-up of a participant program.
 """
 import json
 import os
@@ -169,3 +170,21 @@ class Participant:
 
 def log(*args):
     print(*args, file=sys.stderr, flush=True)
+
+
+def serve_until_shutdown(participant, handler, name, close_handler):
+    """Serves handler until SHUTDOWN and returns the process exit code: 0, 1 after an idle
+    timeout (logged under name), 130 on Ctrl-C. close_handler() and participant.close() run
+    in every case, so results written so far stay readable."""
+    code = 0
+    try:
+        participant.serve(handler)
+    except IdleTimeout as e:
+        log(name + ":", e)
+        code = 1
+    except KeyboardInterrupt:
+        code = 130
+    finally:
+        close_handler()
+        participant.close()
+    return code

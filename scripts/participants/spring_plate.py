@@ -26,7 +26,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from netcouple_participant import Participant, ParticipantError, IdleTimeout, log  # noqa: E402
+from netcouple_participant import Participant, ParticipantError, serve_until_shutdown  # noqa: E402
 
 ALLOWED = {"size", "nodes_per_side", "center", "mass", "stiffness", "damping_ratio", "gravity",
            "comment"}
@@ -138,17 +138,7 @@ def main():
     plate = Plate(cfg, args.output, fail_at)
     p = Participant(args.endpoint, "fem", "netcouple spring_plate.py", "restore",
                     args.idle_timeout, args.endpoint_file)
-    code = 0
-    try:
-        p.serve(plate)
-    except IdleTimeout as e:
-        log("spring_plate:", e)
-        code = 1
-    except KeyboardInterrupt:
-        code = 130
-    finally:
-        plate.close()
-        p.close()
+    code = serve_until_shutdown(p, plate, "spring_plate", plate.close)
     # a participant that replied an error exits non-zero after SHUTDOWN (protocol rule)
     if code == 0 and plate.failed:
         code = 1

@@ -11,21 +11,10 @@
 #    safeguard of 00:36; most of it is weak 1e-4's own first-order lag around 0.15 s);
 #  - weak 2e-4 "loses contact": its centre node departs from weak 1e-4 by > 50 % of the peak
 #    (the net is flung off and the rock thrown back, fig. 19a).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
-run() {   # name, --set arguments
-  local name=$1; shift
-  scripts/run_case.sh cases/angled_net --out "$NC_TMP/$name" --quiet "$@" \
-    || { tail -n 20 "$NC_TMP/$name"/*.log; fail "$name: run_case.sh failed"; }
-}
-run strong2
-run weak2 --set coupler.scheme=weak
-run weak1 --set coupler.scheme=weak --set coupler.dt=1e-4
+. tests/e2e_lib.sh
+run_case strong2 cases/angled_net
+run_case weak2 cases/angled_net --set coupler.scheme=weak
+run_case weak1 cases/angled_net --set coupler.scheme=weak --set coupler.dt=1e-4
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
 sys.path.insert(0, "tests/cases")

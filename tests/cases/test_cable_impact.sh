@@ -15,13 +15,7 @@
 #    within 2 % (measured -0.70 %).
 #  - weak 1e-2 jumps: contact-free time in W > 25 % of W (measured 64 %), contact lost and
 #    regained, and a force on return > 2x the reference's maximum (measured 3.35x).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
+. tests/e2e_lib.sh
 case_dir=cases/cable_impact
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
 T=1.2
@@ -30,9 +24,7 @@ T=1.2
   --save "$NC_TMP/ref.npz" > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
 run() {   # name scheme dt
-  scripts/run_case.sh "$case_dir" --out "$NC_TMP/$1" --quiet --set coupler.scheme=$2 \
-    --set coupler.dt=$3 --set coupler.end_time=$T > "$NC_TMP/$1.out" 2>&1 \
-    || { tail -n 20 "$NC_TMP/$1.out" "$NC_TMP/$1"/*.log; fail "$1: run_case.sh failed"; }
+  run_case "$1" "$case_dir" --set coupler.scheme=$2 --set coupler.dt=$3 --set coupler.end_time=$T
 }
 run weak_dt2e-4 weak 2e-4
 run weak_dt1e-2 weak 1e-2

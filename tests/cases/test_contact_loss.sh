@@ -23,13 +23,7 @@
 #    W (7 short gaps of 1-8 ms); neither has the reference around W's ends.
 # Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
 # (a factor >= 2 away from each measurement).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
+. tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
 T=0.8
@@ -38,10 +32,8 @@ T=0.8
   > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
 run() {   # name scheme dt
-  scripts/run_case.sh "$case_dir" --out "$NC_TMP/$1" --quiet --set coupler.scheme=$2 \
-    --set coupler.dt=$3 --set fem.analysis.dt_s=$3 --set coupler.end_time=$T \
-    --set fem.analysis.end_time_s=$T --set dem.materials.0.restitution=1.0 > "$NC_TMP/$1.out" 2>&1 \
-    || { tail -n 20 "$NC_TMP/$1.out" "$NC_TMP/$1"/*.log; fail "$1: run_case.sh failed"; }
+  run_case "$1" "$case_dir" --set coupler.scheme=$2 --set coupler.dt=$3 --set fem.analysis.dt_s=$3 \
+    --set coupler.end_time=$T --set fem.analysis.end_time_s=$T --set dem.materials.0.restitution=1.0
 }
 run weak_dt1e-2 weak 1e-2
 run weak_dt1e-3 weak 1e-3

@@ -8,15 +8,8 @@
 #  - big sphere: stopped above the net (its centre never below z = -0.25 m, the cables are
 #    0.125 m from its centre line) and thrown back: moving up (v_z > 2 m/s) at the end, its
 #    upward speed never above its impact speed (no energy created at the interface).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
-scripts/run_case.sh cases/net_sieve --out "$NC_TMP/run" --quiet \
-  || { tail -n 20 "$NC_TMP/run"/*.log; fail "run_case.sh failed"; }
+. tests/e2e_lib.sh
+run_case run cases/net_sieve
 "$PY" - "$NC_TMP/run" <<'PY' || exit 1
 import sys, numpy as np
 sys.path.insert(0, "tests/cases")

@@ -17,13 +17,7 @@
 #  - the constant factors need fewer iterations the larger alpha is up to 0.5 (alpha 0.1 >
 #    0.2 > 0.5, each by > 1.5x; measured 38394, 18410, 6296; alpha 0.7: 4286), so alpha 0.1
 #    needs the most of the converging ones.
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
+. tests/e2e_lib.sh
 "$PY" scripts/study.py relaxation --out "$NC_TMP/studies" --end-time 1 --jobs 1 \
   > "$NC_TMP/study.log" 2>&1 || { tail -n 30 "$NC_TMP/study.log"; fail "study.py relaxation failed"; }
 cat "$NC_TMP/study.log"

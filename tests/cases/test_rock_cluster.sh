@@ -8,15 +8,8 @@
 #  - no energy created: the rebound peak is lower than the start height, and the
 #    mechanical energy (kinetic + m g z) at the end is below half the initial one;
 #  - the net deflects: centre node (monitor 0) min u_z between -0.3 and -1.0 m.
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
-scripts/run_case.sh cases/rock_cluster --out "$NC_TMP/run" --quiet \
-  || { tail -n 20 "$NC_TMP/run"/*.log; fail "run_case.sh failed"; }
+. tests/e2e_lib.sh
+run_case run cases/rock_cluster
 "$PY" - "$NC_TMP/run" <<'PY' || exit 1
 import sys, math, numpy as np
 sys.path.insert(0, "tests/cases")

@@ -9,17 +9,9 @@
 #  - the curtain slows the rock: its speed where it reaches x = 5 m is at least 0.1 m/s lower
 #    than in terrain_net (measured: 5.39 vs 5.63 m/s);
 #  - the protection net stops it: the rock centre stays at x < 6.5 m and moves back at the end.
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
-scripts/run_case.sh cases/terrain_curtain --out "$NC_TMP/curtain" --quiet --set coupler.end_time=2.6 \
-  || { tail -n 20 "$NC_TMP/curtain"/*.log; fail "terrain_curtain: run_case.sh failed"; }
-scripts/run_case.sh cases/terrain_net --out "$NC_TMP/plain" --quiet --set coupler.end_time=1.9 \
-  || { tail -n 20 "$NC_TMP/plain"/*.log; fail "terrain_net: run_case.sh failed"; }
+. tests/e2e_lib.sh
+run_case curtain cases/terrain_curtain --set coupler.end_time=2.6
+run_case plain cases/terrain_net --set coupler.end_time=1.9
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, numpy as np
 sys.path.insert(0, "tests/cases")

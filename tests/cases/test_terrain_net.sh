@@ -10,15 +10,8 @@
 #    than x = 6.5 m (net plane 6 m + the net's deflection), and after the impact it moves back
 #    (v_x < 0 at the end) at less than its impact speed (no energy created at the interface);
 #  - the net deflects at the impact point (node 52, x displacement 0.1-0.6 m).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  [ -x "$NC_BIN/$p" ] || { echo "SKIP: $NC_BIN/$p not built"; exit 77; }
-done
-fail() { echo "FAIL: $*"; exit 1; }
-scripts/run_case.sh cases/terrain_net --out "$NC_TMP/run" --quiet --set coupler.end_time=2.6 \
-  || { tail -n 20 "$NC_TMP/run"/*.log; fail "run_case.sh failed"; }
+. tests/e2e_lib.sh
+run_case run cases/terrain_net --set coupler.end_time=2.6
 "$PY" - "$NC_TMP/run" <<'PY' || exit 1
 import sys, numpy as np
 sys.path.insert(0, "tests/cases")

@@ -5,13 +5,7 @@
 # balance: the rock's momentum change from dem.h5 equals the impulse of gravity minus the
 # impulse of the forces the coupler recorded on the net (m Δv = -Σ F_z Δt + m g T), to 1e-6
 # of m g T (the DEM's reply is the exact time average of its contact force).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  if [ ! -x "$NC_BIN/$p" ]; then echo "SKIP: $NC_BIN/$p not built"; exit 77; fi
-done
-fail() { echo "FAIL: $*"; exit 1; }
+. tests/e2e_lib.sh
 
 check() {   # dir scheme [rock density]
   for f in coupling.h5 iterations.log fem.h5 dem.h5 fem.xdmf dem.xdmf fem.log dem.log coupler.log; do
@@ -42,8 +36,7 @@ PY
 
 run() {   # name, --set arguments
   local name=$1; shift
-  scripts/run_case.sh tests/coupler/cases/small_net --out "$NC_TMP/$name" --quiet "$@" \
-    || { tail -n 20 "$NC_TMP/$name"/*.log; fail "$name: run_case.sh failed"; }
+  run_case "$name" tests/coupler/cases/small_net "$@"
 }
 
 run strong_aitken

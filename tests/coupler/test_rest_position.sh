@@ -12,13 +12,7 @@
 #    fine-step reference -0.5471 m (scripts/diagnostics/reference_explicit.py 2 2e-5 0.5;
 #    the scheme gives -0.5344) and no energy created (with coupling_force end_of_step the
 #    net is thrown off the sphere and the sphere falls through).
-set -u
-: "${NC_BIN:?}" "${NC_TMP:?}"
-PY=${PYTHON:-/usr/bin/python3}
-for p in fem_solver dem_solver coupler; do
-  if [ ! -x "$NC_BIN/$p" ]; then echo "SKIP: $NC_BIN/$p not built"; exit 77; fi
-done
-fail() { echo "FAIL: $*"; exit 1; }
+. tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
 
@@ -27,8 +21,7 @@ case_dir=cases/rest_position
 
 run() {   # name, --set arguments
   local name=$1; shift
-  scripts/run_case.sh "$case_dir" --out "$NC_TMP/$name" --quiet "$@" > "$NC_TMP/$name.out" 2>&1 \
-    || { tail -n 20 "$NC_TMP/$name.out" "$NC_TMP/$name"/*.log; fail "$name: run_case.sh failed"; }
+  run_case "$name" "$case_dir" "$@"
 }
 long() { run "$1" --set "dem.materials.0.restitution=$2" --set coupler.dt=3e-2 \
              --set fem.analysis.dt_s=3e-2 --set coupler.end_time=8 --set fem.analysis.end_time_s=8; }

@@ -1,0 +1,21 @@
+# e2e_lib.sh — sourced by the end-to-end shell tests (tests/cases/, tests/coupler/) that run
+# the three programs on a case: checks the environment the test runner gives them (NC_BIN,
+# NC_TMP; the programs must be built, otherwise the test is skipped with exit 77), sets PY
+# to the Python that has h5py/numpy, and defines fail and run_case.
+set -u
+: "${NC_BIN:?}" "${NC_TMP:?}"
+PY=${PYTHON:-/usr/bin/python3}
+for program in fem_solver dem_solver coupler; do
+  [ -x "$NC_BIN/$program" ] || { echo "SKIP: $NC_BIN/$program not built"; exit 77; }
+done
+
+fail() { echo "FAIL: $*"; exit 1; }
+
+# run_case NAME CASE_DIR [run_case.sh arguments ...]: runs the case into $NC_TMP/NAME (its
+# console output in $NC_TMP/NAME.out); on failure shows the logs and fails the test.
+run_case() {
+  local name=$1 case_dir=$2
+  shift 2
+  scripts/run_case.sh "$case_dir" --out "$NC_TMP/$name" --quiet "$@" > "$NC_TMP/$name.out" 2>&1 \
+    || { tail -n 20 "$NC_TMP/$name.out" "$NC_TMP/$name"/*.log; fail "$name: run_case.sh failed"; }
+}
