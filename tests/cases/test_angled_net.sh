@@ -1,26 +1,31 @@
 #!/usr/bin/env bash
-# cases/angled_net (paper 7.5, Table 2): the paper's window 0-0.2 s run three times
-# (strong 2e-4, weak 2e-4, weak 1e-4; about 10 s of wall time together). Checks:
+# cases/angled_net (paper 7.5, Table 2): the paper's window 0-0.2 s run four times
+# (strong 2e-4, weak 2e-4, weak 1e-4, weak 5e-5; about 15 s of wall time together). Checks:
 #  - strong 2e-4: the small sphere (R 0.05) flies through a mesh opening untouched: it ends
 #    beyond the net plane (z < -0.5 m) with the free-flight velocity (|v - v_free| < 1e-3 m/s);
-#    the large sphere (R 0.21) is held: still in contact with the net in the last step, overlap
-#    less than half its radius, and slowed along the net normal compared with free flight;
+#  - the large sphere (R 0.21) is held in the paper's window: still in contact with the net in
+#    the last step, overlap < 0.02 m (measured 6.6 mm), slowed along the net normal compared
+#    with free flight (> 0.05 m/s, measured 0.104). "Caught" means no more than this: with
+#    Table 2's EA = 8.8 N the net only deflects the 97 kg rock, which leaves it past the lower
+#    fixed edge at about 0.45 s (an angled net guides rocks rather than stopping them);
 #  - the centre node (monitor 0) reaches -0.6 m +- 0.15 m (paper fig. 20a: about -0.6 m);
-#  - strong 2e-4 matches weak 1e-4 ("within a few percent", issue 6): max |u_z difference| over
-#    0-0.2 s < 6 % of the peak (measured 2.5 % with the coupler of 00:15, 4.0 % with the Aitken
-#    safeguard of 00:36; most of it is weak 1e-4's own first-order lag around 0.15 s);
+#  - strong 2e-4 matches weak coupling ("within a few percent of weak 1e-4", issue 6): max
+#    |u_z difference| over 0-0.2 s < 6 % of the peak against weak 1e-4 (measured 4.0 %) and
+#    < 2 % against weak 5e-5 (measured 0.5 %): most of the first difference is weak 1e-4's own
+#    first-order lag, which halving the step removes (weak 1e-4 vs 5e-5: measured 4.1 %);
 #  - weak 2e-4 "loses contact": its centre node departs from weak 1e-4 by > 50 % of the peak
 #    (the net is flung off and the rock thrown back, fig. 19a).
 . tests/e2e_lib.sh
 run_case strong2 cases/angled_net
 run_case weak2 cases/angled_net --set coupler.scheme=weak
 run_case weak1 cases/angled_net --set coupler.scheme=weak --set coupler.dt=1e-4
+run_case weak05 cases/angled_net --set coupler.scheme=weak --set coupler.dt=5e-5
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
 sys.path.insert(0, "tests/cases")
 from case_summary import load
 d = sys.argv[1]
-s, w1, w2 = (load(d + "/" + n) for n in ("strong2", "weak1", "weak2"))
+s, w1, w2, w05 = (load(d + "/" + n) for n in ("strong2", "weak1", "weak2", "weak05"))
 g = np.array([0, -6.936718, -6.936718]); v0 = np.array([0, -5.54, -5.54])
 T = s["t"][-1]
 assert abs(T - 0.2) < 1e-9, T
@@ -35,18 +40,23 @@ with h5py.File(d + "/strong2/coupling.h5", "r") as f:
     gap = float(f["/steps/min_gap"][-1]); inc = int(f["/steps/in_contact"][-1])
 vl = s["vel"][-1, 0]
 print("large sphere: in contact %d, gap %.4f m, v_z %.3f (free %.3f) m/s" % (inc, gap, vl[2], v_free[2]))
-assert inc == 1 and gap > -0.105, "large sphere is not held by the net at 0.2 s"
+assert inc == 1 and gap > -0.02, "large sphere is not held by the net at 0.2 s"
 assert vl[2] > v_free[2] + 0.05, "the net did not slow the large sphere"
 # centre node
 t = s["mt"]
 us = s["mu"][:, 0, 2]
 u1 = np.interp(t, w1["mt"], w1["mu"][:, 0, 2])
 u2 = np.interp(t, w2["mt"], w2["mu"][:, 0, 2])
+u05 = np.interp(t, w05["mt"], w05["mu"][:, 0, 2])
 peak = np.abs(u1).max()
 print("centre node: strong2 min %.3f, weak1 min %.3f, max|strong2-weak1| %.4f (%.1f %%), max|weak2-weak1| %.3f m"
       % (us.min(), u1.min(), np.abs(us - u1).max(), 100 * np.abs(us - u1).max() / peak, np.abs(u2 - u1).max()))
 assert -0.75 < us.min() < -0.45, "centre node deflection not about -0.6 m"
+print("centre node: max|strong2-weak05| %.4f m (%.1f %%), max|weak1-weak05| %.4f m (%.1f %%)"
+      % (np.abs(us - u05).max(), 100 * np.abs(us - u05).max() / peak, np.abs(u1 - u05).max(),
+         100 * np.abs(u1 - u05).max() / peak))
 assert np.abs(us - u1).max() < 0.06 * peak, "strong 2e-4 does not match weak 1e-4"
+assert np.abs(us - u05).max() < 0.02 * peak, "strong 2e-4 does not match weak 5e-5"
 assert np.abs(u2 - u1).max() > 0.5 * peak, "weak 2e-4 did not lose contact (paper fig. 19a)"
 its = h5py.File(d + "/strong2/coupling.h5", "r")["/steps/iterations"][:]
 print("strong 2e-4: %.2f iterations per step, max %d" % (its.mean(), its.max()))

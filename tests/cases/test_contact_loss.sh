@@ -11,7 +11,8 @@
 # window; the test uses W (computed from the reference, not hard-coded):
 #  - strong 1e-2 keeps contact: non-zero contact force (coupling.h5 /steps/contact_force,
 #    step average) in every coupling step overlapping W (contact-free time in W < 1e-6 s;
-#    measured 0: its window [0.34, 0.67] covers W).
+#    measured 0: its window [0.34, 0.67] covers W) and its peak u_A is within 5 % of the
+#    reference's (measured -0.5351 vs -0.5511 m, 2.9 %).
 #  - weak 1e-2 loses contact and regains it with a jump: contact-free time in W > 25 % of W
 #    (measured 57 %: 1-2 steps on, 1-2 off, longest contact 30 ms = 13 % of W) and the force on
 #    return > 3x the reference's maximum (measured 148 kN vs 20.9 kN, 7x).
@@ -23,6 +24,8 @@
 #    W (7 short gaps of 1-8 ms); neither has the reference around W's ends.
 # Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
 # (a factor >= 2 away from each measurement).
+# All of this is for COR 1 (the case's value). With a damped contact (COR <= 0.5) weak coupling
+# is unstable even at 1e-3 s (damped_contact.md), as the paper reports for small COR (7.4).
 . tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
@@ -63,6 +66,7 @@ for name in ("weak_dt1e-2", "weak_dt1e-3", "strong_dt1e-2"):
 
 s, w2, w3 = res["strong_dt1e-2"], res["weak_dt1e-2"], res["weak_dt1e-3"]
 assert s["free"] < 1e-6, "strong 1e-2 lost contact inside the reference's main window"
+assert abs(s["peak"] / ref_peak - 1) < 0.05, "strong 1e-2 peak u_A not within 5 % of the reference"
 assert w2["free"] > 0.25 * L, "weak 1e-2 did not lose contact inside the main window"
 assert w2["lost"], "weak 1e-2: contact force never dropped to zero and returned"
 assert w2["fmax"] > 3 * ref_fmax, "weak 1e-2 regained contact without a force jump"

@@ -5,8 +5,10 @@
 #    lowest point, 1.0 m at 2 m/s initial: 0.29 s, the rotation changes the lowest point);
 #  - the net catches it: the cluster's centre never goes below z = -0.8 m (the net deflects
 #    about 0.6 m; a rock through the net falls on) and stays over the net (|x|, |y| < 1.2 m);
-#  - no energy created: the rebound peak is lower than the start height, and the
-#    mechanical energy (kinetic + m g z) at the end is below half the initial one;
+#  - no energy created: the mechanical energy (kinetic + m g z, z from the net plane) never
+#    exceeds its start value by more than 1 % of it, the rebound peak is lower than the start
+#    height, and at the end the energy is below 0.3 of the initial one (measured 0.16);
+#    the rock is caught, not at rest: at 2 s it still slides on the net at about 1 m/s;
 #  - the net deflects: centre node (monitor 0) min u_z between -0.3 and -1.0 m.
 . tests/e2e_lib.sh
 run_case run cases/rock_cluster
@@ -30,7 +32,9 @@ assert 0.25 < t_hit < 0.31, "first contact at an unexpected time"
 assert c[:, 2].min() > -0.8, "the rock went through the net"
 assert np.abs(c[:, :2]).max() < 1.2, "the rock left the net area"
 assert c[after, 2].max() < c[0, 2] - 0.2, "the rock bounced higher than it started (energy created)"
-assert E[-1] < 0.5 * E[0], "the net did not take the rock's energy"
+print("largest mechanical energy %.0f J (%.3f of the start)" % (E.max(), E.max() / E[0]))
+assert E.max() < 1.01 * E[0], "energy was created"
+assert E[-1] < 0.3 * E[0], "the net did not take the rock's energy"
 u = r["mu"][:, 0, 2]
 print("centre node min u_z %.3f m; iterations/step %.2f (max %d)" % (u.min(), r["it"].mean(), r["it"].max()))
 assert -1.0 < u.min() < -0.3, "unexpected net deflection"
