@@ -29,6 +29,15 @@ static void build_one(dem_sim *s, double x, double y, double z, double r, double
     dem_test_build(s, json);
 }
 
+/* The net: one fixed edge from (0,0,0) to (1,0,0), nodes 0 and 1. */
+static void set_one_edge(dem_sim *s)
+{
+    double xyz[6] = {0, 0, 0, 1, 0, 0};
+    int32_t edges[2] = {0, 1};
+    nc_error err;
+    assert_int_equal(dem_sim_set_interface(s, 2, NULL, xyz, 1, edges, &err), 0);
+}
+
 /* Runs `steps` coupling steps of dt with the net fixed at its reference; force (3n) of the last. */
 static void run_fixed(dem_sim *s, int steps, double dt, double *force, dem_coupled_info *info)
 {
@@ -54,10 +63,7 @@ static void test_rest_on_edge_lever_rule(void **state)
     (void)state;
     dem_sim s;
     build_one(&s, 0.3, 0.0, 0.1, 0.1, 0.0, 0.3, "hertz_mindlin", -9.81, 1e-5);
-    double xyz[6] = {0, 0, 0, 1, 0, 0};
-    int32_t edges[2] = {0, 1};
-    nc_error err;
-    assert_int_equal(dem_sim_set_interface(&s, 2, NULL, xyz, 1, edges, &err), 0);
+    set_one_edge(&s);
     double f[6];
     dem_coupled_info info;
     run_fixed(&s, 1000, 1e-3, f, &info); /* 1 s: the bounce has died out */
@@ -106,10 +112,7 @@ static double edge_bounce(const char *law, double e)
 {
     dem_sim s;
     build_one(&s, 0.4, 0.0, 0.1005, 0.1, -1.0, e, law, 0.0, 2e-6);
-    double xyz[6] = {0, 0, 0, 1, 0, 0};
-    int32_t edges[2] = {0, 1};
-    nc_error err;
-    assert_int_equal(dem_sim_set_interface(&s, 2, NULL, xyz, 1, edges, &err), 0);
+    set_one_edge(&s);
     double f[6];
     dem_coupled_info info;
     int was = 0;
@@ -206,10 +209,8 @@ static void test_free_flight_far_from_net(void **state)
                  " \"dt_s\": 1e-5, \"free_flight\": %s}", c == 0 ? "true" : "false");
         dem_sim s;
         dem_test_build(&s, json);
-        double xyz[6] = {0, 0, 0, 1, 0, 0};
-        int32_t edges[2] = {0, 1};
+        set_one_edge(&s);
         nc_error err;
-        assert_int_equal(dem_sim_set_interface(&s, 2, NULL, xyz, 1, edges, &err), 0);
         double f[6], zero[6] = {0};
         dem_coupled_info info;
         long flights = 0, substepped = 0;
@@ -283,10 +284,8 @@ static void test_net_does_not_pass_through_resting_sphere(void **state)
     (void)state;
     dem_sim s;
     build_one(&s, 0.3, 0.0, 0.1, 0.1, 0.0, 0.3, "hertz_mindlin", -9.81, 1e-5);
-    double xyz[6] = {0, 0, 0, 1, 0, 0};
-    int32_t edges[2] = {0, 1};
+    set_one_edge(&s);
     nc_error err;
-    assert_int_equal(dem_sim_set_interface(&s, 2, NULL, xyz, 1, edges, &err), 0);
     double f[6], disp[6] = {0}, vel[6] = {0};
     dem_coupled_info info;
     run_fixed(&s, 300, 1e-3, f, &info); /* resting */

@@ -26,6 +26,18 @@ def run(args, timeout=300):
     return subprocess.run([exe] + args, capture_output=True, text=True, timeout=timeout)
 
 
+# the material of the small inputs written below (opens the JSON object)
+MATERIAL = ('{"materials": [{"name": "m", "youngs_modulus_pa": 1e7, "poisson_ratio": 0.2,'
+            ' "density_kg_m3": 1000, "restitution": 0.5, "friction": 0.3}],')
+
+
+def write(name, text):
+    path = os.path.join(tmp, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
 # 1. drop example: a rock bounces and rolls on a floor, then rests
 out = os.path.join(tmp, "drop")
 r = run([os.path.join(examples, "drop.json"), "--output", out])
@@ -77,26 +89,18 @@ for name in sorted(os.listdir(examples)):
     check(r.returncode == 0, "example %s exits 0: %s" % (name, r.stderr.strip()))
 
 # an input without particles (walls only) is valid and runs
-empty = os.path.join(tmp, "empty.json")
-with open(empty, "w") as f:
-    f.write('{"materials": [{"name": "m", "youngs_modulus_pa": 1e7, "poisson_ratio": 0.2,'
-            ' "density_kg_m3": 1000, "restitution": 0.5, "friction": 0.3}],'
-            ' "planes": [{"point": [0, 0, 0], "normal": [0, 0, 1]}], "end_time_s": 0.01}')
+empty = write("empty.json", MATERIAL + ' "planes": [{"point": [0, 0, 0], "normal": [0, 0, 1]}],'
+                            ' "end_time_s": 0.01}')
 r = run([empty, "--output", os.path.join(tmp, "empty")])
 check(r.returncode == 0, "no particles: exits 0: " + r.stderr)
 
 # 3. errors: message names the problem, exit code non-zero
-bad = os.path.join(tmp, "bad.json")
-with open(bad, "w") as f:
-    f.write('{"materials": [{"name": "m", "youngs_modulus_pa": 1e7, "poisson_ratio": 0.2,'
-            ' "density_kg_m3": 1000, "restitution": 0.5, "friction": 0.3}],'
-            ' "particles": [{"position": [0, 0, 0], "radius": -1}]}')
+bad = write("bad.json", MATERIAL + ' "particles": [{"position": [0, 0, 0], "radius": -1}]}')
 r = run([bad, "--output", os.path.join(tmp, "bad")])
 check(r.returncode == 1 and "particles[0].radius" in r.stderr, "negative radius: " + r.stderr)
 r = run([os.path.join(tmp, "missing.json"), "--output", os.path.join(tmp, "x")])
 check(r.returncode == 1 and "missing.json" in r.stderr, "missing file: " + r.stderr)
-with open(bad, "w") as f:
-    f.write('{"materials": [}')
+write("bad.json", '{"materials": [}')
 r = run([bad, "--output", os.path.join(tmp, "bad")])
 check(r.returncode == 1 and "malformed JSON" in r.stderr, "bad JSON: " + r.stderr)
 r = run([os.path.join(examples, "drop.json")])

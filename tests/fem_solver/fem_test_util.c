@@ -30,6 +30,22 @@ void fem_test_line(fem_model *m, int n_el, double length, double E, double A, do
         for (int c = 0; c < 3; c++) m->fixed[c] = m->fixed[3 * n_el + c] = 1;
 }
 
+const fem_node_set *fem_test_net(fem_model *m, int n, const fem_element_set *set, nc_error *err)
+{
+    const double origin[3] = {0, 0, 0}, edge1[3] = {1, 0, 0}, edge2[3] = {0, 1, 0};
+    fem_model_init(m, "test-net");
+    if (fem_model_add_set(m, set, err) != 0) return NULL;
+    if (fem_model_generate_net(m, origin, edge1, edge2, n, n, 0, err)) return NULL;
+    const fem_node_set *b = fem_model_find_node_set(m, "boundary");
+    if (!b) {
+        nc_error_set(err, 1, "test-net: no boundary node set");
+        return NULL;
+    }
+    for (int i = 0; i < b->count; i++)
+        for (int c = 0; c < 3; c++) m->fixed[3 * b->nodes[i] + c] = 1;
+    return b;
+}
+
 const char *fem_test_write(const char *name, const char *text)
 {
     static char paths[8][512];

@@ -10,6 +10,12 @@
 void fem_test_line(fem_model *m, int n_el, double length, double E, double A, double rho,
                    double S_pre, fem_behaviour behaviour, int fix_ends);
 
+/* A flat square net of n x n nodes over the unit square in the x-y plane
+ * (fem_model_generate_net from the origin along x and y), all elements in `set` (the only
+ * set), its "boundary" nodes fixed in x, y, z. The model is NOT finalised. Returns the
+ * boundary node set, or NULL (err says why) when a step fails. */
+const fem_node_set *fem_test_net(fem_model *m, int n, const fem_element_set *set, nc_error *err);
+
 /* Writes text to NC_TMP/name (or /tmp) and returns the path (static buffer per call slot). */
 const char *fem_test_write(const char *name, const char *text);
 

@@ -77,6 +77,20 @@ static int wait_exit(pid_t pid, double timeout_s)
     return -1;
 }
 
+/* Connects to the solver listening at ep as its "fem" peer (30 s request timeout) and zeroes
+ * the request and reply messages; the caller says HELLO. */
+static proto_peer *connect_fem(const char *ep, proto_message *req, proto_message *rep, nc_error *err)
+{
+    proto_options opt;
+    proto_options_default(&opt);
+    opt.timeout_ms = 30000;
+    proto_peer *peer;
+    assert_int_equal(proto_peer_open(&peer, "fem", ep, &opt, err), 0);
+    memset(req, 0, sizeof *req);
+    memset(rep, 0, sizeof *rep);
+    return peer;
+}
+
 static void paths(const char *tag, char *dir, char *epfile, size_t size)
 {
     const char *tmp = getenv("NC_TMP");
@@ -118,14 +132,8 @@ static void test_protocol_session(void **state)
         fail_msg("fem_solver did not write its endpoint file");
     }
     nc_error err;
-    proto_options opt;
-    proto_options_default(&opt);
-    opt.timeout_ms = 30000;
-    proto_peer *peer;
-    assert_int_equal(proto_peer_open(&peer, "fem", ep, &opt, &err), 0);
     proto_message req, rep;
-    memset(&req, 0, sizeof req);
-    memset(&rep, 0, sizeof rep);
+    proto_peer *peer = connect_fem(ep, &req, &rep, &err);
     if (proto_peer_hello(peer, &rep, &err)) fail_msg("%s", err.message);
     assert_string_equal(rep.role, "fem");
 
@@ -245,14 +253,8 @@ static void test_newton_failure(void **state)
     pid_t pid = spawn(json, dir, epfile, "30");
     assert_int_equal(read_endpoint(epfile, ep, sizeof ep), 0);
     nc_error err;
-    proto_options opt;
-    proto_options_default(&opt);
-    opt.timeout_ms = 30000;
-    proto_peer *peer;
-    assert_int_equal(proto_peer_open(&peer, "fem", ep, &opt, &err), 0);
     proto_message req, rep;
-    memset(&req, 0, sizeof req);
-    memset(&rep, 0, sizeof rep);
+    proto_peer *peer = connect_fem(ep, &req, &rep, &err);
     assert_int_equal(proto_peer_hello(peer, &rep, &err), 0);
     proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
     req.step = 0;

@@ -207,15 +207,9 @@ static void test_restore_bitwise(void **state)
 {
     (void)state;
     fem_model m;
-    fem_model_init(&m, "net");
     nc_error err;
-    double o[3] = {0, 0, 0}, e1[3] = {1, 0, 0}, e2[3] = {0, 1, 0};
     fem_element_set set = {"net", 1e8, 1e-5, 7850, 1e5, FEM_CABLE};
-    fem_model_add_set(&m, &set, &err);
-    assert_int_equal(fem_model_generate_net(&m, o, e1, e2, 9, 9, 0, &err), 0);
-    const fem_node_set *b = fem_model_find_node_set(&m, "boundary");
-    for (int i = 0; i < b->count; i++)
-        for (int c = 0; c < 3; c++) m.fixed[3 * b->nodes[i] + c] = 1;
+    if (!fem_test_net(&m, 9, &set, &err)) fail_msg("%s", err.message);
     m.self_weight = 1;
     m.tau_per_s = 3.0;
     m.settings.integrator = FEM_GENERALIZED_ALPHA;

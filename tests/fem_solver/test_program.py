@@ -82,6 +82,17 @@ def check_with_vtk(out):
         check(np.allclose(a, f["/output/axial_force"][-1]), "vtk axial_force")
 
 
+def net_dynamic(name, end_time_s):
+    """examples/net_dynamic.json ending at end_time_s, written to TMP/<name>.json; returns that
+    path and the output folder TMP/<name>."""
+    cfg = json.load(open(os.path.join(EX, "net_dynamic.json")))
+    cfg["analysis"]["end_time_s"] = end_time_s
+    path = os.path.join(TMP, name + ".json")
+    with open(path, "w") as f:
+        json.dump(cfg, f)
+    return path, os.path.join(TMP, name)
+
+
 def test_static_example():
     out = os.path.join(TMP, "static")
     r = run([os.path.join(EX, "cable_static.json"), "--output", out])
@@ -106,11 +117,7 @@ def test_static_example():
 
 
 def test_dynamic_and_gmsh():
-    cfg = json.load(open(os.path.join(EX, "net_dynamic.json")))
-    cfg["analysis"]["end_time_s"] = 0.1
-    path = os.path.join(TMP, "net.json")
-    json.dump(cfg, open(path, "w"))
-    out = os.path.join(TMP, "net")
+    path, out = net_dynamic("net", 0.1)
     r = run([path, "--output", out])
     check(r.returncode == 0, "net_dynamic exit %d: %s" % (r.returncode, r.stderr))
     with h5py.File(os.path.join(out, "fem.h5"), "r") as f:
@@ -158,11 +165,7 @@ def test_errors():
 
 
 def test_sigterm():
-    cfg = json.load(open(os.path.join(EX, "net_dynamic.json")))
-    cfg["analysis"]["end_time_s"] = 1000.0
-    path = os.path.join(TMP, "long.json")
-    json.dump(cfg, open(path, "w"))
-    out = os.path.join(TMP, "long")
+    path, out = net_dynamic("long", 1000.0)
     p = subprocess.Popen([BIN, path, "--output", out], stderr=subprocess.PIPE, text=True)
     h5 = os.path.join(out, "fem.h5")
     for _ in range(300):

@@ -130,17 +130,11 @@ static void test_flat_net_singular(void **state)
 {
     (void)state;
     fem_model m;
-    fem_model_init(&m, "flat");
     nc_error err;
-    double o[3] = {0, 0, 0}, e1[3] = {1, 0, 0}, e2[3] = {0, 1, 0};
     fem_element_set set = {"net", 1e6, 1e-4, 1000, 0.0, FEM_CABLE};
-    assert_true(fem_model_add_set(&m, &set, &err) == 0);
-    assert_int_equal(fem_model_generate_net(&m, o, e1, e2, 5, 5, 0, &err), 0);
-    const fem_node_set *b = fem_model_find_node_set(&m, "boundary");
-    assert_non_null(b);
+    const fem_node_set *b = fem_test_net(&m, 5, &set, &err);
+    if (!b) fail_msg("%s", err.message);
     assert_int_equal(b->count, 16);
-    for (int i = 0; i < b->count; i++)
-        for (int c = 0; c < 3; c++) m.fixed[3 * b->nodes[i] + c] = 1;
     m.f_point[3 * 12 + 2] = -1.0;
     m.settings.type = FEM_STATIC;
     assert_int_equal(fem_model_finalize(&m, &err), 0);

@@ -21,6 +21,12 @@ static int decode_text(proto_message *m, const char *header, const void *const *
     return proto_decode(m, header, strlen(header), frames, lengths, n, LIMIT, err);
 }
 
+/* Writes the header of a SOLVE carrying one f64 array "u" of n values. */
+static void u_header(char *header, size_t size, size_t n)
+{
+    snprintf(header, size, "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"u\",\"dtype\":\"f64\",\"shape\":[%zu]}]}", n);
+}
+
 static void test_round_trip(void **state)
 {
     (void)state;
@@ -215,7 +221,7 @@ static void test_non_finite_found_anywhere_in_large_arrays(void **state)
     double *data = calloc(n, sizeof *data);
     for (size_t k = 0; k < n; k++) data[k] = 1e300 * ((k % 7) - 3.0); /* large but finite */
     char header[256];
-    snprintf(header, sizeof header, "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"u\",\"dtype\":\"f64\",\"shape\":[%zu]}]}", n);
+    u_header(header, sizeof header, n);
     const void *frames[1] = {data};
     size_t lengths[1] = {n * sizeof *data};
     proto_message in;
@@ -245,7 +251,7 @@ static void test_oversize_rejected(void **state)
     size_t n = 1000;
     double *data = calloc(n, sizeof *data);
     char header[256];
-    snprintf(header, sizeof header, "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"u\",\"dtype\":\"f64\",\"shape\":[%zu]}]}", n);
+    u_header(header, sizeof header, n);
     const void *frames[1] = {data};
     size_t lengths[1] = {n * sizeof *data};
     proto_message in;
