@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "nc_file.h"
 #include "nc_json.h"
 
 void cpl_config_default(cpl_config *c)
@@ -36,12 +37,7 @@ static int parse_participant(const cJSON *root, const char *where, const char *k
     if (endpoint && file)
         return nc_error_set(err, 1, "%s: give either endpoint or endpoint_file, not both", path);
     if (endpoint) snprintf(out->endpoint, sizeof out->endpoint, "%s", endpoint);
-    if (file) {
-        if (file[0] == '/' || !base_dir || !base_dir[0])
-            snprintf(out->endpoint_file, sizeof out->endpoint_file, "%s", file);
-        else
-            snprintf(out->endpoint_file, sizeof out->endpoint_file, "%s/%s", base_dir, file);
-    }
+    if (file) nc_file_join(base_dir, file, out->endpoint_file, sizeof out->endpoint_file);
     return 0;
 }
 
@@ -195,10 +191,7 @@ int cpl_config_load(cpl_config *c, const char *path, nc_error *err)
     cJSON *root = NULL;
     if (nc_json_load_file(path, &root, err)) return -1;
     char base[CPL_PATH_MAX];
-    snprintf(base, sizeof base, "%s", path);
-    char *slash = strrchr(base, '/');
-    if (slash) *slash = '\0';
-    else snprintf(base, sizeof base, ".");
+    nc_file_dir(path, base, sizeof base);
     int rc = cpl_config_parse(c, root, path, base, err);
     cJSON_Delete(root);
     return rc;

@@ -154,7 +154,7 @@ typedef struct run_ctx {
     cpl_loop *L;
     const cpl_participant *fem, *dem;
     const cpl_observer *obs;
-    volatile sig_atomic_t *stop;
+    const volatile sig_atomic_t *stop;
     cpl_failure *failure;
     nc_error *err;
 } run_ctx;
@@ -426,7 +426,7 @@ static int run_step(run_ctx *c)
 }
 
 int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant *dem,
-                 const cpl_observer *observer, volatile sig_atomic_t *stop,
+                 const cpl_observer *observer, const volatile sig_atomic_t *stop,
                  cpl_failure *failure, nc_error *err)
 {
     cpl_failure dummy;

@@ -140,7 +140,7 @@ void cpl_loop_free(cpl_loop *loop);
  * becomes non-zero the run ends with CPL_ERR_INTERRUPTED. On failure `failure` says where;
  * err names the participant, step, iteration and reason. */
 int cpl_loop_run(cpl_loop *loop, const cpl_participant *fem, const cpl_participant *dem,
-                 const cpl_observer *observer, volatile sig_atomic_t *stop,
+                 const cpl_observer *observer, const volatile sig_atomic_t *stop,
                  cpl_failure *failure, nc_error *err);
 
 const cpl_timing *cpl_loop_timing(const cpl_loop *loop);

@@ -21,13 +21,7 @@
 #include "cpl_progress.h"
 #include "cpl_remote.h"
 #include "nc_log.h"
-
-static volatile sig_atomic_t g_signal = 0;   /* the only global: set by the signal handler */
-
-static void on_signal(int sig)
-{
-    g_signal = sig;
-}
+#include "nc_signal.h"
 
 static void usage(FILE *out)
 {
@@ -52,6 +46,7 @@ typedef struct app {
     cpl_progress progress;
     cpl_loop *loop;
     char fem_ep[1024], dem_ep[1024];   /* resolved endpoints ("" while unknown) */
+    const volatile sig_atomic_t *stop_signal;   /* 0, or SIGINT / SIGTERM once received */
 } app;
 
 static int observe_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
@@ -116,7 +111,7 @@ static int resolve_endpoint(app *a, const cpl_endpoint_config *c, const char *ar
     }
     if (c->endpoint_file[0])
         return cpl_read_endpoint_file(c->endpoint_file, a->cfg.connect_timeout_s, out, size,
-                                      &g_signal, err);
+                                      a->stop_signal, err);
     return nc_error_set(err, 1, "%s: no endpoint for the %s participant (set %s.endpoint or "
                         "%s.endpoint_file, or use --%s-endpoint)", a->config_path, name, name,
                         name, name);
@@ -186,12 +181,7 @@ int main(int argc, char **argv)
     if (parse_args(&a, argc, argv)) return 1;
     setvbuf(stdout, NULL, _IOLBF, 0);
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;   /* no SA_RESTART: a blocking wait returns on Ctrl-C */
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    a.stop_signal = nc_signal_catch_stop();   /* a blocking wait returns on Ctrl-C */
     signal(SIGPIPE, SIG_IGN);
 
     nc_error err;
@@ -249,11 +239,11 @@ int main(int argc, char **argv)
 
     cpl_participant fem = cpl_remote_participant(&a.fem), dem = cpl_remote_participant(&a.dem);
     cpl_observer obs = {&a, observe_iteration, observe_step};
-    if (cpl_loop_run(a.loop, &fem, &dem, &obs, &g_signal, &failure, &err)) {
+    if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of
          * that participant, which is not its fault */
-        if (g_signal) {
-            const char *name = g_signal == SIGINT ? "SIGINT" : "SIGTERM";
+        if (*a.stop_signal) {
+            const char *name = *a.stop_signal == SIGINT ? "SIGINT" : "SIGTERM";
             if (err.code == CPL_ERR_INTERRUPTED) {
                 char where[NC_ERROR_MESSAGE_MAX];
                 const char *at = strstr(err.message, " at step");
@@ -278,7 +268,7 @@ fail:
     fprintf(stderr, "coupler: error: %s\n", err.message);
     shutdown_all(&a, failure.participant);
     if (a.loop) print_timing(&a);
-    rc = g_signal == SIGINT ? 130 : g_signal == SIGTERM ? 143 : 1;
+    rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;
 
 done:
     if (history_open) cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL);

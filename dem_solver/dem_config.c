@@ -9,6 +9,7 @@
 
 #include "dem_neighbor_grid.h"
 #include "dem_stl.h"
+#include "nc_file.h"
 #include "nc_json.h"
 
 static int find_material(const dem_sim *s, const cJSON *obj, const char *where, int *index,
@@ -349,8 +350,7 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
             return -1;
         mesh->material = mat;
         char full[1024];
-        if (path[0] == '/' || !base_dir || !base_dir[0]) snprintf(full, sizeof full, "%s", path);
-        else snprintf(full, sizeof full, "%s/%s", base_dir, path);
+        nc_file_join(base_dir, path, full, sizeof full);
         if (dem_stl_load(mesh, full, err)) return nc_error_prefix(err, "%s.file", where);
     }
     return 0;
@@ -497,10 +497,7 @@ int dem_config_load(dem_sim *s, const char *path, nc_error *err)
     cJSON *root;
     if (nc_json_load_file(path, &root, err)) return -1;
     char dir[1024];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
+    nc_file_dir(path, dir, sizeof dir);
     int rc = parse_root(s, root, path, dir, err);
     cJSON_Delete(root);
     if (rc == 0) rc = build_mesh_grids(s, err);

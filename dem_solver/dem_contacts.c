@@ -5,9 +5,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "dem_contact_geometry.h"
 #include "dem_contact_hertz.h"
@@ -435,36 +432,27 @@ static int update_neighbour_list(dem_sim *s, nc_error *err)
     if (!s->rebuild) return 0;
     if (dem_cell_grid_build(&s->grid, n, s->sph.pos, 2.0 * s->r_max + s->skin_m, err)) return -1;
     int failed = 0;
-#pragma omp parallel num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
-    {
-        int t = 0;
-#ifdef _OPENMP
-        t = omp_get_thread_num();
-        int nt = omp_get_num_threads();
-#else
-        int nt = 1;
-#endif
-        for (int b = t; b < nb; b += nt) {
-            struct dem_nbr_part *part = &s->nbr_part[b];
-            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
-            size_t used = 0;
-            for (size_t i = lo; i < hi && !failed; i++) {
-                size_t room = part->cap - used;
-                int32_t count = neighbours_of(s, i, s->skin_m, part->a ? part->a + used : NULL, room);
-                if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
-                    size_t cap = 2 * (used + (size_t)count) + 1024;
-                    int32_t *a = realloc(part->a, cap * sizeof *a);
-                    if (!a) {
-                        failed = 1;
-                        break;
-                    }
-                    part->a = a;
-                    part->cap = cap;
-                    if ((size_t)count > room) neighbours_of(s, i, s->skin_m, part->a + used, (size_t)count);
+#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
+    for (int b = 0; b < nb; b++) {
+        struct dem_nbr_part *part = &s->nbr_part[b];
+        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        size_t used = 0;
+        for (size_t i = lo; i < hi && !failed; i++) {
+            size_t room = part->cap - used;
+            int32_t count = neighbours_of(s, i, s->skin_m, part->a ? part->a + used : NULL, room);
+            if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
+                size_t cap = 2 * (used + (size_t)count) + 1024;
+                int32_t *a = realloc(part->a, cap * sizeof *a);
+                if (!a) {
+                    failed = 1;
+                    break;
                 }
-                s->nbr_first[i + 1] = count;
-                used += (size_t)count;
+                part->a = a;
+                part->cap = cap;
+                if ((size_t)count > room) neighbours_of(s, i, s->skin_m, part->a + used, (size_t)count);
             }
+            s->nbr_first[i + 1] = count;
+            used += (size_t)count;
         }
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory for the neighbour list");
@@ -742,33 +730,24 @@ int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
 
     int nb = s->n_buffers;
     int failed = 0;
-#pragma omp parallel num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
-    {
-        int t = 0;
-#ifdef _OPENMP
-        t = omp_get_thread_num();
-        int nt = omp_get_num_threads();
-#else
-        int nt = 1;
-#endif
-        /* Fixed contiguous ranges per buffer: the concatenation order never changes. */
-        for (int b = t; b < nb; b += nt) {
-            emit_ctx out = {&s->buffers[b], &s->spills[b], 0};
-            out.out->n = 0;
-            out.spill->n = 0;
-            s->buffer_overflow[b] = 0;
-            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
-            /* only this range writes the sums of its unshared spheres */
-            memset(s->sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
-            memset(s->sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
-            for (size_t i = lo; i < hi && !failed; i++) {
-                out.first = out.out->n;
-                s->contact_first[i] = (int32_t)out.first; /* + the buffer's offset, below */
-                if (sphere_sphere(s, &out, i, dt) || sphere_planes(s, &out, i, dt) ||
-                    (s->n_meshes && sphere_meshes(s, &out, i, dt, &s->buffer_overflow[b])) ||
-                    (s->net.active && sphere_net(s, &out, i, dt, &s->buffer_overflow[b])))
-                    failed = 1;
-            }
+    /* Fixed contiguous ranges per buffer: the concatenation order never changes. */
+#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
+    for (int b = 0; b < nb; b++) {
+        emit_ctx out = {&s->buffers[b], &s->spills[b], 0};
+        out.out->n = 0;
+        out.spill->n = 0;
+        s->buffer_overflow[b] = 0;
+        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        /* only this range writes the sums of its unshared spheres */
+        memset(s->sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+        memset(s->sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+        for (size_t i = lo; i < hi && !failed; i++) {
+            out.first = out.out->n;
+            s->contact_first[i] = (int32_t)out.first; /* + the buffer's offset, below */
+            if (sphere_sphere(s, &out, i, dt) || sphere_planes(s, &out, i, dt) ||
+                (s->n_meshes && sphere_meshes(s, &out, i, dt, &s->buffer_overflow[b])) ||
+                (s->net.active && sphere_net(s, &out, i, dt, &s->buffer_overflow[b])))
+                failed = 1;
         }
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory growing the contact list");

@@ -9,7 +9,6 @@
  */
 #include <errno.h>
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,16 +17,10 @@
 #include "dem_config.h"
 #include "dem_output.h"
 #include "dem_solver.h"
+#include "nc_file.h"
 #include "nc_log.h"
+#include "nc_signal.h"
 #include "proto.h"
-
-static volatile sig_atomic_t g_stop = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g_stop = 1;
-}
 
 static void usage(FILE *f)
 {
@@ -92,7 +85,9 @@ static int make_dir(const char *dir, nc_error *err)
     return 0;
 }
 
-static int run_standalone(dem_sim *s, dem_output *out, nc_error *err)
+/* Runs until end_time_s, or until *stop is set (returns 1 then, after writing the state). */
+static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic_t *stop,
+                          nc_error *err)
 {
     double dt = s->prm.dt_s, end = s->prm.end_time_s, interval = s->prm.output_interval_s;
     long steps = (long)ceil(end / dt - 1e-9);
@@ -102,7 +97,7 @@ static int run_standalone(dem_sim *s, dem_output *out, nc_error *err)
     double next_out = interval;
     double t0 = nc_now_s();
     for (long k = 0; k < steps; k++) {
-        if (g_stop) {
+        if (*stop) {
             if (dem_output_write(out, s, NULL, err)) return -1;
             fprintf(stderr, "dem_solver: interrupted at t = %g s; results so far are in %s\n",
                     s->time_s, out->dir);
@@ -118,18 +113,6 @@ static int run_standalone(dem_sim *s, dem_output *out, nc_error *err)
     printf("dem_solver: done, t = %g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
            s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->sph.n / wall : 0.0,
            s->contacts.n);
-    return 0;
-}
-
-static int write_endpoint_file(const char *file, const char *endpoint, nc_error *err)
-{
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", file);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return nc_error_set(err, 1, "%s: cannot write: %s", tmp, strerror(errno));
-    fprintf(f, "%s\n", endpoint);
-    if (fclose(f) != 0 || rename(tmp, file) != 0)
-        return nc_error_set(err, 1, "%s: cannot write endpoint file", file);
     return 0;
 }
 
@@ -240,7 +223,8 @@ static int handle(dem_sim *s, dem_output *out, proto_participant *p, const proto
     return shutdown;
 }
 
-static int run_coupled(dem_sim *s, dem_output *out, const options *o, nc_error *err)
+static int run_coupled(dem_sim *s, dem_output *out, const options *o,
+                       const volatile sig_atomic_t *stop, nc_error *err)
 {
     if (!(s->net.youngs_modulus_pa > 0.0))
         return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
@@ -252,7 +236,7 @@ static int run_coupled(dem_sim *s, dem_output *out, const options *o, nc_error *
     proto_participant *p;
     if (proto_participant_open(&p, o->endpoint, "dem", "netcouple dem_solver", "restore", &popt, err))
         return -1;
-    if (o->endpoint_file && write_endpoint_file(o->endpoint_file, proto_participant_endpoint(p), err)) {
+    if (o->endpoint_file && nc_file_write_line(o->endpoint_file, proto_participant_endpoint(p), err)) {
         proto_participant_close(p);
         return -1;
     }
@@ -267,7 +251,7 @@ static int run_coupled(dem_sim *s, dem_output *out, const options *o, nc_error *
     cs.next_out = s->prm.output_interval_s;
     int rc = 0;
     for (;;) {
-        if (g_stop) {
+        if (*stop) {
             fprintf(stderr, "dem_solver: interrupted at t = %g s\n", s->time_s);
             rc = 130;
             break;
@@ -282,7 +266,7 @@ static int run_coupled(dem_sim *s, dem_output *out, const options *o, nc_error *
                 fprintf(stderr, "dem_solver: bad command: %s\n", err->message);
                 continue; /* an error reply was sent */
             }
-            if (g_stop) continue; /* a signal interrupted the wait */
+            if (*stop) continue; /* a signal interrupted the wait */
             rc = -1;
             break;
         }
@@ -311,11 +295,7 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    const volatile sig_atomic_t *stop = nc_signal_catch_stop();
 
     nc_error err;
     nc_error_clear(&err);
@@ -329,7 +309,8 @@ int main(int argc, char **argv)
         make_dir(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
         rc = -1;
     } else {
-        rc = o.endpoint ? run_coupled(&s, &out, &o, &err) : run_standalone(&s, &out, &err);
+        rc = o.endpoint ? run_coupled(&s, &out, &o, stop, &err)
+                        : run_standalone(&s, &out, stop, &err);
     }
     dem_output_close(&out);
     dem_sim_free(&s);
@@ -338,5 +319,5 @@ int main(int argc, char **argv)
         return 1;
     }
     if (rc == 1 && err.message[0]) fprintf(stderr, "dem_solver: %s\n", err.message);
-    return rc == 1 ? (g_stop ? 130 : 1) : rc;
+    return rc == 1 ? (*stop ? 130 : 1) : rc;
 }

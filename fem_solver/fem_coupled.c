@@ -5,26 +5,14 @@
  * See fem_run.h and the brief's protocol section. */
 #include "fem_run.h"
 #include "fem_output.h"
+#include "nc_file.h"
 #include "nc_log.h"
 #include "proto.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int write_endpoint_file(const char *file, const char *endpoint, nc_error *err)
-{
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", file);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return nc_error_set(err, 1, "%s: cannot write: %s", tmp, strerror(errno));
-    fprintf(f, "%s\n", endpoint);
-    if (fclose(f)) return nc_error_set(err, 1, "%s: write failed", tmp);
-    if (rename(tmp, file)) return nc_error_set(err, 1, "%s: cannot rename to %s", tmp, file);
-    return 0;
-}
 
 typedef struct coupled {
     const fem_model *m;
@@ -166,7 +154,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     if (proto_participant_open(&c->p, opt->endpoint, "fem", "netcouple fem_solver", "restore", &po, err))
         goto done;
     if (opt->endpoint_file &&
-        write_endpoint_file(opt->endpoint_file, proto_participant_endpoint(c->p), err))
+        nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(c->p), err))
         goto done;
     int finished = 0;
     while (!finished) {

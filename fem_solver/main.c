@@ -9,21 +9,13 @@
  */
 #include "fem_input.h"
 #include "fem_run.h"
+#include "nc_signal.h"
 
 #include <errno.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-
-static volatile sig_atomic_t stop_requested = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
 
 static void usage(FILE *f)
 {
@@ -90,12 +82,7 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    const volatile sig_atomic_t *stop = nc_signal_catch_stop();
 
     nc_error err;
     nc_error_clear(&err);
@@ -114,9 +101,9 @@ int main(int argc, char **argv)
     int rc;
     if (endpoint) {
         fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0)};
-        rc = fem_run_coupled(&model, output, &opt, &stop_requested, &sum, &err);
+        rc = fem_run_coupled(&model, output, &opt, stop, &sum, &err);
     } else {
-        rc = fem_run_standalone(&model, output, &stop_requested, &sum, &err);
+        rc = fem_run_standalone(&model, output, stop, &sum, &err);
     }
     fprintf(stderr,
             "fem_solver: %s: %d nodes, %d elements, %ld steps, %ld Newton iterations, "
