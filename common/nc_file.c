@@ -1,4 +1,4 @@
-/* nc_file — input-file folders, relative paths and atomically replaced small files. */
+/* nc_file — input-file folders, relative paths and atomically replaced files. */
 #include "nc_file.h"
 
 #include <errno.h>
@@ -19,14 +19,30 @@ void nc_file_join(const char *base_dir, const char *path, char *out, size_t size
     else snprintf(out, size, "%s/%s", base_dir, path);
 }
 
+FILE *nc_file_replace_open(const char *path, char *tmp, size_t tmp_size, nc_error *err)
+{
+    if ((size_t)snprintf(tmp, tmp_size, "%s.tmp", path) >= tmp_size) {
+        nc_error_set(err, 1, "%s: path too long", path);
+        return NULL;
+    }
+    FILE *f = fopen(tmp, "w");
+    if (!f) nc_error_set(err, 1, "%s: cannot write: %s", tmp, strerror(errno));
+    return f;
+}
+
+int nc_file_replace_commit(FILE *f, const char *tmp, const char *path, nc_error *err)
+{
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad) return nc_error_set(err, 1, "%s: write failed", tmp);
+    if (rename(tmp, path) != 0) return nc_error_set(err, 1, "%s: cannot rename to %s: %s", tmp, path, strerror(errno));
+    return 0;
+}
+
 int nc_file_write_line(const char *path, const char *line, nc_error *err)
 {
     char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return nc_error_set(err, 1, "%s: cannot write: %s", tmp, strerror(errno));
+    FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
+    if (!f) return -1;
     fprintf(f, "%s\n", line);
-    if (fclose(f)) return nc_error_set(err, 1, "%s: write failed", tmp);
-    if (rename(tmp, path)) return nc_error_set(err, 1, "%s: cannot rename to %s", tmp, path);
-    return 0;
+    return nc_file_replace_commit(f, tmp, path, err);
 }

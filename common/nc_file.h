@@ -1,10 +1,11 @@
 /* nc_file — small file-system helpers the programs share: the folder of an input file, paths
- * given relative to it, and small files replaced atomically (endpoint files).
+ * given relative to it, and files replaced atomically (endpoint files, XDMF descriptions).
  */
 #ifndef NC_FILE_H
 #define NC_FILE_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "nc_error.h"
 
@@ -15,6 +16,13 @@ void nc_file_dir(const char *path, char *dir, size_t size);
 /* `path` taken relative to the folder `base_dir` into out: "base_dir/path", or `path` itself
  * when it is absolute or base_dir is NULL or "". Truncated to size. */
 void nc_file_join(const char *base_dir, const char *path, char *out, size_t size);
+
+/* Replacing a file atomically: nc_file_replace_open() opens "<path>.tmp" for writing (its name
+ * into tmp), the caller writes, nc_file_replace_commit() closes it, checks that every write
+ * succeeded and renames it over path, so a reader never sees a half-written file. On an error
+ * both return NULL / -1 with err set (commit has closed the file either way). */
+FILE *nc_file_replace_open(const char *path, char *tmp, size_t tmp_size, nc_error *err);
+int nc_file_replace_commit(FILE *f, const char *tmp, const char *path, nc_error *err);
 
 /* Writes `line` and a newline to `path` through "<path>.tmp" and a rename, so a reader polling
  * for the file never sees it half written. */

@@ -1,6 +1,8 @@
 /* dem_output — HDF5 results and the XDMF index that lets ParaView show the particles. */
 #include "dem_output.h"
 
+#include "nc_file.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -146,9 +148,8 @@ static int write_xdmf(const dem_output *o, nc_error *err)
 {
     char path[1100], tmp[1120];
     snprintf(path, sizeof path, "%s/dem.xdmf", o->dir);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return nc_error_set(err, 1, "%s: cannot write", tmp);
+    FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
+    if (!f) return -1;
     fputs("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n  <Domain>\n"
           "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", f);
     if (o->xdmf_particles.len) fwrite(o->xdmf_particles.data, 1, o->xdmf_particles.len, f);
@@ -159,10 +160,7 @@ static int write_xdmf(const dem_output *o, nc_error *err)
         fputs("    </Grid>\n", f);
     }
     fputs("  </Domain>\n</Xdmf>\n", f);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) return nc_error_set(err, 1, "%s: write failed", tmp);
-    if (rename(tmp, path) != 0) return nc_error_set(err, 1, "%s: cannot rename to %s", tmp, path);
-    return 0;
+    return nc_file_replace_commit(f, tmp, path, err);
 }
 
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err)

@@ -2,6 +2,7 @@
  * file), element sets, supports, loads, damping, interface, monitors, analysis settings. */
 #include "fem_input.h"
 #include "fem_mesh_gmsh.h"
+#include "nc_file.h"
 #include "nc_json.h"
 
 #include <math.h>
@@ -189,14 +190,6 @@ static int parse_net(fem_model *m, const cJSON *net, const char *file, nc_error 
     return 0;
 }
 
-/* the directory part of path, with a trailing slash ("" when none) */
-static void dir_of(const char *path, char *dir, size_t size)
-{
-    snprintf(dir, size, "%s", path);
-    char *slash = strrchr(dir, '/');
-    if (slash) slash[1] = '\0'; else dir[0] = '\0';
-}
-
 static int parse_gmsh(fem_model *m, const cJSON *mesh, const char *file, nc_error *err)
 {
     char w[WHERE_MAX];
@@ -208,9 +201,8 @@ static int parse_gmsh(fem_model *m, const cJSON *mesh, const char *file, nc_erro
         set_by_name(m, mesh, w, "set", &set, err))
         return -1;
     char path[1024], dir[512];
-    dir_of(file, dir, sizeof dir);
-    if (name[0] == '/') snprintf(path, sizeof path, "%s", name);
-    else snprintf(path, sizeof path, "%s%s", dir, name);
+    nc_file_dir(file, dir, sizeof dir);
+    nc_file_join(dir, name, path, sizeof path);
     fem_gmsh_mesh g;
     if (fem_gmsh_read(path, &g, err)) return nc_error_prefix(err, "%s.file", w);
     int rc = 0;

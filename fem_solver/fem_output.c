@@ -1,6 +1,7 @@
 /* fem_output — HDF5 results and the XDMF index ParaView opens (layout in fem_output.h). */
 #include "fem_output.h"
 
+#include "nc_file.h"
 #include "nc_log.h"
 
 #include <stdio.h>
@@ -57,9 +58,8 @@ static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
 {
     char path[700], tmp[710];
     snprintf(path, sizeof path, "%s/fem.xdmf", o->dir);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return nc_error_set(err, 1, "%s: cannot write", tmp);
+    FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
+    if (!f) return -1;
     int n = m->n_nodes, e = m->n_elements, k = o->n_out;
     fprintf(f, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
                "<Xdmf Version=\"2.0\">\n <Domain>\n"
@@ -89,10 +89,7 @@ static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
                    "     </DataItem>\n    </Attribute>\n   </Grid>\n", e, i, e, k, e);
     }
     fprintf(f, "  </Grid>\n </Domain>\n</Xdmf>\n");
-    int bad = ferror(f);
-    if (fclose(f) || bad) return nc_error_set(err, 1, "%s: write failed", tmp);
-    if (rename(tmp, path)) return nc_error_set(err, 1, "%s: cannot rename to %s", tmp, path);
-    return 0;
+    return nc_file_replace_commit(f, tmp, path, err);
 }
 
 int fem_output_step(fem_output *o, const fem_solver *s, double time_s, nc_error *err)
