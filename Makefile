@@ -134,12 +134,17 @@ tests: $(TEST_BINS)
 # Per-module extra rules: each <module>/module.mk may add phony targets to BENCH_TARGETS
 # (run by `make bench`) and define its own helpers (fuzz target, demo, ...).
 BENCH_TARGETS :=
+BENCH_BINS :=
 -include $(wildcard */module.mk)
 
 bench: check-bench-deps
 	@$(MAKE) --no-print-directory run-bench
 
 run-bench: programs $(BENCH_TARGETS)
+
+# Builds the benchmark programs without running them (CI checks that they still compile).
+.PHONY: bench-programs
+bench-programs: $(BENCH_BINS)
 
 check-bench-deps:
 	@scripts/check_deps.sh --bench >/dev/null 2>&1 || scripts/install_deps.sh --bench

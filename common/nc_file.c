@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 
 void nc_file_dir(const char *path, char *dir, size_t size)
 {
@@ -17,6 +18,27 @@ void nc_file_join(const char *base_dir, const char *path, char *out, size_t size
 {
     if (path[0] == '/' || !base_dir || !base_dir[0]) snprintf(out, size, "%s", path);
     else snprintf(out, size, "%s/%s", base_dir, path);
+}
+
+int nc_file_make_dirs(const char *path, nc_error *err)
+{
+    char buf[4096];
+    if (!path[0]) return nc_error_set(err, 1, "output folder: empty path");
+    if ((size_t)snprintf(buf, sizeof buf, "%s", path) >= sizeof buf)
+        return nc_error_set(err, 1, "%s: path too long", path);
+    for (char *p = buf + 1; ; p++) {
+        if (*p != '/' && *p != '\0') continue;
+        char c = *p;
+        *p = '\0';
+        struct stat st;
+        if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+            return nc_error_set(err, 1, "%s: cannot create folder: %s", buf, strerror(errno));
+        if (stat(buf, &st) != 0 || !S_ISDIR(st.st_mode))
+            return nc_error_set(err, 1, "%s: exists and is not a folder", buf);
+        if (c == '\0') break;
+        *p = c;
+    }
+    return 0;
 }
 
 FILE *nc_file_replace_open(const char *path, char *tmp, size_t tmp_size, nc_error *err)

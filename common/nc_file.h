@@ -1,5 +1,5 @@
 /* nc_file — small file-system helpers the programs share: the folder of an input file, paths
- * given relative to it, and files replaced atomically (endpoint files, XDMF descriptions).
+ * given relative to it, output folders created with their parents, and files replaced atomically (endpoint files, XDMF descriptions).
  */
 #ifndef NC_FILE_H
 #define NC_FILE_H
@@ -16,6 +16,10 @@ void nc_file_dir(const char *path, char *dir, size_t size);
 /* `path` taken relative to the folder `base_dir` into out: "base_dir/path", or `path` itself
  * when it is absolute or base_dir is NULL or "". Truncated to size. */
 void nc_file_join(const char *base_dir, const char *path, char *out, size_t size);
+
+/* Creates the folder `path` and its missing parents (like `mkdir -p`); an existing folder is
+ * fine. Fails naming the folder and the OS reason. */
+int nc_file_make_dirs(const char *path, nc_error *err);
 
 /* Replacing a file atomically: nc_file_replace_open() opens "<path>.tmp" for writing (its name
  * into tmp), the caller writes, nc_file_replace_commit() closes it, checks that every write

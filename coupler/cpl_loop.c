@@ -7,7 +7,7 @@
 
 #include "cpl_interface.h"
 #include "cpl_residual.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 
 struct cpl_loop {
     cpl_loop_settings s;
@@ -195,18 +195,18 @@ static double *wait_of(run_ctx *c, const cpl_participant *p)
 static int do_begin(run_ctx *c, const cpl_participant *p, const cpl_call *call)
 {
     if (check_stop(c, call)) return -1;
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int rc = p->begin_step(p->ctx, call, c->err);
-    *wait_of(c, p) += nc_now_s() - t0;
+    *wait_of(c, p) += nc_clock_now_s() - t0;
     return rc ? fail(c, p, call, "begin_step") : 0;
 }
 
 static int do_accept(run_ctx *c, const cpl_participant *p, const cpl_call *call)
 {
     if (check_stop(c, call)) return -1;
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int rc = p->accept(p->ctx, call, c->err);
-    *wait_of(c, p) += nc_now_s() - t0;
+    *wait_of(c, p) += nc_clock_now_s() - t0;
     return rc ? fail(c, p, call, "accept_step") : 0;
 }
 
@@ -219,9 +219,9 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
     info->min_gap_m = INFINITY;
     info->contacts = 0.0;
     info->solver_time_s = NAN;
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int rc = p->solve(p->ctx, call, in0, in1, out0, out1, info, c->err);
-    *wait_of(c, p) += nc_now_s() - t0;
+    *wait_of(c, p) += nc_clock_now_s() - t0;
     if (rc) return fail(c, p, call, "solve");
     size_t n = c->L->n3;
     const double *outs[2] = {out0, out1};
@@ -433,12 +433,12 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     if (!failure) failure = &dummy;
     memset(failure, 0, sizeof *failure);
     run_ctx c = {L, fem, dem, observer, stop, failure, err};
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int rc = 0;
     const double eps = 1e-9 * L->s.dt_s;
     while (L->time_s < L->s.end_time_s - eps && (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
         if ((rc = run_step(&c)) != 0) break;
     }
-    L->timing.total_s += nc_now_s() - t0;
+    L->timing.total_s += nc_clock_now_s() - t0;
     return rc;
 }

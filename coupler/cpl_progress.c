@@ -5,7 +5,7 @@
 #include <stdarg.h>
 #include <string.h>
 
-#include "nc_log.h"
+#include "nc_clock.h"
 
 void cpl_progress_init(cpl_progress *p, FILE *out, int tty, int quiet, double interval_s,
                        double sim_start, double sim_end)
@@ -15,7 +15,7 @@ void cpl_progress_init(cpl_progress *p, FILE *out, int tty, int quiet, double in
     p->tty = tty;
     p->quiet = quiet;
     p->interval_s = interval_s;
-    p->wall_start = p->last_print = nc_now_s();
+    p->wall_start = p->last_print = nc_clock_now_s();
     p->sim_start = sim_start;
     p->sim_end = sim_end;
 }
@@ -33,7 +33,7 @@ static void clock_text(char *buf, size_t size, double s)
 
 static void status_text(const cpl_progress *p, char *buf, size_t size)
 {
-    double elapsed = nc_now_s() - p->wall_start;
+    double elapsed = nc_clock_now_s() - p->wall_start;
     const cpl_step_record *r = &p->last;
     double done = (r->time_s - p->sim_start) / (p->sim_end - p->sim_start);
     double eta = done > 0 ? elapsed * (1.0 - done) / done : NAN;
@@ -78,7 +78,7 @@ void cpl_progress_step(cpl_progress *p, const cpl_step_record *rec, int strong)
                                  p->warnings);
     }
     if (p->quiet) return;
-    double now = nc_now_s();
+    double now = nc_clock_now_s();
     double every = p->tty ? 0.1 : p->interval_s;
     if (now - p->last_print < every) return;
     p->last_print = now;

@@ -7,7 +7,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "nc_log.h"
+#include "nc_clock.h"
 
 static void options_ms(proto_options *o, double timeout_s)
 {
@@ -188,7 +188,7 @@ void cpl_remote_close(cpl_remote *r)
 int cpl_read_endpoint_file(const char *path, double timeout_s, char *endpoint, size_t size,
                            volatile const sig_atomic_t *stop, nc_error *err)
 {
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     for (;;) {
         FILE *f = fopen(path, "r");
         if (f) {
@@ -202,7 +202,7 @@ int cpl_read_endpoint_file(const char *path, double timeout_s, char *endpoint, s
             }
         }
         if (stop && *stop) return nc_error_set(err, 1, "interrupted while waiting for %s", path);
-        if (nc_now_s() - t0 > timeout_s)
+        if (nc_clock_now_s() - t0 > timeout_s)
             return nc_error_set(err, 1, "%s: endpoint file did not appear within %.1f s (did "
                                 "the participant start?)", path, timeout_s);
         struct timespec ts = {0, 50 * 1000 * 1000};

@@ -5,13 +5,11 @@
  * Exit codes: 0 success, 1 input/participant/coupling failure, 130 interrupted (SIGINT),
  * 143 terminated (SIGTERM). See coupler/README.md.
  */
-#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cpl_config.h"
@@ -20,7 +18,8 @@
 #include "cpl_loop.h"
 #include "cpl_progress.h"
 #include "cpl_remote.h"
-#include "nc_log.h"
+#include "nc_clock.h"
+#include "nc_file.h"
 #include "nc_signal.h"
 
 static void usage(FILE *out)
@@ -201,11 +200,7 @@ int main(int argc, char **argv)
     }
     cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet,
                       a.cfg.progress_interval_s, a.cfg.loop.start_time_s, a.cfg.loop.end_time_s);
-    if (mkdir(a.output_dir, 0777) != 0 && errno != EEXIST) {
-        nc_error_set(&err, 1, "%s: cannot create the output folder: %s", a.output_dir,
-                     strerror(errno));
-        goto fail;
-    }
+    if (nc_file_make_dirs(a.output_dir, &err)) goto fail;
 
     char *fem_ep = a.fem_ep, *dem_ep = a.dem_ep;
     if (resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, "fem", fem_ep, sizeof a.fem_ep, &err) ||

@@ -7,18 +7,16 @@
  * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 130 interrupted (SIGINT/SIGTERM;
  * the results written so far are complete and readable).
  */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "dem_config.h"
 #include "dem_output.h"
 #include "dem_solver.h"
 #include "nc_file.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 #include "nc_signal.h"
 #include "proto.h"
 
@@ -78,13 +76,6 @@ static int parse_args(int argc, char **argv, options *o)
     return 0;
 }
 
-static int make_dir(const char *dir, nc_error *err)
-{
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
-        return nc_error_set(err, 1, "%s: cannot create output folder: %s", dir, strerror(errno));
-    return 0;
-}
-
 /* Runs until end_time_s, or until *stop is set (returns 1 then, after writing the state). */
 static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic_t *stop,
                           nc_error *err)
@@ -95,7 +86,7 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
            s->sph.n, s->bod.n, dt, dem_sim_critical_dt(s), steps);
     if (dem_output_write(out, s, NULL, err)) return -1;
     double next_out = interval;
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     for (long k = 0; k < steps; k++) {
         if (*stop) {
             if (dem_output_write(out, s, NULL, err)) return -1;
@@ -109,7 +100,7 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
             while (next_out <= s->time_s + 0.5 * dt) next_out += interval > 0.0 ? interval : dt;
         }
     }
-    double wall = nc_now_s() - t0;
+    double wall = nc_clock_now_s() - t0;
     printf("dem_solver: done, t = %g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
            s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->sph.n / wall : 0.0,
            s->contacts.n);
@@ -306,7 +297,7 @@ int main(int argc, char **argv)
     out.h5.file = H5I_INVALID_HID;
     int rc = 0;
     if (dem_config_load(&s, o.input, &err) || dem_sim_prepare(&s, &err) ||
-        make_dir(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
+        nc_file_make_dirs(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
         rc = -1;
     } else {
         rc = o.endpoint ? run_coupled(&s, &out, &o, stop, &err)

@@ -9,6 +9,7 @@ $(BUILD)/tests/dem_solver/%.o: CFLAGS += -Idem_solver
 $(BUILD)/dem_solver/bench/%.o: CFLAGS += -Idem_solver
 
 BENCH_TARGETS += bench-dem
+BENCH_BINS += $(BUILD)/bench/dem_bench
 .PHONY: bench-dem
 $(BUILD)/bench/dem_bench: $(BUILD)/dem_solver/bench/dem_bench.o $(LINK_dem_solver)
 	@mkdir -p $(@D)

@@ -16,7 +16,7 @@
  */
 #include "fem_analysis.h"
 #include "fem_element_cable.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -57,7 +57,7 @@ static void state_copy(fem_state *dst, const fem_state *src, int ndof)
     memcpy(dst->fc, src->fc, bytes);
 }
 
-int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
+int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
 {
     memset(s, 0, sizeof *s);
     s->m = m;
@@ -126,11 +126,11 @@ int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err)
                 s->f_model[3 * m->conn[2 * e + 1] + c] += half * m->gravity[c];
             }
         }
-    fem_solver_update_axial(s);
+    fem_analysis_update_axial(s);
     return 0;
 }
 
-void fem_solver_free(fem_solver *s)
+void fem_analysis_free(fem_analysis *s)
 {
     if (!s) return;
     fem_sparse_free(&s->K);
@@ -142,7 +142,7 @@ void fem_solver_free(fem_solver *s)
     memset(s, 0, sizeof *s);
 }
 
-double fem_solver_load_factor(const fem_solver *s, double time_s)
+double fem_analysis_load_factor(const fem_analysis *s, double time_s)
 {
     double ramp = s->m->settings.load_ramp_s;
     if (ramp <= 0) return 1.0;
@@ -153,11 +153,11 @@ double fem_solver_load_factor(const fem_solver *s, double time_s)
  * c_m M + c_k K_T into the fixed pattern. w is the mass-term vector, v the velocity used
  * by the kappa term, wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial.
  * Returns the force scale used by the relative tolerance. */
-static double assemble(fem_solver *s, double lambda, double c_m, double c_k, const double *w,
+static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, const double *w,
                        const double *v, double wf, const double *fd_n, int matrix)
 {
     const fem_model *m = s->m;
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     const double *u = s->cur.u;
     double *fd = s->cur.fd;
     double *x = s->K.x;
@@ -218,11 +218,11 @@ static double assemble(fem_solver *s, double lambda, double c_m, double c_k, con
     }
     s->stats.slack_elements = slack_count;
     s->stats.assemblies++;
-    s->stats.assembly_s += nc_now_s() - t0;
+    s->stats.assembly_s += nc_clock_now_s() - t0;
     return sqrt(scale2) + sqrt(fext2);
 }
 
-static double residual_norm(const fem_solver *s)
+static double residual_norm(const fem_analysis *s)
 {
     double r2 = 0;
     for (int q = 0; q < s->neq; q++) {
@@ -233,9 +233,9 @@ static double residual_norm(const fem_solver *s)
 }
 
 /* Factorises and solves K du = r on the free equations; names the node when singular. */
-static int linear_solve(fem_solver *s, int reuse, nc_error *err)
+static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
 {
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int bad = -1;
     if (!reuse && fem_sparse_factorize(&s->K, &bad, err)) {
         if (bad >= 0 && bad < s->neq) {
@@ -253,11 +253,11 @@ static int linear_solve(fem_solver *s, int reuse, nc_error *err)
         if (s->K.use_lu) s->stats.lu_factorizations++;
     }
     s->stats.solves++;
-    double t1 = nc_now_s();
+    double t1 = nc_clock_now_s();
     s->stats.factor_s += t1 - t0;
     for (int q = 0; q < s->neq; q++) s->rhs[q] = s->r[s->dof_of_eq[q]];
     if (fem_sparse_solve(&s->K, s->rhs, s->du, err)) return -1;
-    s->stats.solve_s += nc_now_s() - t1;
+    s->stats.solve_s += nc_clock_now_s() - t1;
     return 0;
 }
 
@@ -279,9 +279,9 @@ static double dot(const double *a, const double *b, int n)
     return sum;
 }
 
-static int pcg_solve(fem_solver *s, nc_error *err)
+static int pcg_solve(fem_analysis *s, nc_error *err)
 {
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     int n = s->neq;
     double *x = s->du, *r = s->cg_r, *z = s->cg_z, *p = s->cg_p, *q = s->cg_q;
     for (int i = 0; i < n; i++) {
@@ -317,12 +317,12 @@ static int pcg_solve(fem_solver *s, nc_error *err)
     s->stats.pcg_iterations += k > FEM_PCG_MAX_IT ? FEM_PCG_MAX_IT : k;
     if (rc) s->stats.pcg_failures++;
     s->stats.solves++;
-    s->stats.solve_s += nc_now_s() - t0;
+    s->stats.solve_s += nc_clock_now_s() - t0;
     return rc;
 }
 
 /* Newmark kinematics of every dof from u_{n+1} and the start state. */
-static void update_kinematics(fem_solver *s, double dt, double beta, double gamma)
+static void update_kinematics(fem_analysis *s, double dt, double beta, double gamma)
 {
     const fem_state *n = &s->start;
     fem_state *c = &s->cur;
@@ -341,7 +341,7 @@ typedef struct newton_setup {
 
 /* Kinematics, residual and tangent at the current iterate; returns the residual norm and
  * sets *tol from the force scale. */
-static double evaluate(fem_solver *s, const newton_setup *ns, double c_m, double c_k, double wf,
+static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, double c_k, double wf,
                        double *tol)
 {
     const fem_model *m = s->m;
@@ -362,7 +362,7 @@ static double evaluate(fem_solver *s, const newton_setup *ns, double c_m, double
     return residual_norm(s);
 }
 
-static void set_free_u(fem_solver *s, double alpha)
+static void set_free_u(fem_analysis *s, double alpha)
 {
     for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = s->u0[q] + alpha * s->du[q];
 }
@@ -374,7 +374,7 @@ static void set_free_u(fem_solver *s, double alpha)
  * reused for that confirming solve. A full step that increases the residual (cables going
  * slack and taut again can make plain Newton cycle) is halved up to 4 times and the best
  * of the tried steps is taken. */
-static int newton(fem_solver *s, const newton_setup *ns, nc_error *err)
+static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
 {
     const fem_model *m = s->m;
     const fem_settings *set = &m->settings;
@@ -462,20 +462,20 @@ static int newton(fem_solver *s, const newton_setup *ns, nc_error *err)
 }
 
 /* prescribed displacements at load factor lambda */
-static void apply_supports(fem_solver *s, double lambda)
+static void apply_supports(fem_analysis *s, double lambda)
 {
     for (int i = 0; i < s->ndof; i++)
         if (s->m->fixed[i]) s->cur.u[i] = lambda * s->m->u_prescribed[i];
 }
 
-int fem_solver_static(fem_solver *s, double lambda, nc_error *err)
+int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err)
 {
     state_copy(&s->start, &s->cur, s->ndof);
     apply_supports(s, lambda);
     newton_setup ns = {0, 0, 0.25, 0.5, 0, 0, lambda};
     if (newton(s, &ns, err)) {
         state_copy(&s->cur, &s->start, s->ndof);
-        fem_solver_update_axial(s);
+        fem_analysis_update_axial(s);
         return nc_error_prefix(err, "%s: static load factor %g", s->m->source, lambda);
     }
     memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
@@ -510,10 +510,10 @@ static void method_weights(const fem_settings *set, double *beta, double *gamma,
     }
 }
 
-int fem_solver_initial_acceleration(fem_solver *s, nc_error *err)
+int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
 {
     const fem_model *m = s->m;
-    double lambda = fem_solver_load_factor(s, s->cur.time_s);
+    double lambda = fem_analysis_load_factor(s, s->cur.time_s);
     apply_supports(s, lambda);
     /* matrix = M (c_m = 1, c_k = 0); residual without inertia */
     s->factor_cm = 1.0;
@@ -529,7 +529,7 @@ int fem_solver_initial_acceleration(fem_solver *s, nc_error *err)
 }
 
 /* y = M x (all dofs) */
-static void mass_multiply(const fem_solver *s, const double *x, double *y)
+static void mass_multiply(const fem_analysis *s, const double *x, double *y)
 {
     const fem_model *m = s->m;
     memset(y, 0, (size_t)s->ndof * sizeof *y);
@@ -552,7 +552,7 @@ static void mass_multiply(const fem_solver *s, const double *x, double *y)
  * alpha-weighted updates then use it over the whole step. Jacobi-preconditioned CG, matrix
  * free: M of bar elements is well conditioned (spectrum of D^-1 M within [0.5, 1.5]), so
  * this converges in a few tens of iterations (1 with a lumped mass). */
-static int shift_start_acceleration(fem_solver *s, nc_error *err)
+static int shift_start_acceleration(fem_analysis *s, nc_error *err)
 {
     const int n = s->neq;
     double *r = s->cg_r, *z = s->cg_z, *p = s->cg_p, *q = s->cg_q, *x = s->du;
@@ -587,7 +587,7 @@ static int shift_start_acceleration(fem_solver *s, nc_error *err)
     return 0;
 }
 
-int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
+int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
 {
     const fem_settings *set = &s->m->settings;
     state_copy(&s->start, &s->cur, s->ndof);
@@ -601,7 +601,7 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
     newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
     method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
     double t1 = s->cur.time_s + dt_s;
-    ns.lambda = fem_solver_load_factor(s, t1);
+    ns.lambda = fem_analysis_load_factor(s, t1);
     /* predictor: the start-of-step displacement (for these stiff, strongly nonlinear nets it
      * did better than the constant-acceleration predictor), supports at their end value */
     apply_supports(s, ns.lambda);
@@ -610,7 +610,7 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
         if (set->coupling_load_constant)
             memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
         state_copy(&s->cur, &s->start, s->ndof);
-        fem_solver_update_axial(s);
+        fem_analysis_update_axial(s);
         return nc_error_prefix(err, "%s: step %ld (t = %g s -> %g s)", s->m->source,
                                s->start.step, s->start.time_s, t1);
     }
@@ -620,7 +620,7 @@ int fem_solver_step(fem_solver *s, double dt_s, nc_error *err)
     return 0;
 }
 
-int fem_solver_save(fem_solver *s, nc_error *err)
+int fem_analysis_save(fem_analysis *s, nc_error *err)
 {
     state_copy(&s->saved, &s->cur, s->ndof);
     s->has_saved = 1;
@@ -629,17 +629,17 @@ int fem_solver_save(fem_solver *s, nc_error *err)
     return fem_sparse_save_factor(&s->K, err);
 }
 
-int fem_solver_restore(fem_solver *s, nc_error *err)
+int fem_analysis_restore(fem_analysis *s, nc_error *err)
 {
     if (!s->has_saved) return nc_error_set(err, 1, "restore requested but no start-of-step state was saved");
     state_copy(&s->cur, &s->saved, s->ndof);
-    fem_solver_update_axial(s);
+    fem_analysis_update_axial(s);
     s->factor_cm = s->saved_factor_cm;
     s->factor_ck = s->saved_factor_ck;
     return fem_sparse_restore_factor(&s->K, err);
 }
 
-void fem_solver_update_axial(fem_solver *s)
+void fem_analysis_update_axial(fem_analysis *s)
 {
     const fem_model *m = s->m;
     int slack = 0;
@@ -654,7 +654,7 @@ void fem_solver_update_axial(fem_solver *s)
     s->stats.slack_elements = slack;
 }
 
-double fem_solver_energy(const fem_solver *s, double *kinetic, double *strain)
+double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain)
 {
     const fem_model *m = s->m;
     double T = 0, W = 0;

@@ -1,9 +1,9 @@
 /* fem_analysis — the nonlinear solver: assembly, Newton-Raphson, static load increments,
  * implicit dynamics (Newmark, generalized-alpha, Bossak) and start-of-step save/restore.
  *
- * Contract: fem_solver_init() builds the equation numbering (supported dofs are eliminated,
+ * Contract: fem_analysis_init() builds the equation numbering (supported dofs are eliminated,
  * so the pattern never changes), the sparse pattern and CHOLMOD's symbolic analysis once.
- * fem_solver_static() and fem_solver_step() allocate nothing; on Newton failure they leave
+ * fem_analysis_static() and fem_analysis_step() allocate nothing; on Newton failure they leave
  * the state as it was before the call and return -1 with a message naming step/time,
  * iterations and residual. The extra nodal force f_coupling (N, per dof) is added to the
  * model's own loads; the coupled driver fills it from the protocol's `force` array.
@@ -36,7 +36,7 @@ typedef struct fem_stats {
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
 } fem_stats;
 
-typedef struct fem_solver {
+typedef struct fem_analysis {
     const fem_model *m;
     int ndof, neq;
     int *eq;               /* [ndof] equation of each dof, -1 for supported dofs */
@@ -60,29 +60,29 @@ typedef struct fem_solver {
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
     fem_stats stats;
-} fem_solver;
+} fem_analysis;
 
-int fem_solver_init(fem_solver *s, const fem_model *m, nc_error *err);
-void fem_solver_free(fem_solver *s);
+int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err);
+void fem_analysis_free(fem_analysis *s);
 
 /* Static equilibrium under load factor lambda (loads and prescribed displacements scaled),
  * starting Newton from the current displacement. Velocity/acceleration are left at 0. */
-int fem_solver_static(fem_solver *s, double lambda, nc_error *err);
+int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
 /* Sets a_0 from M a_0 = F_ext(t) - F_int(u) - C v (call once before dynamic steps). */
-int fem_solver_initial_acceleration(fem_solver *s, nc_error *err);
+int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err);
 /* One implicit dynamic step of dt_s from the current state. */
-int fem_solver_step(fem_solver *s, double dt_s, nc_error *err);
+int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err);
 /* Load factor of the model loads at time t (load_ramp_s). */
-double fem_solver_load_factor(const fem_solver *s, double time_s);
+double fem_analysis_load_factor(const fem_analysis *s, double time_s);
 
 /* Save/restore the state and the factorisation kept by modified Newton (fem_sparse.h), so
  * a step solved again after a restore repeats the same operations bit for bit. */
-int fem_solver_save(fem_solver *s, nc_error *err);
-int fem_solver_restore(fem_solver *s, nc_error *err);
+int fem_analysis_save(fem_analysis *s, nc_error *err);
+int fem_analysis_restore(fem_analysis *s, nc_error *err);
 
 /* Recomputes s->axial and stats.slack_elements at the current state. */
-void fem_solver_update_axial(fem_solver *s);
+void fem_analysis_update_axial(fem_analysis *s);
 /* Total mechanical energy: kinetic (1/2 v^T M v) + strain energy of the elements. */
-double fem_solver_energy(const fem_solver *s, double *kinetic, double *strain);
+double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain);
 
 #endif

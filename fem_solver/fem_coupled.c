@@ -6,7 +6,7 @@
 #include "fem_run.h"
 #include "fem_output.h"
 #include "nc_file.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 #include "proto.h"
 
 #include <math.h>
@@ -16,7 +16,7 @@
 
 typedef struct coupled {
     const fem_model *m;
-    fem_solver s;
+    fem_analysis s;
     fem_output out;
     proto_participant *p;
     proto_message cmd, reply;
@@ -31,14 +31,14 @@ typedef struct coupled {
 static int solve(coupled *c, nc_error *err)
 {
     const fem_model *m = c->m;
-    fem_solver *s = &c->s;
+    fem_analysis *s = &c->s;
     int n = m->n_iface_nodes;
     const double *force;
     if (!c->in_step) return nc_error_set(err, 1, "SOLVE before BEGIN_STEP");
     if (!(c->cmd.dt_s > 0) || !isfinite(c->cmd.dt_s))
         return nc_error_set(err, 1, "SOLVE: dt_s must be > 0, got %g", c->cmd.dt_s);
     if (proto_message_get_f64(&c->cmd, "force", (size_t)n, 3, &force, NULL, err)) return -1;
-    if (c->solved && fem_solver_restore(s, err)) return -1;
+    if (c->solved && fem_analysis_restore(s, err)) return -1;
     c->solved = 1;
     memset(s->f_coupling, 0, (size_t)s->ndof * sizeof(double));
     for (int i = 0; i < n; i++)
@@ -48,11 +48,11 @@ static int solve(coupled *c, nc_error *err)
         /* quasi-static coupling: equilibrium under the loads, velocity from the increment */
         double t0 = s->cur.time_s;
         long step0 = s->cur.step;
-        if (fem_solver_static(s, 1.0, err)) return -1;
+        if (fem_analysis_static(s, 1.0, err)) return -1;
         for (int i = 0; i < s->ndof; i++) s->cur.v[i] = (s->cur.u[i] - s->start.u[i]) / dt;
         s->cur.time_s = t0 + dt;
         s->cur.step = step0 + 1;
-    } else if (fem_solver_step(s, dt, err)) {
+    } else if (fem_analysis_step(s, dt, err)) {
         return -1;
     }
     for (int i = 0; i < n; i++)
@@ -72,7 +72,7 @@ static int solve(coupled *c, nc_error *err)
 static int handle(coupled *c, int *done, fem_run_summary *sum, nc_error *err)
 {
     const fem_model *m = c->m;
-    fem_solver *s = &c->s;
+    fem_analysis *s = &c->s;
     proto_message_init(&c->reply, c->cmd.type);
     switch (c->cmd.type) {
     case PROTO_MSG_INTERFACE: {
@@ -85,9 +85,9 @@ static int handle(coupled *c, int *done, fem_run_summary *sum, nc_error *err)
     }
     case PROTO_MSG_BEGIN_STEP:
         /* a step begun again without ACCEPT_STEP starts from the last accepted state */
-        if (c->in_step && c->solved && fem_solver_restore(s, err)) return -1;
+        if (c->in_step && c->solved && fem_analysis_restore(s, err)) return -1;
         if (isfinite(c->cmd.time_s)) s->cur.time_s = c->cmd.time_s;  /* the coupler owns time */
-        if (fem_solver_save(s, err)) return -1;
+        if (fem_analysis_save(s, err)) return -1;
         c->in_step = 1;
         c->solved = 0;
         return 0;
@@ -105,7 +105,7 @@ static int handle(coupled *c, int *done, fem_run_summary *sum, nc_error *err)
         sum->steps++;
         if (fem_output_monitor(&c->out, s, s->cur.time_s, err)) return -1;
         if (s->cur.step % m->settings.output_interval == 0) {
-            fem_solver_update_axial(s);
+            fem_analysis_update_axial(s);
             if (fem_output_step(&c->out, s, s->cur.time_s, err)) return -1;
             c->written_step = s->cur.step;
         }
@@ -122,7 +122,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
                     const volatile sig_atomic_t *stop, fem_run_summary *summary,
                     nc_error *err)
 {
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     fem_run_summary sum;
     memset(&sum, 0, sizeof sum);
     coupled *c = calloc(1, sizeof *c);
@@ -143,8 +143,8 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
         c->node_ids[i] = m->iface_nodes[i];
         for (int d = 0; d < 3; d++) c->iface_X[3 * i + d] = m->X[3 * m->iface_nodes[i] + d];
     }
-    if (fem_solver_init(&c->s, m, err) || fem_output_open(&c->out, m, output_dir, err)) goto done;
-    if (m->settings.type == FEM_DYNAMIC && fem_solver_initial_acceleration(&c->s, err)) goto done;
+    if (fem_analysis_init(&c->s, m, err) || fem_output_open(&c->out, m, output_dir, err)) goto done;
+    if (m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) goto done;
     if (fem_output_monitor(&c->out, &c->s, 0.0, err) || fem_output_step(&c->out, &c->s, 0.0, err))
         goto done;
     c->written_step = 0;
@@ -182,11 +182,11 @@ done:
     if (c->out.open && c->s.m) {
         /* a step begun but not accepted is not a result: write the last accepted state */
         nc_error ignored;
-        if (c->in_step && c->solved) fem_solver_restore(&c->s, &ignored);
+        if (c->in_step && c->solved) fem_analysis_restore(&c->s, &ignored);
     }
     if (c->out.open && c->written_step != c->s.cur.step && c->s.m) {
         nc_error ignored;
-        fem_solver_update_axial(&c->s);
+        fem_analysis_update_axial(&c->s);
         fem_output_step(&c->out, &c->s, c->s.cur.time_s, &ignored);
     }
     sum.final_time_s = c->s.cur.u ? c->s.cur.time_s : 0;
@@ -201,10 +201,10 @@ done:
     proto_message_free(&c->cmd);
     proto_message_free(&c->reply);
     fem_output_close(&c->out);
-    fem_solver_free(&c->s);
+    fem_analysis_free(&c->s);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
     free(c);
-    sum.wall_s = nc_now_s() - t0;
+    sum.wall_s = nc_clock_now_s() - t0;
     if (summary) *summary = sum;
     return rc;
 }

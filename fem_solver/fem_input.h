@@ -2,7 +2,7 @@
  *
  * Unknown keys are rejected; every error names the file, the field and what was expected,
  * e.g. "net.json: element_sets[0].youngs_modulus_pa: expected a number > 0, got -3".
- * On success the model is finalised (fem_model_finalize) and ready for fem_solver_init.
+ * On success the model is finalised (fem_model_finalize) and ready for fem_analysis_init.
  */
 #ifndef FEM_INPUT_H
 #define FEM_INPUT_H

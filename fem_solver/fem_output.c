@@ -2,7 +2,7 @@
 #include "fem_output.h"
 
 #include "nc_file.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -41,7 +41,7 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
     return 0;
 }
 
-int fem_output_monitor(fem_output *o, const fem_solver *s, double time_s, nc_error *err)
+int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
 {
     const fem_model *m = s->m;
     double *b = o->buf;
@@ -92,7 +92,7 @@ static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
     return nc_file_replace_commit(f, tmp, path, err);
 }
 
-int fem_output_step(fem_output *o, const fem_solver *s, double time_s, nc_error *err)
+int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
 {
     const fem_model *m = s->m;
     int step = (int)s->cur.step;
@@ -113,7 +113,7 @@ int fem_output_step(fem_output *o, const fem_solver *s, double time_s, nc_error 
     /* The XDMF file grows with the number of output steps; rewriting it after each of
      * thousands of steps would cost O(k^2) bytes, so beyond 200 steps it is rewritten at
      * most every 2 s of wall time (and always on close). */
-    double now = nc_now_s();
+    double now = nc_clock_now_s();
     if (o->n_out <= 200 || now - o->last_xdmf_s > 2.0) {
         o->last_xdmf_s = now;
         o->xdmf_current = 1;

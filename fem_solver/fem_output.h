@@ -32,9 +32,9 @@ typedef struct fem_output {
 
 int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error *err);
 /* Appends the monitor rows of the current state (call every step). */
-int fem_output_monitor(fem_output *o, const fem_solver *s, double time_s, nc_error *err);
+int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 /* Appends one full output step, flushes, rewrites the XDMF file. */
-int fem_output_step(fem_output *o, const fem_solver *s, double time_s, nc_error *err);
+int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 void fem_output_close(fem_output *o);
 
 #endif

@@ -2,12 +2,12 @@
  * with monitor rows every step and full output every output interval (see fem_run.h). */
 #include "fem_run.h"
 #include "fem_output.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 
 #include <math.h>
 #include <string.h>
 
-static double max_displacement(const fem_solver *s)
+static double max_displacement(const fem_analysis *s)
 {
     double best = 0;
     for (int i = 0; i < s->m->n_nodes; i++) {
@@ -21,14 +21,14 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
                        const volatile sig_atomic_t *stop, fem_run_summary *summary,
                        nc_error *err)
 {
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     fem_run_summary sum;
     memset(&sum, 0, sizeof sum);
-    fem_solver s;
+    fem_analysis s;
     fem_output out;
     memset(&out, 0, sizeof out);
     int rc = -1;
-    if (fem_solver_init(&s, m, err)) goto done;
+    if (fem_analysis_init(&s, m, err)) goto done;
     if (fem_output_open(&out, m, output_dir, err)) goto done;
     const fem_settings *set = &m->settings;
     long written_step = -1;
@@ -39,8 +39,8 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         for (int k = 1; k <= set->load_steps; k++) {
             if (stop && *stop) { rc = 1; goto done; }
             double lambda = (double)k / set->load_steps;
-            if (fem_solver_static(&s, lambda, err)) goto done;
-            fem_solver_update_axial(&s);
+            if (fem_analysis_static(&s, lambda, err)) goto done;
+            fem_analysis_update_axial(&s);
             sum.steps++;
             sum.newton_iterations += s.stats.iterations;
             if (fem_output_monitor(&out, &s, lambda, err)) goto done;
@@ -51,25 +51,25 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         }
         sum.final_time_s = 1.0;
     } else {
-        if (fem_solver_initial_acceleration(&s, err)) goto done;
+        if (fem_analysis_initial_acceleration(&s, err)) goto done;
         if (fem_output_monitor(&out, &s, 0.0, err) || fem_output_step(&out, &s, 0.0, err)) goto done;
         written_step = 0;
         long n_steps = (long)ceil(set->end_time_s / set->dt_s - 1e-9);
         for (long k = 1; k <= n_steps; k++) {
             if (stop && *stop) { rc = 1; break; }
-            if (fem_solver_step(&s, set->dt_s, err)) goto done;
+            if (fem_analysis_step(&s, set->dt_s, err)) goto done;
             s.cur.time_s = k * set->dt_s;   /* no drift from repeated sums */
             sum.steps++;
             sum.newton_iterations += s.stats.iterations;
             if (fem_output_monitor(&out, &s, s.cur.time_s, err)) goto done;
             if (k % set->output_interval == 0) {
-                fem_solver_update_axial(&s);
+                fem_analysis_update_axial(&s);
                 if (fem_output_step(&out, &s, s.cur.time_s, err)) goto done;
                 written_step = k;
             }
         }
         if (written_step != s.cur.step) {
-            fem_solver_update_axial(&s);
+            fem_analysis_update_axial(&s);
             if (fem_output_step(&out, &s, s.cur.time_s, err)) goto done;
         }
         sum.final_time_s = s.cur.time_s;
@@ -84,8 +84,8 @@ done:
         sum.stats = s.stats;
     }
     fem_output_close(&out);
-    fem_solver_free(&s);
-    sum.wall_s = nc_now_s() - t0;
+    fem_analysis_free(&s);
+    sum.wall_s = nc_clock_now_s() - t0;
     if (summary) *summary = sum;
     return rc;
 }

@@ -9,13 +9,12 @@
  */
 #include "fem_input.h"
 #include "fem_run.h"
+#include "nc_file.h"
 #include "nc_signal.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 static void usage(FILE *f)
 {
@@ -27,20 +26,6 @@ static void usage(FILE *f)
             "writes DIR/fem.h5 and DIR/fem.xdmf. With --endpoint it serves the netcouple\n"
             "protocol as participant \"fem\" (EP e.g. tcp://127.0.0.1:5555 or tcp://127.0.0.1:*).\n"
             "Input keys: fem_solver/README.md.\n");
-}
-
-static int make_dir(const char *dir)
-{
-    char buf[1024];
-    snprintf(buf, sizeof buf, "%s", dir);
-    for (char *p = buf + 1; *p; p++)
-        if (*p == '/') {
-            *p = '\0';
-            if (mkdir(buf, 0777) && errno != EEXIST) return -1;
-            *p = '/';
-        }
-    if (mkdir(buf, 0777) && errno != EEXIST) return -1;
-    return 0;
 }
 
 int main(int argc, char **argv)
@@ -92,8 +77,8 @@ int main(int argc, char **argv)
         fem_model_free(&model);
         return 1;
     }
-    if (make_dir(output)) {
-        fprintf(stderr, "fem_solver: --output %s: cannot create folder: %s\n", output, strerror(errno));
+    if (nc_file_make_dirs(output, &err)) {
+        fprintf(stderr, "fem_solver: --output: %s\n", err.message);
         fem_model_free(&model);
         return 1;
     }

@@ -1,5 +1,6 @@
 # fem_solver/module.mk — `make bench` target of the FEM solver (included by the top Makefile).
 BENCH_TARGETS += bench-fem
+BENCH_BINS += $(BUILD)/bench/fem_bench
 .PHONY: bench-fem
 $(BUILD)/bench/fem_bench: $(BUILD)/fem_solver/bench/fem_bench.o $(LINK_fem_solver)
 	@mkdir -p $(@D)

@@ -1,6 +1,7 @@
 # protocol/module.mk — protocol benchmark and the libFuzzer target of the decoder.
 
 BENCH_TARGETS += bench-protocol
+BENCH_BINS += $(BUILD)/bench/proto_bench
 .PHONY: bench-protocol fuzz fuzz-replay
 
 $(BUILD)/bench/proto_bench: $(BUILD)/protocol/bench/proto_bench.o $(LINK_protocol)

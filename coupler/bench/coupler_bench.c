@@ -28,7 +28,7 @@
 #include "../cpl_interface.h"
 #include "../cpl_loop.h"
 #include "../cpl_remote.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 #include "proto.h"
 
 extern char **environ;
@@ -90,12 +90,12 @@ static double round_trip_s(int with_arrays)
         const int warm = 200, n = 2000;
         double t0 = 0;
         for (int i = 0; i < warm + n; i++) {
-            if (i == warm) t0 = nc_now_s();
+            if (i == warm) t0 = nc_clock_now_s();
             int failed = with_arrays ? p.solve(p.ctx, &call, f, NULL, u, v, &info, &err)
                                      : p.begin_step(p.ctx, &call, &err);
             if (failed) break;
         }
-        rtt = (nc_now_s() - t0) / n;
+        rtt = (nc_clock_now_s() - t0) / n;
         cpl_remote_shutdown(&r, 5, &err);
         cpl_remote_close(&r);
     } else {

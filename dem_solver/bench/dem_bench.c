@@ -16,7 +16,7 @@
 #include <string.h>
 
 #include "dem_solver.h"
-#include "nc_log.h"
+#include "nc_clock.h"
 
 static double uniform(unsigned long long *s)
 {
@@ -109,10 +109,10 @@ int main(int argc, char **argv)
     free(xyz);
     free(rad);
     free(vel);
-    double t0 = nc_now_s();
+    double t0 = nc_clock_now_s();
     for (long k = 0; k < steps; k++)
         if (dem_sim_step(&s, s.prm.dt_s, &err)) goto fail;
-    double wall = nc_now_s() - t0;
+    double wall = nc_clock_now_s() - t0;
     printf("dem_solver: %ld spheres, %ld steps, %d thread(s): %.3f s, %.3e particle-steps/s, "
            "%.2f contacts/sphere, kinetic energy %.4g J, %ld neighbour-list builds\n", n, steps,
            s.n_buffers, wall, (double)n * (double)steps / wall, (double)s.contacts.n / (double)n,

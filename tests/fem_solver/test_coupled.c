@@ -155,9 +155,9 @@ static void test_protocol_session(void **state)
     /* the same model in-process, for comparison */
     fem_model model;
     assert_int_equal(fem_input_load(json, &model, &err), 0);
-    fem_solver ref;
-    assert_int_equal(fem_solver_init(&ref, &model, &err), 0);
-    assert_int_equal(fem_solver_initial_acceleration(&ref, &err), 0);
+    fem_analysis ref;
+    assert_int_equal(fem_analysis_init(&ref, &model, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&ref, &err), 0);
 
     const double dt = 1e-3;
     double force[12] = {0}, u1[12], v1[12];
@@ -196,7 +196,7 @@ static void test_protocol_session(void **state)
         }
         /* in-process reference; same code, same operations: identical to the last bit */
         for (int i = 0; i < 12; i++) ref.f_coupling[i] = force[i];
-        assert_int_equal(fem_solver_step(&ref, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&ref, dt, &err), 0);
         assert_memory_equal(ref.cur.u, u1, sizeof u1);
         proto_message_init(&req, PROTO_MSG_ACCEPT_STEP);
         req.step = k;
@@ -231,7 +231,7 @@ static void test_protocol_session(void **state)
     proto_message_free(&req);
     proto_message_free(&rep);
     proto_peer_close(peer);
-    fem_solver_free(&ref);
+    fem_analysis_free(&ref);
     fem_model_free(&model);
 }
 

@@ -39,13 +39,13 @@ static void string_model(fem_model *m, int n_el, fem_integrator integ, double ta
 }
 
 /* sets u_z = amp sin(mode pi x / L) at every node and the consistent initial acceleration */
-static void pluck(fem_solver *s, int mode, double amp)
+static void pluck(fem_analysis *s, int mode, double amp)
 {
     const fem_model *m = s->m;
     for (int i = 0; i < m->n_nodes; i++)
         s->cur.u[3 * i + 2] = amp * sin(mode * M_PI * m->X[3 * i] / STR_L);
     nc_error err;
-    assert_int_equal(fem_solver_initial_acceleration(s, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(s, &err), 0);
 }
 
 /* period from the downward zero crossings of z(t) (linear interpolation) */
@@ -69,14 +69,14 @@ static void run_string_frequency(fem_integrator integ, double tolerance)
     const double dt = 1e-4, f_exact = 1.0 / (2 * STR_L) * sqrt(STR_T / (STR_RHO * STR_A));
     fem_model m;
     string_model(&m, n_el, integ, 0.0, dt, FEM_CABLE);
-    fem_solver s;
+    fem_analysis s;
     nc_error err;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
     pluck(&s, 1, 1e-4);
     int steps = (int)(3.2 / f_exact / dt);
     double *z = malloc((size_t)steps * sizeof *z);
     for (int k = 0; k < steps; k++) {
-        if (fem_solver_step(&s, dt, &err)) fail_msg("%s", err.message);
+        if (fem_analysis_step(&s, dt, &err)) fail_msg("%s", err.message);
         z[k] = s.cur.u[3 * (n_el / 2) + 2];
     }
     double f = 1.0 / measure_period(z, steps, dt);
@@ -84,7 +84,7 @@ static void run_string_frequency(fem_integrator integ, double tolerance)
                   f_exact, f / f_exact - 1);
     assert_true(fabs(f / f_exact - 1) < tolerance);
     free(z);
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 
@@ -114,22 +114,22 @@ static void test_energy_conservation(void **state)
     for (int pass = 0; pass < 2; pass++) {
         fem_model m;
         string_model(&m, 20, FEM_NEWMARK, 0.0, dts[pass], FEM_TRUSS);
-        fem_solver s;
+        fem_analysis s;
         nc_error err;
-        assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
         pluck(&s, 1, amps[pass]);
         /* add a second mode so energy is exchanged between modes */
         for (int i = 0; i < m.n_nodes; i++) s.cur.v[3 * i + 1] = 0.01 * sin(2 * M_PI * m.X[3 * i]);
-        assert_int_equal(fem_solver_initial_acceleration(&s, &err), 0);
-        double E0 = fem_solver_energy(&s, NULL, NULL), dev = 0;
+        assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+        double E0 = fem_analysis_energy(&s, NULL, NULL), dev = 0;
         for (int k = 0; k < (pass ? 4000 : 2000); k++) {
-            if (fem_solver_step(&s, dts[pass], &err)) fail_msg("%s", err.message);
-            dev = fmax(dev, fabs(fem_solver_energy(&s, NULL, NULL) - E0) / E0);
+            if (fem_analysis_step(&s, dts[pass], &err)) fail_msg("%s", err.message);
+            dev = fmax(dev, fabs(fem_analysis_energy(&s, NULL, NULL) - E0) / E0);
         }
         print_message("amplitude %g m: max relative energy deviation %.3e (tolerance %g)\n",
                       amps[pass], dev, tols[pass]);
         assert_true(dev < tols[pass]);
-        fem_solver_free(&s);
+        fem_analysis_free(&s);
         fem_model_free(&m);
     }
 }
@@ -143,14 +143,14 @@ static void test_rayleigh_decay(void **state)
     const double tau = 2.0, dt = 1e-4;
     fem_model m;
     string_model(&m, 20, FEM_NEWMARK, tau, dt, FEM_CABLE);
-    fem_solver s;
+    fem_analysis s;
     nc_error err;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
     pluck(&s, 1, 1e-4);
     int steps = 10000, mid = 3 * 10 + 2;
     double prev2 = 0, prev1 = s.cur.u[mid], t_first = -1, a_first = 0, t_last = 0, a_last = 0;
     for (int k = 1; k <= steps; k++) {
-        if (fem_solver_step(&s, dt, &err)) fail_msg("%s", err.message);
+        if (fem_analysis_step(&s, dt, &err)) fail_msg("%s", err.message);
         double z = s.cur.u[mid];
         if (k >= 2 && prev1 > prev2 && prev1 >= z && prev1 > 0) {   /* a maximum at k-1 */
             if (t_first < 0) { t_first = (k - 1) * dt; a_first = prev1; }
@@ -164,7 +164,7 @@ static void test_rayleigh_decay(void **state)
     print_message("decay rate %.5f /s, expected tau/2 = %.5f /s\n", rate, tau / 2);
     assert_true(t_last - t_first > 0.5);
     assert_true(fabs(rate / (tau / 2) - 1) < 0.01);
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 
@@ -182,15 +182,15 @@ static void test_numerical_damping(void **state)
         string_model(&m, 20, integs[i], 0.0, 2e-3, FEM_CABLE);
         m.settings.rho_inf = 0.0;
         m.settings.alpha_b = -0.3;
-        fem_solver s;
+        fem_analysis s;
         nc_error err;
-        assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
         pluck(&s, 15, 1e-5);
-        double E0 = fem_solver_energy(&s, NULL, NULL);
+        double E0 = fem_analysis_energy(&s, NULL, NULL);
         for (int k = 0; k < 20; k++)
-            if (fem_solver_step(&s, 2e-3, &err)) fail_msg("%s", err.message);
-        ratio[i] = fem_solver_energy(&s, NULL, NULL) / E0;
-        fem_solver_free(&s);
+            if (fem_analysis_step(&s, 2e-3, &err)) fail_msg("%s", err.message);
+        ratio[i] = fem_analysis_energy(&s, NULL, NULL) / E0;
+        fem_analysis_free(&s);
         fem_model_free(&m);
     }
     print_message("energy kept after 20 steps: newmark %.6f, generalized-alpha(0) %.2e, bossak(-0.3) %.3f\n",
@@ -214,38 +214,38 @@ static void test_restore_bitwise(void **state)
     m.tau_per_s = 3.0;
     m.settings.integrator = FEM_GENERALIZED_ALPHA;
     assert_int_equal(fem_model_finalize(&m, &err), 0);
-    fem_solver s, ref;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-    assert_int_equal(fem_solver_init(&ref, &m, &err), 0);
-    assert_int_equal(fem_solver_initial_acceleration(&s, &err), 0);
-    assert_int_equal(fem_solver_initial_acceleration(&ref, &err), 0);
+    fem_analysis s, ref;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&ref, &m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&ref, &err), 0);
     const double dt = 1e-3;
     size_t bytes = (size_t)s.ndof * sizeof(double);
     double *u1 = malloc(bytes), *v1 = malloc(bytes), *a1 = malloc(bytes);
     for (int step = 0; step < 5; step++) {
         int centre = 40;
-        assert_int_equal(fem_solver_save(&s, &err), 0);
+        assert_int_equal(fem_analysis_save(&s, &err), 0);
         s.f_coupling[3 * centre + 2] = -50.0 * (step + 1);
-        assert_int_equal(fem_solver_step(&s, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
         memcpy(u1, s.cur.u, bytes); memcpy(v1, s.cur.v, bytes); memcpy(a1, s.cur.a, bytes);
-        assert_int_equal(fem_solver_restore(&s, &err), 0);
+        assert_int_equal(fem_analysis_restore(&s, &err), 0);
         s.f_coupling[3 * centre + 2] = -500.0;
-        assert_int_equal(fem_solver_step(&s, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
         assert_true(memcmp(u1, s.cur.u, bytes) != 0);
-        assert_int_equal(fem_solver_restore(&s, &err), 0);
+        assert_int_equal(fem_analysis_restore(&s, &err), 0);
         s.f_coupling[3 * centre + 2] = -50.0 * (step + 1);
-        assert_int_equal(fem_solver_step(&s, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
         assert_memory_equal(u1, s.cur.u, bytes);
         assert_memory_equal(v1, s.cur.v, bytes);
         assert_memory_equal(a1, s.cur.a, bytes);
         ref.f_coupling[3 * centre + 2] = -50.0 * (step + 1);
-        assert_int_equal(fem_solver_step(&ref, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&ref, dt, &err), 0);
         assert_memory_equal(ref.cur.u, s.cur.u, bytes);
         assert_memory_equal(ref.cur.v, s.cur.v, bytes);
     }
     free(u1); free(v1); free(a1);
-    fem_solver_free(&s);
-    fem_solver_free(&ref);
+    fem_analysis_free(&s);
+    fem_analysis_free(&ref);
     fem_model_free(&m);
 }
 
@@ -269,9 +269,9 @@ static void momentum_after_steps(fem_integrator integ, int step_constant, double
     m.settings.coupling_load_constant = step_constant;
     nc_error err;
     assert_int_equal(fem_model_finalize(&m, &err), 0);
-    fem_solver s;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-    assert_int_equal(fem_solver_initial_acceleration(&s, &err), 0);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
     const double dt = 2e-3;
     for (int c = 0; c < 3; c++) want[c] = 0;
     for (int n = 0; n < 12; n++) {
@@ -279,7 +279,7 @@ static void momentum_after_steps(fem_integrator integ, int step_constant, double
         s.f_coupling[3 * 1 + 0] = -30.0 * n;             /* node 1, x */
         s.f_coupling[3 * 3 + 1] = n < 6 ? 50.0 : 0.0;    /* node 3, y: switched off */
         for (int i = 0; i < s.ndof; i++) want[i % 3] += s.f_coupling[i] * dt;
-        assert_int_equal(fem_solver_step(&s, dt, &err), 0);
+        assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
     }
     for (int c = 0; c < 3; c++) got[c] = 0;
     for (int e = 0; e < m.n_elements; e++) {
@@ -287,7 +287,7 @@ static void momentum_after_steps(fem_integrator integ, int step_constant, double
         for (int c = 0; c < 3; c++)
             got[c] += half * (s.cur.v[3 * m.conn[2 * e] + c] + s.cur.v[3 * m.conn[2 * e + 1] + c]);
     }
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 

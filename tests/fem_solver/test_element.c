@@ -43,9 +43,9 @@ static void test_axial_bar(void **state)
         m.settings.type = FEM_STATIC;
         nc_error err;
         assert_int_equal(fem_model_finalize(&m, &err), 0);
-        fem_solver s;
-        assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-        assert_int_equal(fem_solver_static(&s, 1.0, &err), 0);
+        fem_analysis s;
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+        assert_int_equal(fem_analysis_static(&s, 1.0, &err), 0);
         double u = s.cur.u[3];
         if (!pass) {
             /* strain 5e-7: the nonlinear terms are ~1e-6 relative; tolerance 1e-5 */
@@ -56,7 +56,7 @@ static void test_axial_bar(void **state)
             assert_true(fabs(P_exact - P) < 1e-10 * P);
             assert_true(fabs(s.axial[0] - P) < 1e-8 * P);
         }
-        fem_solver_free(&s);
+        fem_analysis_free(&s);
         fem_model_free(&m);
     }
 }
@@ -136,11 +136,11 @@ static void test_slack(void **state)
     m.settings.type = FEM_STATIC;
     nc_error err;
     assert_int_equal(fem_model_finalize(&m, &err), 0);
-    fem_solver s;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-    assert_int_equal(fem_solver_static(&s, 1.0, &err), -1);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_static(&s, 1.0, &err), -1);
     assert_non_null(strstr(err.message, "node 1"));
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 

@@ -68,11 +68,11 @@ static void test_three_element_cable(void **state)
         m.settings.residual_tol_n = 1e-9;
         nc_error err;
         assert_int_equal(fem_model_finalize(&m, &err), 0);
-        fem_solver s;
-        assert_int_equal(fem_solver_init(&s, &m, &err), 0);
+        fem_analysis s;
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
         int steps = 5;
         for (int k = 1; k <= steps; k++) {
-            int rc = fem_solver_static(&s, (double)k / steps, &err);
+            int rc = fem_analysis_static(&s, (double)k / steps, &err);
             if (rc) fail_msg("%s", err.message);
         }
         double a, w;
@@ -85,7 +85,7 @@ static void test_three_element_cable(void **state)
         /* symmetry: node 2 mirrors node 1, the inner element stays horizontal */
         assert_true(fabs(s.cur.u[3 * 2 + 0] + a_fem) < 1e-12);
         assert_true(fabs(s.cur.u[3 * 2 + 2] - s.cur.u[3 * 1 + 2]) < 1e-12);
-        fem_solver_free(&s);
+        fem_analysis_free(&s);
         fem_model_free(&m);
     }
 }
@@ -111,15 +111,15 @@ static void test_compressed_truss_lu(void **state)
     m.settings.factorization = mode;   /* 1: LDL^T copes; 2: LL^T fails, LU takes over */
     nc_error err;
     assert_int_equal(fem_model_finalize(&m, &err), 0);
-    fem_solver s;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-    if (fem_solver_static(&s, 1.0, &err)) fail_msg("%s", err.message);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
     if (mode == 2) assert_true(s.stats.lu_factorizations > 0);
     else assert_true(s.stats.lu_factorizations == 0);
     for (int e = 0; e < 2; e++) assert_true(fabs(s.axial[e] + P) < 1e-9 * P);
     double l = 1.0 + s.cur.u[3] - s.cur.u[0];
     assert_true(fabs((EA * (l * l - 1) / 2 + AS) * l + P) < 1e-9 * P);
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
     }
 }
@@ -139,13 +139,13 @@ static void test_flat_net_singular(void **state)
     m.settings.type = FEM_STATIC;
     assert_int_equal(fem_model_finalize(&m, &err), 0);
     assert_int_equal(m.n_elements, 40);
-    fem_solver s;
-    assert_int_equal(fem_solver_init(&s, &m, &err), 0);
-    assert_int_equal(fem_solver_static(&s, 1.0, &err), -1);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_static(&s, 1.0, &err), -1);
     print_message("expected error: %s\n", err.message);
     assert_non_null(strstr(err.message, "node "));
     assert_non_null(strstr(err.message, "dof z"));
-    fem_solver_free(&s);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 

@@ -1,9 +1,9 @@
-/* nc_log — monotonic clock. */
-#include "nc_log.h"
+/* nc_clock — monotonic clock (see nc_clock.h). */
+#include "nc_clock.h"
 
 #include <time.h>
 
-double nc_now_s(void)
+double nc_clock_now_s(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
