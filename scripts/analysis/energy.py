@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """energy.py RUN_DIR [T0 T1] — energy bookkeeping of a rest_position run, per output sample:
 sphere KE + gravity PE (dem.h5), cable KE (consistent or lumped mass, from fem.h5 monitor
 velocities of nodes 1 and 2, which are all free nodes of this case) + strain energy above the

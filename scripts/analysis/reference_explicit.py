@@ -1,14 +1,16 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """reference_explicit.py [T_END] [DT] [COR] [--mass consistent|lumped] [--tau TAU] [--save FILE.npz] — independent fine-step reference
 for paper case 7.2 (no coupling, no sub-stepping): the 3-element prestressed cable (E 1e9, A 1.26e-4,
 rho 7850, S_pre 1e6, Rayleigh C = tau M, tau 5) and the sphere (R 0.12, rho 3.5e4, E 1e7, nu 0.2, COR)
 integrated together with one explicit central-difference / symplectic-Euler step of DT (default 2e-5 s,
 far below the contact period ~7 ms and the axial period ~12 ms). Hertz normal contact on the segment
-1-2 with the (A.8)-(A.10) damping fit and the tangent-stiffness dashpot, as dem_solver does.
+1-2 with the damping fit of eqs. (A.8)–(A.10) and the tangent-stiffness dashpot, as dem_solver does.
 Prints Point A (node 1) z, sphere z, energies every 0.1 s and the mean of the last 0.5 s.
---save FILE.npz: every step's t, uA (node 1 z), sphere z and vz, contact force on the net (z) for
-comparisons (damped_contact.md: contact loss, time to rest).
---case cable_impact [--swap]: paper 7.1 instead (contact still only on the inner element 1-2)."""
+--save FILE.npz: every step's t, uA (node 1 z), sphere z and vz, contact force on the net (z), for
+contact_intervals.py and the tests (docs/notes/damped_contact.md: contact loss, time to rest).
+--case cable_impact [--swap x]: paper 7.1 instead (cases/cable_impact; contact still only on the
+inner element 1-2); --swap x takes outer E 1e9 / inner 1e5 (the case's reading).
+Options that take a value (--mass, --tau, --save, --case, --swap) must be given one."""
 import sys, math
 import numpy as np
 args = []
@@ -39,7 +41,7 @@ h = [-6.918798, -16.41105, 146.8049, -796.4559, 2928.711, -7206.864, 11494.29, -
 def zeta_fit(e):
     e = min(max(e, 0.001), 1.0)
     if e > 0.999: return 0.0
-    # nested Horner (A.9): e*(h1 + e*(h2 + ... + e*h10))
+    # eq. (A.9), nested Horner form: e*(h1 + e*(h2 + ... + e*h10))
     lam = h[-1]
     for c in reversed(h[:-1]): lam = c + e * lam
     lam *= e

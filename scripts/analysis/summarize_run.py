@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """summarize_run.py RUN_DIR [--every S] — one-look summary of a rest_position-like run.
 
 Prints, per time sample: Point A (monitor node 0) z displacement, sphere z and vz,

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """contact_intervals.py RUN_DIR|REF.npz ... [--until T] — contact intervals (time spans with a
 non-zero contact force on the net) of coupled runs (coupling.h5 /steps/contact_force) or of a
 reference_explicit.py --save file, up to T (default 0.75 s: the first impact of case 7.2).

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """steps_detail.py RUN_DIR T0 T1 — every coupling step between T0 and T1: node 1/2 z displacement
 and velocity (fem.h5 monitor), sphere z, vz, gap of the sphere centre to the edge 1-2 midpoint,
 total DEM force on the net (dem.h5 net_force, z), coupler contact force and iterations."""
