@@ -9,7 +9,7 @@
  *   c_m = (1-alpha_m)/(beta dt^2) + tau (1-alpha_f) gamma/(beta dt),
  *   c_k = (1-alpha_f) (1 + kappa gamma/(beta dt)).
  * The statics is the same with no inertia (c_m = 0, c_k = 1). The kappa term uses the
- * current tangent K_T(u) (eq. 12) and its derivative with respect to u is left out of the
+ * current tangent K_T(u) (eq. (12)) and its derivative with respect to u is left out of the
  * Newton matrix (exact for a linear system; kappa = 0 in all paper cases). F_ext is taken
  * at the end of the step for every method (model loads at the ramp value of t_{n+1};
  * coupling forces are constant over the step anyway).

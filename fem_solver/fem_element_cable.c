@@ -1,5 +1,5 @@
 /* fem_element_cable — internal force, tangent and mass of the cable/truss element
- * (equations (8)-(11) of the paper; see fem_element_cable.h for the block layout). */
+ * (eqs. (8)–(11); see fem_element_cable.h for the block layout). */
 #include "fem_element_cable.h"
 
 #include <math.h>

@@ -1,9 +1,9 @@
-/* fem_element_cable — the 2-node total-Lagrangian cable/truss element (paper eqs. 8-12).
+/* fem_element_cable — the 2-node total-Lagrangian cable/truss element (eqs. (8)–(12), docs/equations.md).
  *
  * Everything is expressed through the current chord d = x_l - x_k: the element force on
- * node l is f_l = (A S_tot / L) d, on node k it is -f_l (eq. 8), and the 6x6 tangent is
- * [Kb -Kb; -Kb Kb] with the 3x3 block Kb = (E A / L^3) d d^T + (A S_tot / L) I (eq. 9).
- * A cable with S_tot < 0 is slack: no force and no stiffness. Mass (eq. 11) is
+ * node l is f_l = (A S_tot / L) d, on node k it is -f_l (eq. (8)), and the 6x6 tangent is
+ * [Kb -Kb; -Kb Kb] with the 3x3 block Kb = (E A / L^3) d d^T + (A S_tot / L) I (eq. (9)).
+ * A cable with S_tot < 0 is slack: no force and no stiffness. Mass (eq. (11)) is
  * [m11 I, m12 I; m12 I, m11 I] with m = rho A L: consistent m11 = m/3, m12 = m/6;
  * lumped m11 = m/2, m12 = 0.
  */

@@ -74,7 +74,7 @@ typedef struct fem_model {
     double gravity[3];           /* m/s^2 */
     double tau_per_s;            /* Rayleigh mass factor (C = tau M + kappa K) */
     double kappa_s;              /* Rayleigh stiffness factor */
-    int lumped_mass;             /* 1 lumped, 0 consistent (eq. 11) */
+    int lumped_mass;             /* 1 lumped, 0 consistent (eq. (11)) */
 
     int n_interface_sets;        /* interface element sets (0 = default: cable sets) */
     int *interface_sets;

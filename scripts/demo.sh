@@ -12,7 +12,7 @@ echo "demo: running cases/rest_position (paper 7.2, strong coupling, dt 3e-2 s, 
   --set coupler.dt=3e-2 --set fem.analysis.dt_s=3e-2 \
   --set coupler.end_time=8 --set fem.analysis.end_time_s=8 \
   --set dem.materials.0.restitution=0.5
-echo "demo: the FEM static solution for the same load (eq. 43) into $out/static"
+echo "demo: the FEM static solution for the same load (eq. (43)) into $out/static"
 "${NC_BIN:-$root/bin}/fem_solver" "$root/cases/rest_position/static.json" --output "$out/static" >"$out/static.log" 2>&1 || {
   echo "demo: static solve failed, see $out/static.log" >&2; exit 1; }
 "$PYTHON" "$root/scripts/plot_results.py" "$out" --node 1 --static "$out/static" >/dev/null

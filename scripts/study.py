@@ -67,7 +67,7 @@ def run_all(case, variants, out_dir, jobs, end_time):
 
 
 def static_solution(case, out_dir):
-    """Point A of the FEM static solve for the particle's weight (eq. 43)."""
+    """Point A of the FEM static solve for the particle's weight (eq. (43))."""
     static_dir = os.path.join(out_dir, "static")
     if not os.path.exists(os.path.join(static_dir, "fem.h5")):
         os.makedirs(static_dir, exist_ok=True)
@@ -109,7 +109,7 @@ def plot_point_a(results, labels, path, title, static=None):
         m = nc_results.load_monitor(run_dir)
         ax.plot(m.time, m.node(POINT_A), label=label, lw=1)
     plot_runs(results, labels, path, title, "Point A vertical displacement [m]", draw,
-              None if static is None else (static, "static (eq. 43)"))
+              None if static is None else (static, "static (eq. (43))"))
 
 
 def plot_iterations(results, labels, path, title):
