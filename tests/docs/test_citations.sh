@@ -44,7 +44,7 @@ scan() {  # scan EXTENDED_REGEX -> FILE:LINE:TEXT
 # ---- 1. forbidden text ----------------------------------------------------------------------
 report "pointer to source material outside the repository (shared/reference)" < <(scan 'shared/reference')
 
-report "temporary path (/tmp/...): use mktemp, \$TMPDIR/\$NC_TMP or a results/ folder" < <(scan '/tmp/' |
+report "temporary path (/tmp/...): use mktemp, \$TMPDIR/\$NC_TMP or a results/ folder" < <(scan '/tmp/[A-Za-z0-9_]' |
   grep -v -E 'mktemp|TMPDIR|XXXXXX|(--out|--output) /tmp/|^[^:]+:[0-9]+:(scripts|bin|/usr/bin)/')
 
 report "report wording about who worked on what" < <(scan 'Helper report|[Tt]he lead([^a-z]|$)')
