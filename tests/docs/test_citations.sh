@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # test_citations — the repository's text follows its documentation rules (CONTRIBUTING.md):
 #  1. no tracked *.md/*.c/*.h/*.py/*.sh file holds a pointer to the source material outside the
-#     repository ("shared/reference"), a temporary path (/tmp/..., except mktemp/TMPDIR lines,
+#     repository ("shared/reference") or to the removed scripts/diagnostics/, a temporary path (/tmp/..., except mktemp/TMPDIR lines,
 #     "--out /tmp/" examples and command lines, filtered as the repository's before-stop check
 #     does, and mkdtemp templates XXXXXX), report wording ("Helper report", "the lead"), a clock
 #     stamp "HH:MM UTC", or an equation citation in a non-canonical form ("eq. 8", "eqs. 8",
@@ -43,6 +43,8 @@ scan() {  # scan EXTENDED_REGEX -> FILE:LINE:TEXT
 
 # ---- 1. forbidden text ----------------------------------------------------------------------
 report "pointer to source material outside the repository (shared/reference)" < <(scan 'shared/reference')
+report "pointer to the removed scripts/diagnostics/ (now docs/notes/ and scripts/analysis/)" < <(
+  scan 'scripts/diagnostics')
 
 report "temporary path (/tmp/...): use mktemp, \$TMPDIR/\$NC_TMP or a results/ folder" < <(scan '/tmp/[A-Za-z0-9_]' |
   grep -v -E 'mktemp|TMPDIR|XXXXXX|(--out|--output) /tmp/|^[^:]+:[0-9]+:(scripts|bin|/usr/bin)/')
