@@ -154,7 +154,7 @@ install: programs
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/netcouple
 	install -m 755 $(PROGRAM_BINS) $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(PROTOCOL_LIB) $(DESTDIR)$(PREFIX)/lib/
-	install -m 644 protocol/proto.h common/nc_error.h $(DESTDIR)$(PREFIX)/include/netcouple/
+	install -m 644 protocol/proto.h protocol/proto_serve.h common/nc_error.h $(DESTDIR)$(PREFIX)/include/netcouple/
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/share/doc/netcouple
 	install -m 644 protocol/README.md $(DESTDIR)$(PREFIX)/share/doc/netcouple/protocol.md
 	printf 'prefix=%s\nlibdir=$${prefix}/lib\nincludedir=$${prefix}/include/netcouple\n\nName: netcouple-protocol\nDescription: netcouple coupling protocol (ZeroMQ + JSON header + binary arrays)\nVersion: 1\nRequires: libzmq libcjson\nCflags: -I$${includedir}\nLibs: -L$${libdir} -lnetcouple_protocol -lm\n' \

@@ -14,6 +14,7 @@
 
 #include "dem_config.h"
 #include "dem_output.h"
+#include "dem_participant.h"
 #include "dem_solver.h"
 #include "nc_file.h"
 #include "nc_clock.h"
@@ -107,176 +108,15 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
     return 0;
 }
 
-/* One command of the coupler; returns 0 to keep serving, 1 after SHUTDOWN. A failed command
- * gets an error reply (*failed is set) and serving continues. */
-typedef struct coupled_state {
-    double *force;          /* 3 per node: last time-averaged nodal force */
-    size_t force_cap;
-    int step_begun;
-    double next_out;
-    int failed;
-} coupled_state;
-
-static int handle(dem_sim *s, dem_output *out, proto_participant *p, const proto_message *cmd,
-                  proto_message *reply, coupled_state *cs, nc_error *err)
-{
-    nc_error cmd_err;
-    nc_error_clear(&cmd_err);
-    proto_message_init(reply, cmd->type);
-    int rc = 0, shutdown = 0;
-    switch (cmd->type) {
-    case PROTO_MSG_INTERFACE: {
-        const int32_t *ids, *elements;
-        const double *coords;
-        size_t n, m;
-        if (proto_message_get_i32(cmd, "node_ids", 0, 0, &ids, &n, &cmd_err) ||
-            proto_message_get_f64(cmd, "coordinates", n, 3, &coords, NULL, &cmd_err) ||
-            proto_message_get_i32(cmd, "elements", 0, 2, &elements, &m, &cmd_err) ||
-            dem_sim_set_interface(s, n, ids, coords, m, elements, &cmd_err)) {
-            rc = -1;
-            break;
-        }
-        if ((size_t)cs->force_cap < 3 * n) {
-            free(cs->force);
-            cs->force = calloc(3 * n, sizeof *cs->force);
-            cs->force_cap = cs->force ? 3 * n : 0;
-            if (!cs->force) {
-                rc = nc_error_set(&cmd_err, 1, "dem: out of memory");
-                break;
-            }
-        }
-        memset(cs->force, 0, 3 * n * sizeof *cs->force);
-        printf("dem_solver: interface with %zu nodes and %zu elements\n", n, m);
-        if (out->n_out == 0) rc = dem_output_write(out, s, cs->force, &cmd_err);
-        break;
-    }
-    case PROTO_MSG_BEGIN_STEP:
-        rc = dem_sim_begin_step(s, &cmd_err);
-        cs->step_begun = rc == 0;
-        break;
-    case PROTO_MSG_SOLVE: {
-        if (!s->net.active) {
-            rc = nc_error_set(&cmd_err, 1, "dem: SOLVE before INTERFACE");
-            break;
-        }
-        size_t n = s->net.n_nodes;
-        const double *disp, *vel;
-        if (proto_message_get_f64(cmd, "displacement", n, 3, &disp, NULL, &cmd_err) ||
-            proto_message_get_f64(cmd, "velocity", n, 3, &vel, NULL, &cmd_err)) {
-            rc = -1;
-            break;
-        }
-        if (cmd->iteration > 1) {
-            if (dem_sim_restore(s, &cmd_err)) { rc = -1; break; }
-        } else if (!cs->step_begun) {
-            if (dem_sim_begin_step(s, &cmd_err)) { rc = -1; break; }
-            cs->step_begun = 1;
-        }
-        dem_coupled_info info;
-        if (dem_sim_solve_coupled(s, cmd->dt_s, disp, vel, cs->force, &info, &cmd_err)) {
-            nc_error_prefix(&cmd_err, "step %ld iteration %d", cmd->step, cmd->iteration);
-            rc = -1;
-            break;
-        }
-        if (proto_message_add_f64(reply, "force", cs->force, n, 3, &cmd_err) ||
-            proto_message_set_value(reply, "near_interface", info.near_interface, &cmd_err) ||
-            proto_message_set_value(reply, "min_gap_m", info.min_gap_m, &cmd_err) ||
-            proto_message_set_value(reply, "contacts", (double)info.contacts, &cmd_err) ||
-            proto_message_set_value(reply, "substeps", (double)info.substeps, &cmd_err))
-            rc = -1;
-        break;
-    }
-    case PROTO_MSG_ACCEPT_STEP:
-        cs->step_begun = 0;
-        if (s->time_s >= cs->next_out - 1e-12) {
-            rc = dem_output_write(out, s, cs->force, &cmd_err);
-            double interval = s->prm.output_interval_s;
-            if (interval > 0.0)
-                while (cs->next_out <= s->time_s + 1e-12) cs->next_out += interval;
-            else cs->next_out = s->time_s;
-        }
-        break;
-    case PROTO_MSG_SHUTDOWN:
-        shutdown = 1;
-        break;
-    default:
-        rc = nc_error_set(&cmd_err, 1, "dem: command '%s' is not supported",
-                          proto_type_name(cmd->type));
-        break;
-    }
-    if (rc) {
-        cs->failed = 1;
-        fprintf(stderr, "dem_solver: %s failed: %s\n", proto_type_name(cmd->type), cmd_err.message);
-        if (proto_participant_reply_error(p, cmd_err.message, err)) return -1;
-        return 0;
-    }
-    if (proto_participant_reply(p, reply, err)) return -1;
-    return shutdown;
-}
-
 static int run_coupled(dem_sim *s, dem_output *out, const options *o,
                        const volatile sig_atomic_t *stop, nc_error *err)
 {
-    if (!(s->net.youngs_modulus_pa > 0.0))
-        return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
-                                    "material: youngs_modulus_pa, poisson_ratio, friction)",
-                            s->source);
-    proto_options popt;
-    proto_options_default(&popt);
-    if (o->idle_timeout_s >= 0.0) popt.idle_timeout_ms = (int)(o->idle_timeout_s * 1000.0);
-    proto_participant *p;
-    if (proto_participant_open(&p, o->endpoint, "dem", "netcouple dem_solver", "restore", &popt, err))
-        return -1;
-    if (o->endpoint_file && nc_file_write_line(o->endpoint_file, proto_participant_endpoint(p), err)) {
-        proto_participant_close(p);
-        return -1;
-    }
-    printf("dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->sph.n, s->prm.dt_s,
-           proto_participant_endpoint(p));
-    fflush(stdout);
-    proto_message cmd, reply;
-    memset(&cmd, 0, sizeof cmd);
-    memset(&reply, 0, sizeof reply);
-    coupled_state cs;
-    memset(&cs, 0, sizeof cs);
-    cs.next_out = s->prm.output_interval_s;
-    int rc = 0;
-    for (;;) {
-        if (*stop) {
-            fprintf(stderr, "dem_solver: interrupted at t = %g s\n", s->time_s);
-            rc = 130;
-            break;
-        }
-        if (proto_participant_receive(p, &cmd, err)) {
-            if (err->code == PROTO_ERR_IDLE) {
-                nc_error_prefix(err, "no command from the coupler (idle timeout)");
-                rc = -1;
-                break;
-            }
-            if (err->code == PROTO_ERR_DECODE || err->code == PROTO_ERR_VERSION) {
-                fprintf(stderr, "dem_solver: bad command: %s\n", err->message);
-                continue; /* an error reply was sent */
-            }
-            if (*stop) continue; /* a signal interrupted the wait */
-            rc = -1;
-            break;
-        }
-        int h = handle(s, out, p, &cmd, &reply, &cs, err);
-        if (h < 0) {
-            rc = -1;
-            break;
-        }
-        if (h == 1) {
-            rc = cs.failed ? 1 : 0;
-            if (cs.failed) nc_error_set(err, 1, "a command failed during the run (see above)");
-            break;
-        }
-    }
-    proto_message_free(&cmd);
-    proto_message_free(&reply);
-    proto_participant_close(p);
-    free(cs.force);
-    return rc;
+    dem_participant_options po = {
+        .endpoint = o->endpoint, .endpoint_file = o->endpoint_file,
+        .idle_timeout_ms = o->idle_timeout_s >= 0.0 ? (int)(o->idle_timeout_s * 1000.0)
+                                                    : PROTO_DEFAULT_IDLE_TIMEOUT_MS,
+        .progress = stdout, .problems = stderr};
+    return dem_participant_run(s, out, &po, stop, err);
 }
 
 int main(int argc, char **argv)

@@ -1,13 +1,15 @@
-/* fem_coupled — the FEM as a netcouple protocol participant ("fem"): answers INTERFACE with
- * its interface mesh, BEGIN_STEP by saving its start-of-step state, SOLVE (force in,
- * displacement + velocity out; restoring the start state first when the step is solved
- * again), ACCEPT_STEP by committing and writing output, SHUTDOWN by closing its files.
- * See fem_run.h and the brief's protocol section. */
+/* fem_coupled — the FEM as the netcouple protocol participant "fem": its handlers of the serve
+ * loop (protocol/proto_serve.h). INTERFACE replies the interface mesh, BEGIN_STEP saves the
+ * start-of-step state (the coupler owns time), a repeated SOLVE restores it (the loop decides
+ * when), SOLVE takes the interface force and replies displacement + velocity, ACCEPT_STEP
+ * writes monitor and output rows when due. A run ended inside a solved but not accepted step
+ * writes the last accepted state. See fem_run.h.
+ */
 #include "fem_run.h"
 #include "fem_output.h"
 #include "nc_file.h"
 #include "nc_clock.h"
-#include "proto.h"
+#include "proto_serve.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,32 +20,54 @@ typedef struct coupled {
     const fem_model *m;
     fem_analysis s;
     fem_output out;
-    proto_participant *p;
-    proto_message cmd, reply;
+    fem_run_summary *sum;
     int32_t *node_ids;
     double *iface_X, *iface_u, *iface_v;
-    int in_step;          /* BEGIN_STEP received, not yet accepted */
-    int solved;           /* a SOLVE ran since BEGIN_STEP (the next one restores first) */
     long written_step;
+    char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
 } coupled;
 
+static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)cmd;
+    coupled *c = ctx;
+    const fem_model *m = c->m;
+    size_t n = (size_t)m->n_iface_nodes, e = (size_t)m->n_iface_elements;
+    if (proto_message_add_i32(reply, "node_ids", c->node_ids, n, 0, err) ||
+        proto_message_add_f64(reply, "coordinates", c->iface_X, n, 3, err) ||
+        proto_message_add_i32(reply, "elements", (const int32_t *)m->iface_conn, e, 2, err))
+        return -1;
+    return 0;
+}
+
+static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
+{
+    coupled *c = ctx;
+    if (isfinite(cmd->time_s)) c->s.cur.time_s = cmd->time_s;   /* the coupler owns time */
+    return fem_analysis_save(&c->s, err);
+}
+
+static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
+{
+    (void)cmd;
+    coupled *c = ctx;
+    return fem_analysis_restore(&c->s, err);
+}
+
 /* Solves the step with the interface force of `cmd`; fills the reply arrays. */
-static int solve(coupled *c, nc_error *err)
+static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
     const fem_model *m = c->m;
     fem_analysis *s = &c->s;
     int n = m->n_iface_nodes;
     const double *force;
-    if (!c->in_step) return nc_error_set(err, 1, "SOLVE before BEGIN_STEP");
-    if (!(c->cmd.dt_s > 0) || !isfinite(c->cmd.dt_s))
-        return nc_error_set(err, 1, "SOLVE: dt_s must be > 0, got %g", c->cmd.dt_s);
-    if (proto_message_get_f64(&c->cmd, "force", (size_t)n, 3, &force, NULL, err)) return -1;
-    if (c->solved && fem_analysis_restore(s, err)) return -1;
-    c->solved = 1;
+    if (!(cmd->dt_s > 0) || !isfinite(cmd->dt_s))
+        return nc_error_set(err, 1, "dt_s must be > 0, got %g", cmd->dt_s);
+    if (proto_message_get_f64(cmd, "force", (size_t)n, 3, &force, NULL, err)) return -1;
     memset(s->f_coupling, 0, (size_t)s->ndof * sizeof(double));
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) s->f_coupling[3 * m->iface_nodes[i] + d] = force[3 * i + d];
-    double dt = c->cmd.dt_s;
+    double dt = cmd->dt_s;
     if (m->settings.type == FEM_STATIC) {
         /* quasi-static coupling: equilibrium under the loads, velocity from the increment */
         double t0 = s->cur.time_s;
@@ -60,62 +84,45 @@ static int solve(coupled *c, nc_error *err)
             c->iface_u[3 * i + d] = s->cur.u[3 * m->iface_nodes[i] + d];
             c->iface_v[3 * i + d] = s->cur.v[3 * m->iface_nodes[i] + d];
         }
-    proto_message_init(&c->reply, PROTO_MSG_SOLVE);
-    if (proto_message_add_f64(&c->reply, "displacement", c->iface_u, (size_t)n, 3, err) ||
-        proto_message_add_f64(&c->reply, "velocity", c->iface_v, (size_t)n, 3, err) ||
-        proto_message_set_value(&c->reply, "newton_iterations", s->stats.iterations, err) ||
-        proto_message_set_value(&c->reply, "residual_norm", s->stats.residual_norm, err))
+    if (proto_message_add_f64(reply, "displacement", c->iface_u, (size_t)n, 3, err) ||
+        proto_message_add_f64(reply, "velocity", c->iface_v, (size_t)n, 3, err) ||
+        proto_message_set_value(reply, "newton_iterations", s->stats.iterations, err) ||
+        proto_message_set_value(reply, "residual_norm", s->stats.residual_norm, err))
         return -1;
     return 0;
 }
 
-static int handle(coupled *c, int *done, fem_run_summary *sum, nc_error *err)
+static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
-    const fem_model *m = c->m;
+    coupled *c = ctx;
+    if (solve(c, cmd, reply, err)) {
+        c->sum->failed_solves++;
+        return -1;
+    }
+    c->sum->newton_iterations += c->s.stats.iterations;
+    return 0;
+}
+
+static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)cmd;
+    (void)reply;
+    coupled *c = ctx;
     fem_analysis *s = &c->s;
-    proto_message_init(&c->reply, c->cmd.type);
-    switch (c->cmd.type) {
-    case PROTO_MSG_INTERFACE: {
-        size_t n = (size_t)m->n_iface_nodes, e = (size_t)m->n_iface_elements;
-        if (proto_message_add_i32(&c->reply, "node_ids", c->node_ids, n, 0, err) ||
-            proto_message_add_f64(&c->reply, "coordinates", c->iface_X, n, 3, err) ||
-            proto_message_add_i32(&c->reply, "elements", (const int32_t *)m->iface_conn, e, 2, err))
-            return -1;
-        return 0;
+    c->sum->steps++;
+    if (fem_output_monitor(&c->out, s, s->cur.time_s, err)) return -1;
+    if (s->cur.step % c->m->settings.output_interval == 0) {
+        fem_analysis_update_axial(s);
+        if (fem_output_step(&c->out, s, s->cur.time_s, err)) return -1;
+        c->written_step = s->cur.step;
     }
-    case PROTO_MSG_BEGIN_STEP:
-        /* a step begun again without ACCEPT_STEP starts from the last accepted state */
-        if (c->in_step && c->solved && fem_analysis_restore(s, err)) return -1;
-        if (isfinite(c->cmd.time_s)) s->cur.time_s = c->cmd.time_s;  /* the coupler owns time */
-        if (fem_analysis_save(s, err)) return -1;
-        c->in_step = 1;
-        c->solved = 0;
-        return 0;
-    case PROTO_MSG_SOLVE:
-        if (solve(c, err)) {
-            sum->failed_solves++;
-            return -1;
-        }
-        sum->newton_iterations += s->stats.iterations;
-        return 0;
-    case PROTO_MSG_ACCEPT_STEP:
-        if (!c->in_step || !c->solved) return nc_error_set(err, 1, "ACCEPT_STEP without a solved step");
-        c->in_step = 0;
-        c->solved = 0;
-        sum->steps++;
-        if (fem_output_monitor(&c->out, s, s->cur.time_s, err)) return -1;
-        if (s->cur.step % m->settings.output_interval == 0) {
-            fem_analysis_update_axial(s);
-            if (fem_output_step(&c->out, s, s->cur.time_s, err)) return -1;
-            c->written_step = s->cur.step;
-        }
-        return 0;
-    case PROTO_MSG_SHUTDOWN:
-        *done = 1;
-        return 0;
-    default:
-        return nc_error_set(err, 1, "the FEM solver does not handle %s commands", proto_type_name(c->cmd.type));
-    }
+    return 0;
+}
+
+static void on_report(void *ctx, const char *message)
+{
+    coupled *c = ctx;
+    if (!c->first_failure[0]) snprintf(c->first_failure, sizeof c->first_failure, "%s", message);
 }
 
 int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_coupled_options *opt,
@@ -128,7 +135,11 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     coupled *c = calloc(1, sizeof *c);
     if (!c) return nc_error_set(err, 1, "out of memory");
     c->m = m;
+    c->sum = &sum;
     c->written_step = -1;
+    proto_participant *p = NULL;
+    proto_serve_summary served;
+    memset(&served, 0, sizeof served);
     int rc = -1;
     size_t n = (size_t)m->n_iface_nodes;
     c->node_ids = malloc((n + 1) * sizeof *c->node_ids);
@@ -151,38 +162,25 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     proto_options po;
     proto_options_default(&po);
     po.idle_timeout_ms = opt->idle_timeout_ms;
-    if (proto_participant_open(&c->p, opt->endpoint, "fem", "netcouple fem_solver", "restore", &po, err))
+    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore", &po, err))
         goto done;
-    if (opt->endpoint_file &&
-        nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(c->p), err))
+    if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err))
         goto done;
-    int finished = 0;
-    while (!finished) {
-        if (stop && *stop) { rc = 1; goto done; }
-        nc_error e;
-        nc_error_clear(&e);
-        if (proto_participant_receive(c->p, &c->cmd, &e)) {
-            if (stop && *stop) { rc = 1; goto done; }
-            if (e.code == PROTO_ERR_IDLE || e.code == PROTO_ERR_TRANSPORT) {
-                *err = e;
-                goto done;
-            }
-            continue;   /* malformed command: already answered with an error */
-        }
-        if (handle(c, &finished, &sum, &e)) {
-            nc_error e2;
-            if (proto_participant_reply_error(c->p, e.message, &e2)) { *err = e2; goto done; }
-            continue;
-        }
-        if (proto_participant_reply(c->p, &c->reply, &e)) { *err = e; goto done; }
+    const proto_serve_handlers handlers = {
+        .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
+        .solve = on_solve, .accept_step = on_accept, .report = on_report};
+    rc = proto_serve(p, &handlers, c, stop, &served, err);
+    if (rc == 0 && served.failed + served.rejected > 0) {
+        /* the coupler was told each time, but the run had errors: not a clean exit */
+        nc_error_set(err, 3, "%ld command(s) answered with an error during the run; the first: %s",
+                     served.failed + served.rejected, c->first_failure);
+        rc = -1;
     }
-    rc = sum.failed_solves ? -1 : 0;
-    if (rc) nc_error_set(err, 3, "%d SOLVE command(s) failed during the run", sum.failed_solves);
 done:
-    if (c->out.open && c->s.m) {
-        /* a step begun but not accepted is not a result: write the last accepted state */
+    /* a step begun and solved but not accepted is not a result: write the last accepted state */
+    if (c->out.open && c->s.m && served.step_solved) {
         nc_error ignored;
-        if (c->in_step && c->solved) fem_analysis_restore(&c->s, &ignored);
+        fem_analysis_restore(&c->s, &ignored);
     }
     if (c->out.open && c->written_step != c->s.cur.step && c->s.m) {
         nc_error ignored;
@@ -197,9 +195,7 @@ done:
             sum.max_displacement_m = fmax(sum.max_displacement_m, sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
         }
     sum.stats = c->s.stats;
-    if (c->p) proto_participant_close(c->p);
-    proto_message_free(&c->cmd);
-    proto_message_free(&c->reply);
+    if (p) proto_participant_close(p);
     fem_output_close(&c->out);
     fem_analysis_free(&c->s);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);

@@ -131,6 +131,11 @@ static void test_coupled_drop_on_two_edges(void **state)
     assert_true(near == 1.0 && contacts == 1.0 && substeps == 50.0);
 
     /* a SOLVE with a wrong shape gets an error reply; the solver keeps serving */
+    proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
+    req.step = 800;
+    req.time_s = 800 * dt;
+    req.dt_s = dt;
+    assert_int_equal(proto_peer_request(peer, &req, &rep, &err), 0);
     proto_message_init(&req, PROTO_MSG_SOLVE);
     req.step = 800;
     req.iteration = 1;

@@ -8,7 +8,7 @@ prefix="$NC_TMP/prefix"
 env -u MAKEFLAGS -u MAKELEVEL -u SANITIZE make -s -C "$NC_ROOT" install PREFIX="$prefix" >"$NC_TMP/install.log" 2>&1 || {
   cat "$NC_TMP/install.log"; exit 1; }
 for f in bin/fem_solver bin/dem_solver bin/coupler lib/libnetcouple_protocol.a \
-         include/netcouple/proto.h include/netcouple/nc_error.h \
+         include/netcouple/proto.h include/netcouple/proto_serve.h include/netcouple/nc_error.h \
          lib/pkgconfig/netcouple-protocol.pc share/doc/netcouple/protocol.md; do
   [ -e "$prefix/$f" ] || { echo "missing after install: $f"; exit 1; }
 done

@@ -1,0 +1,147 @@
+/* dem_participant — the DEM's serve-loop handlers (dem_participant.h). */
+#include "dem_participant.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "nc_file.h"
+#include "proto_serve.h"
+
+typedef struct participant {
+    dem_sim *s;
+    dem_output *out;
+    const dem_participant_options *opt;
+    double *force;          /* 3 per node: last time-averaged nodal force */
+    size_t force_cap;
+    double next_out_s;      /* next output time */
+} participant;
+
+static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    participant *c = ctx;
+    const int32_t *ids, *elements;
+    const double *coords;
+    size_t n, m;
+    if (proto_message_get_i32(cmd, "node_ids", 0, 0, &ids, &n, err) ||
+        proto_message_get_f64(cmd, "coordinates", n, 3, &coords, NULL, err) ||
+        proto_message_get_i32(cmd, "elements", 0, 2, &elements, &m, err) ||
+        dem_sim_set_interface(c->s, n, ids, coords, m, elements, err))
+        return -1;
+    if (c->force_cap < 3 * n) {
+        free(c->force);
+        c->force = calloc(3 * n, sizeof *c->force);
+        c->force_cap = c->force ? 3 * n : 0;
+        if (!c->force) return nc_error_set(err, 1, "dem: out of memory");
+    }
+    memset(c->force, 0, 3 * n * sizeof *c->force);
+    if (c->opt->progress)
+        fprintf(c->opt->progress, "dem_solver: interface with %zu nodes and %zu elements\n", n, m);
+    if (c->out->n_out == 0) return dem_output_write(c->out, c->s, c->force, err);
+    return 0;
+}
+
+static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
+{
+    (void)cmd;
+    participant *c = ctx;
+    return dem_sim_begin_step(c->s, err);
+}
+
+static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
+{
+    (void)cmd;
+    participant *c = ctx;
+    return dem_sim_restore(c->s, err);
+}
+
+static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    participant *c = ctx;
+    dem_sim *s = c->s;
+    if (!s->net.active) return nc_error_set(err, 1, "dem: SOLVE before INTERFACE");
+    size_t n = s->net.n_nodes;
+    const double *disp, *vel;
+    if (proto_message_get_f64(cmd, "displacement", n, 3, &disp, NULL, err) ||
+        proto_message_get_f64(cmd, "velocity", n, 3, &vel, NULL, err))
+        return -1;
+    dem_coupled_info info;
+    if (dem_sim_solve_coupled(s, cmd->dt_s, disp, vel, c->force, &info, err)) return -1;
+    if (proto_message_add_f64(reply, "force", c->force, n, 3, err) ||
+        proto_message_set_value(reply, "near_interface", info.near_interface, err) ||
+        proto_message_set_value(reply, "min_gap_m", info.min_gap_m, err) ||
+        proto_message_set_value(reply, "contacts", (double)info.contacts, err) ||
+        proto_message_set_value(reply, "substeps", (double)info.substeps, err))
+        return -1;
+    return 0;
+}
+
+static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)cmd;
+    (void)reply;
+    participant *c = ctx;
+    dem_sim *s = c->s;
+    if (s->time_s < c->next_out_s - 1e-12) return 0;
+    int rc = dem_output_write(c->out, s, c->force, err);
+    double interval = s->prm.output_interval_s;
+    if (interval > 0.0)
+        while (c->next_out_s <= s->time_s + 1e-12) c->next_out_s += interval;
+    else c->next_out_s = s->time_s;
+    return rc;
+}
+
+static void on_report(void *ctx, const char *message)
+{
+    participant *c = ctx;
+    if (c->opt->problems) fprintf(c->opt->problems, "dem_solver: %s\n", message);
+}
+
+int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
+                        const volatile sig_atomic_t *stop, nc_error *err)
+{
+    if (!(s->net.youngs_modulus_pa > 0.0))
+        return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
+                                    "material: youngs_modulus_pa, poisson_ratio, friction)",
+                            s->source);
+    proto_options popt;
+    proto_options_default(&popt);
+    popt.idle_timeout_ms = opt->idle_timeout_ms;
+    proto_participant *p;
+    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore", &popt, err))
+        return -1;
+    if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err)) {
+        proto_participant_close(p);
+        return -1;
+    }
+    if (opt->progress) {
+        fprintf(opt->progress, "dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->sph.n,
+                s->prm.dt_s, proto_participant_endpoint(p));
+        fflush(opt->progress);
+    }
+    participant c = {.s = s, .out = out, .opt = opt, .next_out_s = s->prm.output_interval_s};
+    const proto_serve_handlers handlers = {
+        .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
+        .solve = on_solve, .accept_step = on_accept, .report = on_report};
+    proto_serve_summary sum;
+    int served = proto_serve(p, &handlers, &c, stop, &sum, err);
+    int rc;
+    if (served == 1) {
+        if (opt->problems) fprintf(opt->problems, "dem_solver: interrupted at t = %g s\n", s->time_s);
+        rc = 130;
+    } else if (served < 0) {
+        if (err && err->code == PROTO_ERR_IDLE)
+            nc_error_prefix(err, "no command from the coupler (idle timeout)");
+        rc = -1;
+    } else if (sum.failed + sum.rejected > 0) {
+        /* the coupler was told, but the run had errors: not a clean exit */
+        nc_error_set(err, 1, "%ld command(s) answered with an error during the run (see above)",
+                     sum.failed + sum.rejected);
+        rc = 1;
+    } else {
+        rc = 0;
+    }
+    proto_participant_close(p);
+    free(c.force);
+    return rc;
+}

@@ -1,0 +1,31 @@
+/* dem_participant — the DEM as the netcouple protocol participant "dem": its handlers of the
+ * serve loop (protocol/proto_serve.h). INTERFACE builds the net wall, BEGIN_STEP saves the
+ * complete state (dem_sim_begin_step), a repeated SOLVE restores it (dem_sim_restore; the
+ * loop decides when), SOLVE sub-steps the coupling step and replies the time-averaged nodal
+ * forces, ACCEPT_STEP writes output when due. The step order and the restore rule are the
+ * serve loop's, shared with every other participant.
+ */
+#ifndef DEM_PARTICIPANT_H
+#define DEM_PARTICIPANT_H
+
+#include <signal.h>
+#include <stdio.h>
+#include "dem_output.h"
+#include "dem_solver.h"
+
+typedef struct dem_participant_options {
+    const char *endpoint;       /* e.g. tcp://127.0.0.1:* */
+    const char *endpoint_file;  /* NULL, or a file to write the bound endpoint into */
+    int idle_timeout_ms;        /* <= 0 waits forever */
+    FILE *progress;             /* NULL or where progress lines go (the program: stdout) */
+    FILE *problems;             /* NULL or where failed commands are logged (stderr) */
+} dem_participant_options;
+
+/* Serves the coupler with the prepared simulation s, writing results through out.
+ * Returns 0 after SHUTDOWN with every command answered, 1 after SHUTDOWN when a command was
+ * answered with an error (err says how many), 130 when *stop was set, -1 on an error (idle
+ * timeout, transport failure, missing net wall material; err). */
+int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
+                        const volatile sig_atomic_t *stop, nc_error *err);
+
+#endif
