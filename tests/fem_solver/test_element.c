@@ -62,7 +62,7 @@ static void test_axial_bar(void **state)
     }
 }
 
-/* Consistent tangent (eq. 9) against central differences of the internal force (eq. 8)
+/* Consistent tangent (eq. (9)) against central differences of the internal force (eq. (8))
  * for taut cables and a compressed truss at random chords: relative error < 1e-6
  * (central differences with h = 1e-6 L are accurate to ~1e-10 here). */
 static void test_tangent_fd(void **state)
@@ -147,7 +147,7 @@ static void test_slack(void **state)
     fem_model_free(&m);
 }
 
-/* Mass (eq. 11): consistent and lumped both carry the element mass rho A L per direction:
+/* Mass (eq. (11)): consistent and lumped both carry the element mass rho A L per direction:
  * sum of the 2x2 coefficients = rho A L. */
 static void test_mass(void **state)
 {

@@ -18,7 +18,7 @@
 /* Closed form of the symmetric 3-element cable (nodes at x = 0, 1, 2, 3, L = 1 each, ends
  * fixed, load P downwards at nodes 1 and 2). By symmetry node 1 sits at (1 + a, 0, -w),
  * node 2 at (2 - a, 0, -w): the inner element stays horizontal, the outer ones rotate.
- * With A S(l) = E A (l^2 - 1)/2 + A S_pre (eq. 10, L = 1) node 1 balances
+ * With A S(l) = E A (l^2 - 1)/2 + A S_pre (eq. (10), L = 1) node 1 balances
  *   x: -A S_o (1 + a) + A S_i (1 - 2a) = 0,   z: A S_o w - P = 0,
  * l_o = sqrt((1+a)^2 + w^2), l_i = 1 - 2a. For a given w the x equation is monotone in a
  * (bisection), and then the z equation is monotone in w (outer bisection). */
