@@ -6,8 +6,8 @@ layout users rely on (/mesh, /output series, /monitor/time, /monitor/node_ids,
 /monitor/displacement), the static answer of the paper's 7.2 cable (w = 0.303837 m from the
 closed form in test_static.c, tolerance 1e-6 m), the XDMF file (tests/xdmf_check.py: it
 describes fem.h5 exactly, one grid per output time; and the check fails on corrupted copies),
-bad inputs (clear message naming the file, exit 1), usage errors
-(exit 2), and SIGTERM (clean stop: exit 130, results readable).
+bad inputs (clear message naming the file, exit 1), usage errors (exit 2), and SIGTERM (clean
+stop: exit 130, results readable).
 """
 import json
 import os
