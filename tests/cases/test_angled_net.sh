@@ -9,7 +9,7 @@
 #    Table 2's EA = 8.8 N the net only deflects the 97 kg rock, which leaves it past the lower
 #    fixed edge at about 0.45 s (an angled net guides rocks rather than stopping them);
 #  - the centre node (monitor 0) reaches -0.6 m +- 0.15 m (paper fig. 20a: about -0.6 m);
-#  - strong 2e-4 matches weak coupling ("within a few percent of weak 1e-4", issue 6): max
+#  - strong 2e-4 matches weak coupling ("within a few percent of weak 1e-4"): max
 #    |u_z difference| over 0-0.2 s < 6 % of the peak against weak 1e-4 (measured 4.0 %) and
 #    < 2 % against weak 5e-5 (measured 0.5 %): most of the first difference is weak 1e-4's own
 #    first-order lag, which halving the step removes (weak 1e-4 vs 5e-5: measured 4.1 %);

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Paper 7.1 (issue 6), cases/cable_impact: "weak coupling works at a small step; at 1e-2 s the
+# Paper 7.1, cases/cable_impact: "weak coupling works at a small step; at 1e-2 s the
 # weak scheme jumps (contact lost and regained), the strong scheme keeps contact". Runs shortened
 # to 1.2 s (first impact and the main contact 0.25-0.92 s), compared with the independent
-# fine-step reference scripts/diagnostics/reference_explicit.py (--case cable_impact --swap: the
+# fine-step reference scripts/analysis/reference_explicit.py (--case cable_impact --swap: the
 # case's moduli, no coupling, dt 2e-5 s). W = the reference's longest contact window (measured
 # [0.509, 0.918] s), computed here, not hard-coded.
 #  - weak 2e-4 works: contact-free time in W < 2 % of W (measured 0.3 %), same number of contact
@@ -20,7 +20,7 @@ case_dir=cases/cable_impact
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
 T=1.2
 
-"$PY" scripts/diagnostics/reference_explicit.py $T 2e-5 1.0 --case cable_impact --swap x \
+"$PY" scripts/analysis/reference_explicit.py $T 2e-5 1.0 --case cable_impact --swap x \
   --save "$NC_TMP/ref.npz" > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
 run() {   # name scheme dt

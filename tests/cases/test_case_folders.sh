@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
-# Issue 6, deliverable 1: every case under cases/ is a folder with fem.json, dem.json,
-# coupler.json and a README.md, and every file those inputs name (meshes, STL terrain) is in
-# the folder. Checked statically: the JSON must parse, and each string value ending in
-# .msh/.stl/.json is a file next to it.
+# Every case under cases/ is a folder with fem.json, dem.json, coupler.json and a README.md,
+# and every file those inputs name (meshes, STL terrain) is in the folder. Checked statically:
+# the JSON must parse, and each string value ending in .msh/.stl/.json is a file next to it.
 set -u
 PY=${PYTHON:-/usr/bin/python3}
 "$PY" - <<'PY'

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Paper 7.1/7.2 claim (issue 6): "at dt = 1e-2 s weak coupling loses contact after the first
+# Paper 7.1/7.2 claim: "at dt = 1e-2 s weak coupling loses contact after the first
 # impact (the contact force drops to zero and returns) while strong keeps it; weak at 1e-3
 # does not lose it". cases/rest_position, COR 1 (the case's value), runs shortened to 0.8 s
 # (the first impact lasts 0.25-0.7 s), compared with the independent fine-step reference
-# scripts/diagnostics/reference_explicit.py (no coupling, dt 2e-5 s, about 2 s of CPU).
+# scripts/analysis/reference_explicit.py (no coupling, dt 2e-5 s, about 2 s of CPU).
 #
 # What "keeps contact" means here. With COR 1 the undamped sphere chatters PHYSICALLY at the
 # start and end of the impact: the reference has 11 contact windows before 0.75 s, the main
@@ -25,13 +25,13 @@
 # Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
 # (a factor >= 2 away from each measurement).
 # All of this is for COR 1 (the case's value). With a damped contact (COR <= 0.5) weak coupling
-# is unstable even at 1e-3 s (damped_contact.md), as the paper reports for small COR (7.4).
+# is unstable even at 1e-3 s (docs/notes/damped_contact.md), as the paper reports for small COR (7.4).
 . tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
 T=0.8
 
-"$PY" scripts/diagnostics/reference_explicit.py $T 2e-5 1.0 --save "$NC_TMP/ref.npz" \
+"$PY" scripts/analysis/reference_explicit.py $T 2e-5 1.0 --save "$NC_TMP/ref.npz" \
   > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
 run() {   # name scheme dt
@@ -48,7 +48,7 @@ import numpy as np
 sys.path.insert(0, "scripts")
 import nc_results as R
 tmp = sys.argv[1]
-UNTIL = 0.75    # end of the first impact window (damped_contact.md)
+UNTIL = 0.75    # end of the first impact window (docs/notes/damped_contact.md)
 ref = R.reference_contact(tmp + "/ref.npz", UNTIL)
 ref_iv, W, L, ref_fmax, ref_peak = ref["intervals"], ref["main"], ref["length"], ref["fmax"], ref["peak"]
 print("reference: %d contact windows before %.2f s, main window W = [%.3f, %.3f] s, max |F| %.0f N, "

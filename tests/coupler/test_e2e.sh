@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # End to end: the three real programs (fem_solver, dem_solver, coupler) on localhost on a small
 # case (tests/coupler/cases/small_net: 7 x 7 cable net, one rock), started by run_case.sh.
-# Checks: all exit 0; every strong step converged; the result files exist; and an independent
+# Checks: all exit 0; every strong step converged; the result files exist and their XDMF files
+# describe the HDF5 output exactly (tests/xdmf_check.py); and an independent
 # balance: the rock's momentum change from dem.h5 equals the impulse of gravity minus the
 # impulse of the forces the coupler recorded on the net (m Δv = -Σ F_z Δt + m g T), to 1e-6
 # of m g T (the DEM's reply is the exact time average of its contact force).
@@ -11,6 +12,9 @@ check() {   # dir scheme [rock density]
   for f in coupling.h5 iterations.log fem.h5 dem.h5 fem.xdmf dem.xdmf fem.log dem.log coupler.log; do
     [ -s "$1/$f" ] || fail "$1/$f missing"
   done
+  # both XDMF files describe their HDF5 output exactly (tests/xdmf_check.py)
+  "$PY" tests/xdmf_check.py "$1/fem.xdmf" /output/time || fail "$1/fem.xdmf"
+  "$PY" tests/xdmf_check.py "$1/dem.xdmf" /time || fail "$1/dem.xdmf"
   "$PY" - "$1" "$2" "${3:-2500}" <<'PY' || exit 1
 import sys, math, h5py, numpy as np
 d, scheme, density = sys.argv[1], sys.argv[2], float(sys.argv[3])
@@ -41,6 +45,9 @@ run() {   # name, --set arguments
 
 run strong_aitken
 check "$NC_TMP/strong_aitken" strong
+# the XDMF check fails on broken copies of a coupled dem.xdmf (particles and net collections)
+"$PY" tests/xdmf_check.py --self-test "$NC_TMP/strong_aitken" dem.xdmf /time "$NC_TMP" \
+  || fail "xdmf_check self-test"
 run strong_iqn --set coupler.relaxation.method=iqn-ils --set coupler.relaxed_quantity=force
 check "$NC_TMP/strong_iqn" strong
 # weak coupling is unstable for the 18 kg rock on this light net at this step (the paper's

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fault behaviour of the coupler (issue 5, "Faults"), with the Python participants:
+# Fault behaviour of the coupler, with the Python participants:
 #  1. the DEM is killed with SIGKILL mid-run -> coupler exits non-zero naming dem, the step
 #     and the iteration; the FEM is told to shut down and exits 0; coupling.h5 stays readable.
 #  2. the FEM replies an error (Newton-failure stand-in) -> message with its reason, step and

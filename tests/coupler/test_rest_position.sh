@@ -1,22 +1,22 @@
 #!/usr/bin/env bash
 # End to end on the paper's case 7.2 (cases/rest_position, real fem_solver + dem_solver +
 # coupler, strong coupling) with a DAMPED contact (COR < 1), the regime that used to create
-# energy (scripts/diagnostics/damped_contact.md). Checks:
+# energy (docs/notes/damped_contact.md). Checks:
 #  - static.json loads the cable with the sphere's weight from dem.json (4/3 pi R^3 rho g,
 #    1e-5 relative), so the static reference is the one of eq. (43) for this sphere;
 #  - Δt 3e-2, COR 0.1 and 0.5, 8 s: Point A comes to rest within 1 % of the FEM's own static
-#    solution for the sphere's weight (static.json, eq. 43); the peak deflection exceeds the
+#    solution for the sphere's weight (static.json, eq. (43)); the peak deflection exceeds the
 #    rest value by > 50 % (the transient overshoots: measured 0.497 and 0.509 vs 0.304 m); the
 #    rest position does not depend on the COR (the two agree to 0.1 %); the sphere's mechanical
 #    energy never rises above its start value by more than 1 J (no energy created at the
 #    interface; without the Aitken restart safeguard COR 0.1 throws the sphere up with 27 kJ).
 #    Why 3e-2 and not the case's 1e-2: at 1e-2 the bounce is damped too little to be at rest
-#    within a test-length run (damped_contact.md: not within 1 % in 20 s for COR > 0.1). Part
+#    within a test-length run (docs/notes/damped_contact.md: not within 1 % in 20 s for COR > 0.1). Part
 #    of the damping at 3e-2 is Bossak's numerical damping of the 1 Hz sphere-on-cable mode
-#    (centred_coupling.md); the fine-step reference is still bouncing at 2 s. The check is of
+#    (docs/notes/centred_coupling.md); the fine-step reference is still bouncing at 2 s. The check is of
 #    the rest POSITION, which no damping may change;
 #  - Δt 1e-2 (the case's step), COR 0.5, 1.5 s: peak u_A within 5 % of the independent
-#    fine-step reference computed here (scripts/diagnostics/reference_explicit.py 1.5 2e-5 0.5:
+#    fine-step reference computed here (scripts/analysis/reference_explicit.py 1.5 2e-5 0.5:
 #    -0.5471 m; the scheme gives -0.5344) and no energy created (with coupling_force
 #    end_of_step the net is thrown off the sphere and the sphere falls through).
 . tests/e2e_lib.sh
@@ -36,7 +36,7 @@ long cor01 0.1
 long cor05 0.5
 run short --set dem.materials.0.restitution=0.5 --set coupler.end_time=1.5 \
           --set fem.analysis.end_time_s=1.5
-"$PY" scripts/diagnostics/reference_explicit.py 1.5 2e-5 0.5 --save "$NC_TMP/ref.npz" \
+"$PY" scripts/analysis/reference_explicit.py 1.5 2e-5 0.5 --save "$NC_TMP/ref.npz" \
   > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1

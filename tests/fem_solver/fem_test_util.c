@@ -1,4 +1,4 @@
-/* fem_test_util — helpers linked into every fem_solver test (see fem_test_util.h). */
+/* fem_test_util — linked into every fem_solver test (see fem_test_util.h). */
 #include "fem_test_util.h"
 
 #include <stdio.h>

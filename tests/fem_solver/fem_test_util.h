@@ -1,4 +1,4 @@
-/* fem_test_util — shared helpers of the fem_solver tests: small models built in code and
+/* fem_test_util — code shared by the fem_solver tests: small models built in code and
  * scratch files. */
 #ifndef FEM_TEST_UTIL_H
 #define FEM_TEST_UTIL_H

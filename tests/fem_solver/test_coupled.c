@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <hdf5.h>
 #include <math.h>
@@ -146,7 +147,7 @@ static void test_protocol_session(void **state)
     assert_int_equal(n, 4);
     for (int i = 0; i < 4; i++) assert_int_equal(ids[i], i);
     assert_int_equal(proto_message_get_f64(&rep, "coordinates", 4, 3, &X, NULL, &err), 0);
-    assert_true(X[3 * 3] == 3.0);
+    assert_near(X[3 * 3], 3.0, 0.0);
     assert_int_equal(proto_message_get_i32(&rep, "elements", 0, 2, &elems, &m, &err), 0);
     assert_int_equal(m, 3);
     assert_int_equal(elems[2], 1);
@@ -202,7 +203,7 @@ static void test_protocol_session(void **state)
         req.step = k;
         if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
     }
-    assert_true(u1[3 * 1 + 2] < -1e-4);   /* the loaded cable moved down */
+    assert_below(u1[3 * 1 + 2], -1e-4);   /* the loaded cable moved down */
 
     /* a SOLVE with a wrong force shape: error reply, the solver keeps serving */
     proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
@@ -279,7 +280,7 @@ static void test_newton_failure(void **state)
             if (rc) fail_msg("%s", err.message);
             const double *u;
             assert_int_equal(proto_message_get_f64(&rep, "displacement", 4, 3, &u, NULL, &err), 0);
-            for (int i = 0; i < 12; i++) assert_true(u[i] == 0.0);
+            for (int i = 0; i < 12; i++) assert_near(u[i], 0.0, 0.0);
         }
     }
     proto_message_init(&req, PROTO_MSG_SHUTDOWN);

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <string.h>
@@ -49,19 +50,19 @@ static void test_axial_bar(void **state)
         double u = s.cur.u[3];
         if (!pass) {
             /* strain 5e-7: the nonlinear terms are ~1e-6 relative; tolerance 1e-5 */
-            assert_true(fabs(u - P * L / (E * A)) < 1e-5 * P * L / (E * A));
+            assert_near_rel(u, P * L / (E * A), 1e-5);
         } else {
             double l = L + u;
             double P_exact = E * A * (l * l - L * L) / (2 * L * L) * l / L;
-            assert_true(fabs(P_exact - P) < 1e-10 * P);
-            assert_true(fabs(s.axial[0] - P) < 1e-8 * P);
+            assert_near_rel(P_exact, P, 1e-10);
+            assert_near_rel(s.axial[0], P, 1e-8);
         }
         fem_analysis_free(&s);
         fem_model_free(&m);
     }
 }
 
-/* Consistent tangent (eq. 9) against central differences of the internal force (eq. 8)
+/* Consistent tangent (eq. (9)) against central differences of the internal force (eq. (8))
  * for taut cables and a compressed truss at random chords: relative error < 1e-6
  * (central differences with h = 1e-6 L are accurate to ~1e-10 here). */
 static void test_tangent_fd(void **state)
@@ -102,7 +103,7 @@ static void test_tangent_fd(void **state)
                 kmax = fmax(kmax, fabs(K[6 * a + b]));
             }
         }
-        assert_true(errmax < 1e-6 * kmax);
+        assert_below(errmax, 1e-6 * kmax);
     }
 }
 
@@ -115,18 +116,20 @@ static void test_slack(void **state)
     int slack = 0;
     double N = fem_cable_response(d, 1.0, 1e5, 10.0, 1, f, Kb, &slack);
     assert_int_equal(slack, 1);
-    assert_true(N == 0.0 && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0);
-    for (int i = 0; i < 9; i++) assert_true(Kb[i] == 0.0);
+    assert_near(N, 0.0, 0.0);
+    for (int i = 0; i < 3; i++) assert_near(f[i], 0.0, 0.0);
+    for (int i = 0; i < 9; i++) assert_near(Kb[i], 0.0, 0.0);
     N = fem_cable_response(d, 1.0, 1e5, 10.0, 0, f, Kb, &slack);
     assert_int_equal(slack, 0);
     double expected = (1e5 * (0.81 - 1.0) / 2.0 + 10.0) * 0.9;   /* A S_tot l / L */
-    assert_true(fabs(N - expected) < 1e-9 * fabs(expected));
-    assert_true(N < 0 && f[0] < 0);
+    assert_near_rel(N, expected, 1e-9);
+    assert_below(N, 0.0);
+    assert_below(f[0], 0.0);
     /* prestress alone keeps a cable taut down to E = -S_pre/E_mod: at l = L it is taut */
     d[0] = 1.0;
     N = fem_cable_response(d, 1.0, 1e5, 10.0, 1, f, Kb, &slack);
     assert_int_equal(slack, 0);
-    assert_true(fabs(N - 10.0) < 1e-12);
+    assert_near(N, 10.0, 1e-12);
 
     /* in a model: a 2-element cable whose elements are slack (negative prestress) leaves
      * the middle node unheld; the static solve must fail naming node 1 */
@@ -144,17 +147,18 @@ static void test_slack(void **state)
     fem_model_free(&m);
 }
 
-/* Mass (eq. 11): consistent and lumped both carry the element mass rho A L per direction:
+/* Mass (eq. (11)): consistent and lumped both carry the element mass rho A L per direction:
  * sum of the 2x2 coefficients = rho A L. */
 static void test_mass(void **state)
 {
     (void)state;
     double m11, m12;
     fem_cable_mass(7850 * 1e-4, 2.0, 0, &m11, &m12);
-    assert_true(fabs(2 * m11 + 2 * m12 - 7850 * 1e-4 * 2.0) < 1e-12);
-    assert_true(fabs(m11 - 2 * m12) < 1e-15);
+    assert_near(2 * m11 + 2 * m12, 7850 * 1e-4 * 2.0, 1e-12);
+    assert_near(m11, 2 * m12, 1e-15);
     fem_cable_mass(7850 * 1e-4, 2.0, 1, &m11, &m12);
-    assert_true(fabs(2 * m11 - 7850 * 1e-4 * 2.0) < 1e-12 && m12 == 0.0);
+    assert_near(2 * m11, 7850 * 1e-4 * 2.0, 1e-12);
+    assert_near(m12, 0.0, 0.0);
 }
 
 int main(void)

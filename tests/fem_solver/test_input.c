@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -39,21 +40,29 @@ static void test_valid_net(void **state)
     assert_int_equal(m.n_nodes, 15);
     assert_int_equal(m.n_elements, 4 * 3 + 5 * 2);
     assert_int_equal(m.element_set[0], 1);
-    assert_true(fabs(m.X[3 * 14 + 0] - 2.0) < 1e-15 && fabs(m.X[3 * 14 + 1] - 1.0) < 1e-15 && m.X[3 * 14 + 2] == 1.0);
-    assert_true(fabs(m.EA[0] - 2e9 * 2e-4) < 1e-3 && fabs(m.AS[0] - 1e5 * 2e-4) < 1e-12);
+    assert_near(m.X[3 * 14 + 0], 2.0, 1e-15);
+    assert_near(m.X[3 * 14 + 1], 1.0, 1e-15);
+    assert_near(m.X[3 * 14 + 2], 1.0, 0.0);
+    assert_near(m.EA[0], 2e9 * 2e-4, 1e-3);
+    assert_near(m.AS[0], 1e5 * 2e-4, 1e-12);
     /* boundary: 12 nodes fixed in xyz; node 7 (centre) then also given u_z = -0.01 */
     int fixed_nodes = 0;
     for (int i = 0; i < 15; i++) fixed_nodes += m.fixed[3 * i] && m.fixed[3 * i + 1] && m.fixed[3 * i + 2];
     assert_int_equal(fixed_nodes, 12);
-    assert_true(m.fixed[3 * 7 + 2] && !m.fixed[3 * 7] && m.u_prescribed[3 * 7 + 2] == -0.01);
-    assert_true(m.f_point[3 * 7 + 2] == -10 && m.f_point[3 * 6 + 2] == -10);
-    assert_true(m.self_weight && m.gravity[1] == -9.81 && m.lumped_mass);
-    assert_true(m.tau_per_s == 5 && m.kappa_s == 0.001);
+    assert_true(m.fixed[3 * 7 + 2] && !m.fixed[3 * 7]);
+    assert_near(m.u_prescribed[3 * 7 + 2], -0.01, 0.0);
+    assert_near(m.f_point[3 * 7 + 2], -10.0, 0.0);
+    assert_near(m.f_point[3 * 6 + 2], -10.0, 0.0);
+    assert_true(m.self_weight && m.lumped_mass);
+    assert_near(m.gravity[1], -9.81, 0.0);
+    assert_near(m.tau_per_s, 5.0, 0.0);
+    assert_near(m.kappa_s, 0.001, 0.0);
     assert_int_equal(m.n_monitor, 2);
     assert_int_equal(m.monitor_nodes[0], 7);
     assert_int_equal(m.settings.output_interval, 4);
     assert_int_equal(m.settings.integrator, FEM_BOSSAK);
-    assert_true(m.settings.alpha_b == -0.2 && m.settings.dt_s == 0.002);
+    assert_near(m.settings.alpha_b, -0.2, 0.0);
+    assert_near(m.settings.dt_s, 0.002, 0.0);
     assert_int_equal(m.settings.max_iterations, 12);
     const fem_node_set *mine = fem_model_find_node_set(&m, "mine");
     assert_non_null(mine);
@@ -104,7 +113,7 @@ static void test_gmsh(void **state)
             fail_msg("gmsh %d: %d nodes, %d elements (expected 4, 3)", v, m.n_nodes, m.n_elements);
         double length = 0;
         for (int e = 0; e < 3; e++) length += m.L0[e];
-        assert_true(fabs(length - 3.0) < 1e-12);
+        assert_near(length, 3.0, 1e-12);
         int stiff = fem_model_find_set(&m, "stiff"), n_stiff = 0;
         for (int e = 0; e < 3; e++) n_stiff += m.element_set[e] == stiff;
         assert_int_equal(n_stiff, 1);

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <string.h>
@@ -17,7 +18,7 @@
 /* Closed form of the symmetric 3-element cable (nodes at x = 0, 1, 2, 3, L = 1 each, ends
  * fixed, load P downwards at nodes 1 and 2). By symmetry node 1 sits at (1 + a, 0, -w),
  * node 2 at (2 - a, 0, -w): the inner element stays horizontal, the outer ones rotate.
- * With A S(l) = E A (l^2 - 1)/2 + A S_pre (eq. 10, L = 1) node 1 balances
+ * With A S(l) = E A (l^2 - 1)/2 + A S_pre (eq. (10), L = 1) node 1 balances
  *   x: -A S_o (1 + a) + A S_i (1 - 2a) = 0,   z: A S_o w - P = 0,
  * l_o = sqrt((1+a)^2 + w^2), l_i = 1 - 2a. For a given w the x equation is monotone in a
  * (bisection), and then the z equation is monotone in w (outer bisection). */
@@ -80,11 +81,11 @@ static void test_three_element_cable(void **state)
         double w_fem = -s.cur.u[3 * 1 + 2], a_fem = s.cur.u[3 * 1 + 0];
         print_message("P = %.4f N: closed form w = %.12f a = %.12f, FEM w = %.12f a = %.12f\n",
                       P, w, a, w_fem, a_fem);
-        assert_true(fabs(w_fem - w) < 1e-9);
-        assert_true(fabs(a_fem - a) < 1e-9);
+        assert_near(w_fem, w, 1e-9);
+        assert_near(a_fem, a, 1e-9);
         /* symmetry: node 2 mirrors node 1, the inner element stays horizontal */
-        assert_true(fabs(s.cur.u[3 * 2 + 0] + a_fem) < 1e-12);
-        assert_true(fabs(s.cur.u[3 * 2 + 2] - s.cur.u[3 * 1 + 2]) < 1e-12);
+        assert_near(s.cur.u[3 * 2 + 0], -a_fem, 1e-12);
+        assert_near(s.cur.u[3 * 2 + 2], s.cur.u[3 * 1 + 2], 1e-12);
         fem_analysis_free(&s);
         fem_model_free(&m);
     }
@@ -116,9 +117,9 @@ static void test_compressed_truss_lu(void **state)
     if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
     if (mode == 2) assert_true(s.stats.lu_factorizations > 0);
     else assert_true(s.stats.lu_factorizations == 0);
-    for (int e = 0; e < 2; e++) assert_true(fabs(s.axial[e] + P) < 1e-9 * P);
+    for (int e = 0; e < 2; e++) assert_near(s.axial[e], -P, 1e-9 * P);
     double l = 1.0 + s.cur.u[3] - s.cur.u[0];
-    assert_true(fabs((EA * (l * l - 1) / 2 + AS) * l + P) < 1e-9 * P);
+    assert_near((EA * (l * l - 1) / 2 + AS) * l, -P, 1e-9 * P);
     fem_analysis_free(&s);
     fem_model_free(&m);
     }

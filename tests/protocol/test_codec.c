@@ -4,6 +4,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -57,8 +58,8 @@ static void test_round_trip(void **state)
     assert_int_equal(in.type, PROTO_MSG_SOLVE);
     assert_int_equal(in.step, 12);
     assert_int_equal(in.iteration, 3);
-    assert_true(in.time_s == 0.0125); /* exact: cJSON prints 17 significant digits */
-    assert_true(in.dt_s == 1e-3);
+    assert_near(in.time_s, 0.0125, 0.0); /* exact: cJSON prints 17 significant digits */
+    assert_near(in.dt_s, 1e-3, 0.0);
     const double *f;
     size_t rows;
     assert_int_equal(proto_message_get_f64(&in, "force", 2, 3, &f, &rows, &err), 0);
@@ -68,9 +69,9 @@ static void test_round_trip(void **state)
     const int32_t *e;
     assert_int_equal(proto_message_get_i32(&in, "elements", 2, 2, &e, NULL, &err), 0);
     assert_memory_equal(e, elements, sizeof elements);
-    assert_true(proto_message_value(&in, "near_interface", 0.0) == 1.0);
-    assert_true(proto_message_value(&in, "min_gap_m", 0.0) == -1.5e-3);
-    assert_true(proto_message_value(&in, "absent", 7.0) == 7.0);
+    assert_near(proto_message_value(&in, "near_interface", 0.0), 1.0, 0.0);
+    assert_near(proto_message_value(&in, "min_gap_m", 0.0), -1.5e-3, 0.0);
+    assert_near(proto_message_value(&in, "absent", 7.0), 7.0, 0.0);
 
     /* wrong expectations are reported with the array's name */
     assert_int_equal(proto_message_get_f64(&in, "force", 3, 3, &f, NULL, &err), -1);
@@ -283,7 +284,7 @@ static void test_storage_reused(void **state)
     data[7] = 3.5;
     assert_int_equal(proto_decode(&in, header, strlen(header), frames, lengths, 1, LIMIT, &err), 0);
     assert_ptr_equal(in.arrays[0].data, first);
-    assert_true(((const double *)in.arrays[0].data)[7] == 3.5);
+    assert_near(((const double *)in.arrays[0].data)[7], 3.5, 0.0);
     proto_message_free(&in);
 }
 

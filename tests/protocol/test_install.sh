@@ -2,11 +2,27 @@
 # `make install` gives a third-party solver everything it needs: headers, the static protocol
 # library and a pkg-config file. Builds a minimal participant against the installed copy only
 # and runs it until its idle timeout.
+# The release build and install run in a copy of the source tree: the suite may be using the
+# programs of the working tree (bin/, build/) at the same time, and this test must leave them
+# exactly as they were (checked: every file under bin/ and build/ keeps its size and mtime).
 set -eu
 prefix="$NC_TMP/prefix"
-# a fresh release build/install, whatever build the test suite itself runs under
-env -u MAKEFLAGS -u MAKELEVEL -u SANITIZE make -s -C "$NC_ROOT" install PREFIX="$prefix" >"$NC_TMP/install.log" 2>&1 || {
+src="$NC_TMP/src"
+snapshot() {   # every file under bin/ and build/ of the working tree, with size and mtime
+  (cd "$NC_ROOT" && find bin build -type f -printf '%p %s %T@\n' 2>/dev/null | sort)
+}
+snapshot > "$NC_TMP/before.txt"
+# sources as they are (mtimes kept), and the release build so that only what changed is rebuilt
+mkdir -p "$src/build"
+tar -C "$NC_ROOT" --exclude=./.git --exclude=./build --exclude=./runs --exclude=./results -cf - . \
+  | tar -C "$src" -xf -
+[ -d "$NC_ROOT/build/release" ] && cp -a "$NC_ROOT/build/release" "$src/build/"
+# a release build/install, whatever build the test suite itself runs under
+env -u MAKEFLAGS -u MAKELEVEL -u SANITIZE make -s -C "$src" install PREFIX="$prefix" >"$NC_TMP/install.log" 2>&1 || {
   cat "$NC_TMP/install.log"; exit 1; }
+snapshot > "$NC_TMP/after.txt"
+diff "$NC_TMP/before.txt" "$NC_TMP/after.txt" >"$NC_TMP/changed.txt" || {
+  echo "make install changed the working tree's bin/ or build/:"; head -n 20 "$NC_TMP/changed.txt"; exit 1; }
 for f in bin/fem_solver bin/dem_solver bin/coupler lib/libnetcouple_protocol.a \
          include/netcouple/proto.h include/netcouple/proto_serve.h include/netcouple/nc_error.h \
          lib/pkgconfig/netcouple-protocol.pc share/doc/netcouple/protocol.md; do

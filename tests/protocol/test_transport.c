@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <signal.h>
@@ -159,9 +160,9 @@ static void exchange_full_sequence(const char *endpoint)
         if (proto_peer_request(peer, &request, &reply, &err)) fail_msg("%s", err.message);
         const double *u;
         assert_int_equal(proto_message_get_f64(&reply, "displacement", N_NODES, 3, &u, NULL, &err), 0);
-        for (int i = 0; i < N_NODES * 3; i++) assert_true(u[i] == 2.0 * force[i]);
+        for (int i = 0; i < N_NODES * 3; i++) assert_near(u[i], 2.0 * force[i], 0.0);
         assert_int_equal(reply.iteration, iteration); /* the reply echoes the command's counters */
-        assert_true(proto_message_value(&reply, "newton_iterations", 0) == 4);
+        assert_near(proto_message_value(&reply, "newton_iterations", 0), 4.0, 0.0);
     }
     proto_message_init(&request, PROTO_MSG_ACCEPT_STEP);
     assert_int_equal(proto_peer_request(peer, &request, &reply, &err), 0);
@@ -235,7 +236,8 @@ static void test_peer_never_answers_times_out(void **state)
     assert_non_null(strstr(err.message, "participant 'dem' at tcp://127.0.0.1:"));
     assert_non_null(strstr(err.message, "did not answer within 0.4 s"));
     assert_non_null(strstr(err.message, "solve (step 3, iteration 2, t = 0.25 s)"));
-    assert_true(elapsed >= 0.35 && elapsed < 5.0);
+    assert_below(0.35, elapsed);
+    assert_below(elapsed, 5.0);
 }
 
 static void test_peer_dies_is_reported_before_timeout(void **state)
@@ -247,7 +249,7 @@ static void test_peer_dies_is_reported_before_timeout(void **state)
     assert_int_equal(err.code, PROTO_ERR_DISCONNECTED);
     assert_non_null(strstr(err.message, "participant 'dem'"));
     assert_non_null(strstr(err.message, "closed the connection while handling solve (step 3"));
-    assert_true(elapsed < 10.0); /* far less than the 20 s timeout */
+    assert_below(elapsed, 10.0); /* far less than the 20 s timeout */
 }
 
 static void test_peer_gone_between_requests_is_reported_at_once(void **state)
@@ -275,7 +277,7 @@ static void test_peer_gone_between_requests_is_reported_at_once(void **state)
     request.iteration = 1;
     double start = now_s();
     assert_int_equal(proto_peer_request(peer, &request, &reply, &err), -1);
-    assert_true(now_s() - start < 5.0); /* not the 20 s timeout */
+    assert_below(now_s() - start, 5.0); /* not the 20 s timeout */
     assert_int_equal(err.code, PROTO_ERR_DISCONNECTED);
     assert_non_null(strstr(err.message, "participant 'fem'"));
     assert_non_null(strstr(err.message, "solve (step 7, iteration 1"));
@@ -331,7 +333,7 @@ static void test_participant_idle_timeout(void **state)
     assert_int_equal(proto_participant_receive(p, &command, &err), -1);
     assert_int_equal(err.code, PROTO_ERR_IDLE);
     assert_non_null(strstr(err.message, "idle timeout"));
-    assert_true(now_s() - start >= 0.15);
+    assert_below(0.15, now_s() - start);
     proto_participant_close(p);
 }
 
