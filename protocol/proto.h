@@ -149,7 +149,7 @@ typedef struct proto_options {
 void proto_options_default(proto_options *options);
 
 /* Participant side: a solver serving the coupler. It binds `endpoint`
- * ("tcp://127.0.0.1:5555", "tcp://127.0.0.1:*" for a free port, "ipc:///tmp/x.sock"). */
+ * ("tcp://127.0.0.1:5555", "tcp://127.0.0.1:*" for a free port, "ipc://PATH" for a Unix socket at PATH). */
 typedef struct proto_participant proto_participant;
 
 int proto_participant_open(proto_participant **p, const char *endpoint, const char *role,

@@ -244,9 +244,12 @@ static double decode_time(void)
 
 int main(void)
 {
-    char ipc_raw[128], ipc_proto[128];
-    snprintf(ipc_raw, sizeof ipc_raw, "ipc:///tmp/netcouple-bench-raw-%d", (int)getpid());
-    snprintf(ipc_proto, sizeof ipc_proto, "ipc:///tmp/netcouple-bench-proto-%d", (int)getpid());
+    /* ipc sockets go to the user's temporary folder ($TMPDIR, else the system's) */
+    const char *tmpdir = getenv("TMPDIR");
+    if (!tmpdir || !tmpdir[0]) tmpdir = P_tmpdir;
+    char ipc_raw[512], ipc_proto[512];
+    snprintf(ipc_raw, sizeof ipc_raw, "ipc://%s/netcouple-bench-raw-%d", tmpdir, (int)getpid());
+    snprintf(ipc_proto, sizeof ipc_proto, "ipc://%s/netcouple-bench-proto-%d", tmpdir, (int)getpid());
     printf("protocol latency: solve round trip, %d nodes, %d f64 arrays of %d x 3 each way "
            "(%.2f MB per direction);\nbest of %d alternating trials of the median of %d round trips\n",
            NODES, ARRAYS, NODES, ARRAYS * NODES * 3 * 8 / 1e6, TRIALS, ROUNDS);
