@@ -41,6 +41,7 @@ static int parse_participant(const cJSON *root, const char *where, const char *k
     return 0;
 }
 
+/* The relaxation object is read by the relaxation module: its keys depend on the methods. */
 static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_settings *r,
                             nc_error *err)
 {
@@ -49,38 +50,7 @@ static int parse_relaxation(const cJSON *root, const char *where, cpl_relax_sett
     if (!obj) return 0;
     char path[512];
     nc_json_path(path, sizeof path, where, "relaxation");
-    static const char *const keys[] = {"method", "alpha", "first_iteration_cap", "alpha_min",
-                                       "alpha_max", "restart_growth", "filter", "reuse_steps",
-                                       "max_columns", NULL};
-    static const char *const methods[] = {"none", "constant", "aitken", "iqn-ils", NULL};
-    int method = 0;
-    long reuse = r->iqn_reuse_steps, cols = r->iqn_max_columns;
-    if (nc_json_check_keys(obj, path, keys, err) ||
-        nc_json_choice_opt(obj, path, "method", methods, 0, &method, err) ||
-        nc_json_number_range_opt(obj, path, "alpha", r->alpha, 1e-12, 2.0, &r->alpha, err) ||
-        nc_json_number_range_opt(obj, path, "first_iteration_cap", r->first_cap, 1e-12, 2.0,
-                                 &r->first_cap, err) ||
-        nc_json_number_range_opt(obj, path, "alpha_min", r->alpha_min, -2.0, 2.0,
-                                 &r->alpha_min, err) ||
-        nc_json_number_range_opt(obj, path, "alpha_max", r->alpha_max, -2.0, 10.0,
-                                 &r->alpha_max, err) ||
-        nc_json_number_range_opt(obj, path, "restart_growth", r->restart_growth, 0.0, 1e6,
-                                 &r->restart_growth, err) ||
-        nc_json_number_range_opt(obj, path, "filter", r->iqn_filter, 1e-16, 0.5,
-                                 &r->iqn_filter, err) ||
-        nc_json_int_opt(obj, path, "reuse_steps", reuse, 0, 100, &reuse, err) ||
-        nc_json_int_opt(obj, path, "max_columns", cols, 0, 100000, &cols, err))
-        return -1;
-    r->method = (cpl_relax_method)method;
-    r->iqn_reuse_steps = (int)reuse;
-    r->iqn_max_columns = (int)cols;
-    if (r->restart_growth > 0.0 && r->restart_growth < 1.0)
-        return nc_error_set(err, 1, "%s: restart_growth: expected 0 (off) or a number >= 1, "
-                                    "got %g", path, r->restart_growth);
-    if (!(r->alpha_min < r->alpha_max))
-        return nc_error_set(err, 1, "%s: alpha_min (%g) must be smaller than alpha_max (%g)",
-                            path, r->alpha_min, r->alpha_max);
-    return 0;
+    return cpl_relax_settings_parse(r, obj, path, err);
 }
 
 static int parse_efficiency(const cJSON *root, const char *where, cpl_loop_settings *s,

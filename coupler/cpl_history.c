@@ -41,9 +41,9 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
          series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
-        nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_method_name(s->relax.method), err) ||
+        nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_settings_method(&s->relax), err) ||
         nc_h5_attr_string(&h->h5, "/", "relaxed_quantity",
-                          s->relaxed == CPL_RELAX_FORCE ? "force" : "displacement_velocity", err) ||
+                          s->relaxed == CPL_RELAXED_FORCE ? "force" : "displacement_velocity", err) ||
         nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_flush(&h->h5, err))

@@ -8,6 +8,7 @@
 #include "cpl_interface.h"
 #include "cpl_residual.h"
 #include "nc_clock.h"
+#include "nc_json.h"
 
 struct cpl_loop {
     cpl_loop_settings s;
@@ -38,7 +39,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->tol_rel = 0.0;
     s->max_iterations = 50;
     s->on_max_iterations = CPL_MAXIT_ACCEPT;
-    s->relaxed = CPL_RELAX_DISPLACEMENT_VELOCITY;
+    s->relaxed = CPL_RELAXED_DISPLACEMENT_VELOCITY;
     cpl_relax_settings_default(&s->relax);
     s->predictor = CPL_PREDICT_LINEAR;
     s->far_step = 0;
@@ -66,21 +67,9 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (s->far_step && !(s->far_step_factor >= 1.0))
         return nc_error_set(err, 1, "%s: far_step_factor must be >= 1, got %g", where,
                             s->far_step_factor);
-    const cpl_relax_settings *r = &s->relax;
-    if (r->method != CPL_RELAX_NONE && !(r->alpha > 0.0 && r->alpha <= 2.0))
-        return nc_error_set(err, 1, "%s: relaxation.alpha must be in (0, 2], got %g", where,
-                            r->alpha);
-    if (r->method == CPL_RELAX_AITKEN) {
-        if (!(r->alpha_min < r->alpha_max))
-            return nc_error_set(err, 1, "%s: relaxation.alpha_min (%g) must be < alpha_max (%g)",
-                                where, r->alpha_min, r->alpha_max);
-        if (!(r->first_cap > 0.0))
-            return nc_error_set(err, 1, "%s: relaxation.first_iteration_cap must be > 0, got %g",
-                                where, r->first_cap);
-    }
-    if (r->method == CPL_RELAX_IQN_ILS && !(r->iqn_filter > 0.0 && r->iqn_filter < 1.0))
-        return nc_error_set(err, 1, "%s: relaxation.filter must be in (0, 1), got %g", where,
-                            r->iqn_filter);
+    char relax_where[512];
+    nc_json_path(relax_where, sizeof relax_where, where, "relaxation");
+    if (cpl_relax_settings_check(&s->relax, relax_where, err)) return -1;
     return 0;
 }
 
@@ -94,7 +83,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     if (!L) return nc_error_set(err, 1, "coupling loop: out of memory");
     L->s = *s;
     L->n3 = 3 * n_nodes;
-    L->nx = s->relaxed == CPL_RELAX_FORCE ? L->n3 : 2 * L->n3;
+    L->nx = s->relaxed == CPL_RELAXED_FORCE ? L->n3 : 2 * L->n3;
     L->time_s = s->start_time_s;
     L->last_near = -1;
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
@@ -110,7 +99,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     if (v0) memcpy(L->v, v0, L->n3 * sizeof(double));
     if (s->scheme == CPL_SCHEME_STRONG &&
         cpl_relax_create(&L->relax, &s->relax, L->nx,
-                         s->relaxed == CPL_RELAX_FORCE ? 1 : 2, err)) {
+                         s->relaxed == CPL_RELAXED_FORCE ? 1 : 2, err)) {
         cpl_loop_free(L);
         return -1;
     }
@@ -302,7 +291,7 @@ static int report_iteration(run_ctx *c, const cpl_call *call, double residual, d
     return 0;
 }
 
-/* Residual of algorithm 2: max(r_u, r_u̇) (35); convergence needs both fields (27). */
+/* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27). */
 static double residual_uv(cpl_loop *L, int *converged)
 {
     double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
@@ -316,7 +305,7 @@ static int run_step(run_ctx *c)
 {
     cpl_loop *L = c->L;
     const int strong = L->s.scheme == CPL_SCHEME_STRONG;
-    const int force_mode = strong && L->s.relaxed == CPL_RELAX_FORCE;
+    const int force_mode = strong && L->s.relaxed == CPL_RELAXED_FORCE;
     const size_t n3 = L->n3;
     cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = choose_dt(L)};
 
@@ -341,12 +330,12 @@ static int run_step(run_ctx *c)
         /* DEM with the current interface position and velocity -> contact forces */
         if (do_solve(c, c->dem, &call, L->u_in, L->v_in, L->f_dem, NULL, &dem_info)) return -1;
         if (!force_mode) {
-            /* weak, or algorithm 2: forces go to the structure unrelaxed (39) */
+            /* weak, or algorithm 2: forces go to the structure unrelaxed, eq. (39) */
             int solved = fem_solve_or_skip(c, &call, L->f_dem, fem_solved);
             if (solved < 0) return -1;
             fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
-            residual = residual_uv(L, &converged);            /* (28), (29), (35) */
+            residual = residual_uv(L, &converged);            /* eqs. (28), (29), (35) */
             if (!strong || converged || k == max_it) {
                 if (report_iteration(c, &call, residual, NAN, solved)) return -1;
                 break;
@@ -355,26 +344,26 @@ static int run_step(run_ctx *c)
             pack(L, L->x_in, L->u_in, L->v_in);
             pack(L, L->x_out, L->u_out, L->v_out);
             if (cpl_relax_update(L->relax, L->x_in, L->x_out, L->x_in, &alpha, c->err))
-                return fail(c, NULL, &call, "relaxation");    /* (31), (32), (34) */
-            unpack(L, L->x_in, L->u_in, L->v_in);              /* (40), (41) */
+                return fail(c, NULL, &call, "relaxation");    /* eqs. (31), (32), (34) */
+            unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
             if (report_iteration(c, &call, residual, alpha, solved)) return -1;
         } else {
             /* algorithm 3: residual and relaxation of the forces, then the structure */
-            residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);          /* (30), (36) */
+            residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);          /* eqs. (30), (36) */
             converged = cpl_converged(residual, cpl_scaled_norm(L->f_dem, n3), L->s.tol_abs,
                                       L->s.tol_rel);
             double alpha;
             if (cpl_relax_update(L->relax, L->f_in, L->f_dem, L->f_in, &alpha, c->err))
-                return fail(c, NULL, &call, "relaxation");                 /* (33), (34) */
+                return fail(c, NULL, &call, "relaxation");                 /* eqs. (33), (34) */
             /* iteration 1 evaluated the DEM at the predicted position, not at the FEM's
              * answer to the previous relaxed force: no secant information in this pair */
-            if (k == 1) cpl_relax_forget_pair(L->relax);
-            int solved = fem_solve_or_skip(c, &call, L->f_in, fem_solved); /* (42) */
+            if (k == 1) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
+            int solved = fem_solve_or_skip(c, &call, L->f_in, fem_solved); /* eq. (42) */
             if (solved < 0) return -1;
             fem_solved |= solved;
             if (report_iteration(c, &call, residual, alpha, solved)) return -1;
             if (converged || k == max_it) break;
-            memcpy(L->u_in, L->u_out, n3 * sizeof(double));                /* (37), (38) */
+            memcpy(L->u_in, L->u_out, n3 * sizeof(double));                /* eqs. (37), (38) */
             memcpy(L->v_in, L->v_out, n3 * sizeof(double));
         }
     }
@@ -390,7 +379,7 @@ static int run_step(run_ctx *c)
         }
     }
     if (strong && !converged) {
-        cpl_relax_forget_history(L->relax);   /* do not carry a failed step's model along */
+        cpl_relax_forget(L->relax, CPL_RELAX_FORGET_HISTORY);   /* do not carry a failed step's model along */
     } else if (strong) {
         if (force_mode) {
             cpl_relax_end_step(L->relax, NULL, NULL);

@@ -4,9 +4,10 @@
  *   weak   (algorithms 1, 5): per step one exchange: DEM solve with the current interface
  *          u, u̇ -> forces -> FEM solve -> u, u̇ -> accept.
  *   strong (algorithms 2, 3, 6, 7): per step Gauss–Seidel iterations k = 1, 2, ...; the
- *          solvers restore their start-of-step state for k > 1; residual (28)–(30),
- *          r = max(r_u, r_u̇) (35) or r_F (36), convergence (27), relaxation (31)–(34) of
- *          u, u̇ (algorithm 2) or of F (algorithm 3); then ACCEPT_STEP.
+ *          solvers restore their start-of-step state for k > 1; residual, eqs. (28)–(30),
+ *          r = max(r_u, r_u̇), eq. (35), or r_F, eq. (36), convergence, eq. (27),
+ *          relaxation, eqs. (31)–(34), of u, u̇ (algorithm 2) or of F (algorithm 3); then
+ *          ACCEPT_STEP.
  * Efficiency options of algorithm 1: a larger step while the DEM reports no particle near
  * the interface; no FEM solve while the contact force is zero (only valid when the
  * structure is otherwise unloaded and at rest). With that option the FEM's step begins at its
@@ -53,7 +54,7 @@ typedef struct cpl_participant {
 } cpl_participant;
 
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
-typedef enum { CPL_RELAX_DISPLACEMENT_VELOCITY = 0, CPL_RELAX_FORCE } cpl_relaxed_quantity;
+typedef enum { CPL_RELAXED_DISPLACEMENT_VELOCITY = 0, CPL_RELAXED_FORCE } cpl_relaxed_quantity;
 typedef enum { CPL_MAXIT_ACCEPT = 0, CPL_MAXIT_STOP } cpl_maxit_policy;
 typedef enum { CPL_PREDICT_CONSTANT = 0, CPL_PREDICT_LINEAR } cpl_predictor;
 

@@ -1,43 +1,150 @@
-/* cpl_relax — dispatch of the relaxation methods (none, constant, Aitken, IQN-ILS). */
+/* cpl_relax — the relaxation interface: settings of the `relaxation` object and one
+ * relaxation object, both calling through the chosen method's table of operations
+ * (cpl_relax_ops.h). The only thing done here for every method is the finiteness check of
+ * the next input. */
 #include "cpl_relax.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "cpl_relax_aitken.h"
-#include "cpl_relax_iqn.h"
+#include "cpl_relax_ops.h"
+#include "nc_json.h"
+
+enum { MAX_METHODS = 16, MAX_KEYS = 64 };
 
 struct cpl_relax {
-    cpl_relax_settings s;
+    const cpl_relax_ops *ops;
+    void *state;
     size_t n;
-    cpl_aitken aitken;
-    cpl_iqn iqn;
 };
 
 void cpl_relax_settings_default(cpl_relax_settings *s)
 {
     memset(s, 0, sizeof *s);
-    s->method = CPL_RELAX_NONE;
+    s->method = cpl_relax_method_find("none");
     s->alpha = 0.5;
-    s->first_cap = 0.5;
-    s->alpha_min = 1e-6;
-    s->alpha_max = 2.0;
-    s->restart_growth = 4.0; /* Aitken safeguard on (see cpl_relax_aitken.h) */
-    s->iqn_filter = 1e-2;   /* "QR2" filter limit commonly used with IQN-ILS */
-    s->iqn_reuse_steps = 4;
-    s->iqn_max_columns = 0;
 }
 
-const char *cpl_relax_method_name(cpl_relax_method m)
+static void use_method(cpl_relax_settings *s, const cpl_relax_ops *m)
 {
-    switch (m) {
-    case CPL_RELAX_NONE: return "none";
-    case CPL_RELAX_CONSTANT: return "constant";
-    case CPL_RELAX_AITKEN: return "aitken";
-    case CPL_RELAX_IQN_ILS: return "iqn-ils";
+    s->method = m;
+    memset(s->params, 0, sizeof s->params);
+    if (m->defaults) m->defaults(s);
+}
+
+/* "one of \"none\", \"constant\", ..." for messages */
+static const char *method_names(char *buf, size_t size)
+{
+    snprintf(buf, size, "one of");
+    for (const cpl_relax_ops *const *m = cpl_relax_methods(); *m; m++) {
+        size_t used = strlen(buf);
+        snprintf(buf + used, size - used, "%s \"%s\"", m == cpl_relax_methods() ? "" : ",",
+                 (*m)->name);
     }
-    return "unknown";
+    return buf;
+}
+
+int cpl_relax_settings_select(cpl_relax_settings *s, const char *method, nc_error *err)
+{
+    const cpl_relax_ops *m = cpl_relax_method_find(method);
+    if (!m) {
+        char names[400];
+        return nc_error_set(err, 1, "relaxation method \"%s\" unknown: expected %s", method,
+                            method_names(names, sizeof names));
+    }
+    use_method(s, m);
+    return 0;
+}
+
+const char *cpl_relax_settings_method(const cpl_relax_settings *s)
+{
+    return s->method->name;
+}
+
+/* alpha and the keys of every method (unknown keys rejected); the chosen method's values
+ * are kept, the others only checked. */
+static int parse_keys(cpl_relax_settings *s, const cJSON *obj, const char *where, int check,
+                      nc_error *err)
+{
+    const char *keys[MAX_KEYS] = {"method", "alpha"};
+    size_t n_keys = 2;
+    for (const cpl_relax_ops *const *m = cpl_relax_methods(); *m; m++)
+        for (const char *const *k = (*m)->keys; k && *k && n_keys + 1 < MAX_KEYS; k++)
+            keys[n_keys++] = *k;
+    keys[n_keys] = NULL;
+    if (nc_json_check_keys(obj, where, keys, err) ||
+        nc_json_number_range_opt(obj, where, "alpha", s->alpha, 1e-12, 2.0, &s->alpha, err))
+        return -1;
+    /* all methods read their keys first, then all check them: the first error is the same
+     * whichever method is chosen */
+    cpl_relax_settings each[MAX_METHODS];
+    size_t n_methods = 0;
+    for (const cpl_relax_ops *const *m = cpl_relax_methods(); *m && n_methods < MAX_METHODS;
+         m++) {
+        cpl_relax_settings *t = &each[n_methods++];
+        *t = *s;
+        if (*m != s->method) use_method(t, *m);
+        if ((*m)->parse && (*m)->parse(t, obj, where, err)) return -1;
+    }
+    for (size_t i = 0; check && i < n_methods; i++)
+        if (each[i].method->check && each[i].method->check(&each[i], where, err)) return -1;
+    for (size_t i = 0; i < n_methods; i++)
+        if (each[i].method == s->method) *s = each[i];
+    return 0;
+}
+
+int cpl_relax_settings_parse(cpl_relax_settings *s, const cJSON *obj, const char *where,
+                             nc_error *err)
+{
+    const cpl_relax_ops *const *methods = cpl_relax_methods();
+    const char *names[MAX_METHODS + 1];
+    int n = 0, index = 0;
+    for (; methods[n] && n < MAX_METHODS; n++) {
+        if (methods[n] == s->method) index = n;
+        names[n] = methods[n]->name;
+    }
+    names[n] = NULL;
+    if (nc_json_choice_opt(obj, where, "method", names, index, &index, err)) return -1;
+    if (methods[index] != s->method) use_method(s, methods[index]);
+    return parse_keys(s, obj, where, 1, err);
+}
+
+int cpl_relax_settings_set(cpl_relax_settings *s, const char *key, double value,
+                           nc_error *err)
+{
+    if (strcmp(key, "method") == 0)
+        return nc_error_set(err, 1, "relaxation: method is a name (cpl_relax_settings_select)");
+    cJSON *obj = cJSON_CreateObject();
+    if (!obj || !cJSON_AddNumberToObject(obj, key, value)) {
+        cJSON_Delete(obj);
+        return nc_error_set(err, 1, "relaxation: out of memory");
+    }
+    int rc = parse_keys(s, obj, "relaxation", 0, err);
+    cJSON_Delete(obj);
+    return rc;
+}
+
+int cpl_relax_settings_get(const cpl_relax_settings *s, const char *key, double *value)
+{
+    if (strcmp(key, "alpha") == 0) {
+        *value = s->alpha;
+        return 0;
+    }
+    return s->method->get ? s->method->get(s, key, value) : -1;
+}
+
+int cpl_relax_settings_check(const cpl_relax_settings *s, const char *where, nc_error *err)
+{
+    return s->method->check ? s->method->check(s, where, err) : 0;
+}
+
+int cpl_relax_check_alpha(const cpl_relax_settings *s, const char *where, nc_error *err)
+{
+    if (!(s->alpha > 0.0 && s->alpha <= 2.0))
+        return nc_error_set(err, 1, "%s: alpha must be in (0, 2], got %g", where, s->alpha);
+    return 0;
 }
 
 int cpl_relax_create(cpl_relax **out, const cpl_relax_settings *s, size_t n, size_t n_blocks,
@@ -46,18 +153,9 @@ int cpl_relax_create(cpl_relax **out, const cpl_relax_settings *s, size_t n, siz
     *out = NULL;
     cpl_relax *r = calloc(1, sizeof *r);
     if (!r) return nc_error_set(err, 1, "relaxation: out of memory");
-    r->s = *s;
+    r->ops = s->method;
     r->n = n;
-    int rc = 0;
-    if (s->method == CPL_RELAX_AITKEN) {
-        rc = cpl_aitken_init(&r->aitken, n, n_blocks, s->alpha, s->first_cap, s->alpha_min,
-                             s->alpha_max, err);
-        r->aitken.restart_growth = s->restart_growth;
-    }
-    else if (s->method == CPL_RELAX_IQN_ILS)
-        rc = cpl_iqn_init(&r->iqn, n, s->iqn_max_columns > 0 ? (size_t)s->iqn_max_columns : 0,
-                          s->alpha, s->iqn_filter, s->iqn_reuse_steps, err);
-    if (rc) {
+    if (r->ops->create(&r->state, s, n, n_blocks, err)) {
         free(r);
         return -1;
     }
@@ -68,60 +166,39 @@ int cpl_relax_create(cpl_relax **out, const cpl_relax_settings *s, size_t n, siz
 void cpl_relax_free(cpl_relax *r)
 {
     if (!r) return;
-    cpl_aitken_free(&r->aitken);
-    cpl_iqn_free(&r->iqn);
+    r->ops->free(r->state);
     free(r);
 }
 
 void cpl_relax_begin_step(cpl_relax *r)
 {
-    if (r->s.method == CPL_RELAX_AITKEN) cpl_aitken_begin_step(&r->aitken);
-    else if (r->s.method == CPL_RELAX_IQN_ILS) cpl_iqn_begin_step(&r->iqn);
+    if (r->ops->begin_step) r->ops->begin_step(r->state);
 }
 
 int cpl_relax_update(cpl_relax *r, const double *x_in, const double *x_out, double *x_next,
                      double *alpha, nc_error *err)
 {
-    double a = 1.0;
-    switch (r->s.method) {
-    case CPL_RELAX_NONE:
-        memmove(x_next, x_out, r->n * sizeof(double));   /* eqs. (37)–(39) */
-        break;
-    case CPL_RELAX_CONSTANT:
-        a = r->s.alpha;
-        for (size_t i = 0; i < r->n; i++) x_next[i] = x_in[i] + a * (x_out[i] - x_in[i]);
-        break;
-    case CPL_RELAX_AITKEN:
-        a = cpl_aitken_update(&r->aitken, x_in, x_out, x_next);
-        break;
-    case CPL_RELAX_IQN_ILS:
-        a = cpl_iqn_update(&r->iqn, x_in, x_out, x_next);
-        break;
-    }
+    double a = r->ops->update(r->state, x_in, x_out, x_next);
     for (size_t i = 0; i < r->n; i++)
         if (!isfinite(x_next[i]))
             return nc_error_set(err, 1, "%s relaxation produced a non-finite interface value "
                                 "(entry %zu); the coupling iteration diverged",
-                                cpl_relax_method_name(r->s.method), i);
+                                r->ops->name, i);
     if (alpha) *alpha = a;
     return 0;
 }
 
-void cpl_relax_forget_pair(cpl_relax *r)
+void cpl_relax_forget(cpl_relax *r, cpl_relax_forget_level level)
 {
-    r->aitken.have_prev = 0;
-    r->iqn.have_prev = 0;
-}
-
-void cpl_relax_forget_history(cpl_relax *r)
-{
-    r->aitken.have_prev = 0;
-    r->aitken.have_alpha = 0;   /* next step starts again from α0 */
-    r->iqn.have_prev = 0;
-    r->iqn.cols = 0;
+    if (r->ops->forget) r->ops->forget(r->state, level);
 }
 
 void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out)
 {
-    if (r->s.method == CPL_RELAX_IQN_ILS && x_in && x_out) cpl_iqn_end_step(&r->iqn, x_in, x_out);
+    if (r->ops->end_step) r->ops->end_step(r->state, x_in, x_out);
+}
+
+int cpl_relax_counter(const cpl_relax *r, const char *name, double *value)
+{
+    return r->ops->counter ? r->ops->counter(r->state, name, value) : -1;
 }

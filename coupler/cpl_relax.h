@@ -1,52 +1,60 @@
 /* cpl_relax — relaxation of the exchanged interface data, eqs. (31)–(34), and interface
- * quasi-Newton (IQN-ILS, Degroote et al. 2009).
+ * quasi-Newton (IQN-ILS, Degroote et al. 2009), behind one interface.
  *
  * The relaxed vector x is either [u; s·u̇] (algorithm 2; s = the nominal Δt so both halves
  * are lengths) or the forces F (algorithm 3). In each coupling iteration the loop hands
  * over the input it used (x^k, the previous relaxed value) and the value the solvers
  * produced from it (x̃^k); cpl_relax_update() returns the input of the next iteration.
- *   none      x^{k+1} = x̃^k
- *   constant  x^{k+1} = x^k + α r^k,  r^k = x̃^k − x^k                         (31)–(33)
- *   aitken    as constant with α^k of eq. (34), one α per block (α_u, α_u̇ or α_F); the first
- *             iteration of a step uses sign(α_prev)·min(first_cap, |α_prev|) of the previous
- *             step's last α; α is clipped to [alpha_min, alpha_max]; optional restart at the
- *             best iterate of the step when the residual grows (restart_growth)
- *   iqn-ils   x^{k+1} = x̃^k + W c,  c = argmin ‖V c + r^k‖, columns of residual (V) and
- *             output (W) differences, QR filter, columns of previous steps reused
+ * The methods (one file each, see cpl_relax_ops.h; the list is cpl_relax_methods.c):
+ *   none      x^{k+1} = x̃^k                                        (cpl_relax_none.c)
+ *   constant  x^{k+1} = x^k + α r^k,  r^k = x̃^k − x^k, eqs. (31)–(33) (cpl_relax_constant.c)
+ *   aitken    as constant with α^k of eq. (34), one α per block      (cpl_relax_aitken.c)
+ *   iqn-ils   x^{k+1} = x̃^k + W c,  c = argmin ‖V c + r^k‖           (cpl_relax_iqn.c)
  * Lifecycle per step: begin_step, update for each non-final iteration, end_step.
+ *
+ * Settings are what the `relaxation` object of coupler.json says: the method, the common
+ * `alpha`, and the method's own keys, kept opaque here (only the method's file knows their
+ * layout). Set them from JSON (cpl_relax_settings_parse) or key by key with the same names
+ * (cpl_relax_settings_set).
  */
 #ifndef CPL_RELAX_H
 #define CPL_RELAX_H
 
 #include <stddef.h>
+#include <cjson/cJSON.h>
 #include "nc_error.h"
 
-typedef enum {
-    CPL_RELAX_NONE = 0,
-    CPL_RELAX_CONSTANT,
-    CPL_RELAX_AITKEN,
-    CPL_RELAX_IQN_ILS
-} cpl_relax_method;
+typedef struct cpl_relax_ops cpl_relax_ops;   /* one method's operations (cpl_relax_ops.h) */
+
+enum { CPL_RELAX_PARAMS_SIZE = 64 };   /* room for a method's own settings */
 
 typedef struct cpl_relax_settings {
-    cpl_relax_method method;
-    double alpha;           /* constant α; Aitken α of the very first iteration; IQN α of a
-                               plain relaxation step (no columns yet) */
-    double first_cap;       /* Aitken: cap of |α| in the first iteration of a step */
-    double alpha_min;       /* Aitken: clipping range of α */
-    double alpha_max;
-    double restart_growth;  /* Aitken: back to the step's best iterate with half its α when
-                               the residual exceeds this × the best residual (0 = off) */
-    double iqn_filter;      /* IQN: drop a column whose part orthogonal to the newer
-                               columns is < iqn_filter × its norm */
-    int iqn_reuse_steps;    /* IQN: columns of this many previous steps are kept */
-    int iqn_max_columns;    /* IQN: at most this many columns (0 = number of unknowns) */
+    const cpl_relax_ops *method;
+    double alpha;   /* common key: constant α; Aitken α of the very first iteration; IQN α
+                       of a plain relaxation step (no columns yet); unused by none */
+    unsigned char params[CPL_RELAX_PARAMS_SIZE];   /* the method's own keys, private */
 } cpl_relax_settings;
 
-/* Defaults: none, α = 0.5, first_cap = 0.5, clip [1e-6, 2], restart_growth 4, filter 1e-2,
- * reuse 4, max 0. */
+/* Method none, α = 0.5. */
 void cpl_relax_settings_default(cpl_relax_settings *s);
-const char *cpl_relax_method_name(cpl_relax_method m);
+/* Switches to the named method with its defaults (α is kept); an unknown name fails
+ * listing the known ones. */
+int cpl_relax_settings_select(cpl_relax_settings *s, const char *method, nc_error *err);
+const char *cpl_relax_settings_method(const cpl_relax_settings *s);
+/* Reads the `relaxation` object (`where` names it in messages, e.g.
+ * "coupler.json.relaxation"): method, alpha, and the keys of every method, each checked
+ * (keys of another method than the chosen one are accepted and checked too, so switching
+ * the method alone keeps a file valid); unknown keys are rejected. */
+int cpl_relax_settings_parse(cpl_relax_settings *s, const cJSON *obj, const char *where,
+                             nc_error *err);
+/* One key as coupler.json spells it ("alpha", "filter", ...), range-checked like the file;
+ * for programs and tests. A key of another method is checked and ignored. */
+int cpl_relax_settings_set(cpl_relax_settings *s, const char *key, double value,
+                           nc_error *err);
+/* The value of one key of the chosen method (or "alpha"); -1 when it has no such key. */
+int cpl_relax_settings_get(const cpl_relax_settings *s, const char *key, double *value);
+/* Consistency of the chosen method's settings (ranges, α_min < α_max, ...). */
+int cpl_relax_settings_check(const cpl_relax_settings *s, const char *where, nc_error *err);
 
 typedef struct cpl_relax cpl_relax;
 
@@ -61,15 +69,24 @@ void cpl_relax_begin_step(cpl_relax *r);
  * update. Fails when the result is not finite (diverged iteration). */
 int cpl_relax_update(cpl_relax *r, const double *x_in, const double *x_out, double *x_next,
                      double *alpha, nc_error *err);
-/* Forget the last pair for the secant information (Aitken's r^{k-1}, IQN's next column):
- * used when that pair was not an evaluation of the fixed-point map (algorithm 3's first
- * iteration starts from the DEM with the predicted position, not from the relaxed force). */
-void cpl_relax_forget_pair(cpl_relax *r);
-/* Forget everything learnt in earlier steps (IQN columns, Aitken's last α): used after a
- * step that did not converge, whose information would mislead the next steps. */
-void cpl_relax_forget_history(cpl_relax *r);
+
+typedef enum {
+    /* the last pair was not an evaluation of the fixed-point map (algorithm 3's first
+     * iteration starts from the DEM at the predicted position, not from the relaxed force):
+     * no secant information from it (Aitken's r^{k-1}, IQN's next column) */
+    CPL_RELAX_FORGET_PAIR = 0,
+    /* also everything learnt in earlier steps (IQN columns, Aitken's last α): after a step
+     * that did not converge, whose information would mislead the next steps */
+    CPL_RELAX_FORGET_HISTORY
+} cpl_relax_forget_level;
+void cpl_relax_forget(cpl_relax *r, cpl_relax_forget_level level);
+
 /* The step is accepted. x_in/x_out: the last pair when it was not passed to update (IQN
  * keeps its columns for the next steps), or NULL. Aitken keeps its last α regardless. */
 void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out);
+
+/* A method's diagnostic counter by name ("restarts" of Aitken; "columns",
+ * "dropped_columns" of IQN-ILS); -1 when the method has no such counter. */
+int cpl_relax_counter(const cpl_relax *r, const char *name, double *value);
 
 #endif

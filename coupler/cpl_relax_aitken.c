@@ -1,55 +1,163 @@
 /* cpl_relax_aitken — Aitken dynamic relaxation factor, eq. (34):
  *   α^k = −α^{k−1} (r^{k−1})ᵀ (r^k − r^{k−1}) / ‖r^k − r^{k−1}‖²
- * computed per block (α_u, α_u̇ or α_F as in the paper), with the first-iteration rule
- * α^1 = sign(α_prev)·min(first_cap, |α_prev|) (α0 in the very first step), clipping to
- * [alpha_min, alpha_max] and a guard for a vanishing denominator (keep the previous α).
- * Optional safeguard: back to the best iterate of the step when the residual grows (header). */
-#include "cpl_relax_aitken.h"
+ * computed per block (α_u, α_u̇ or α_F as in the paper), then x^{k+1} = x^k + α^k r^k,
+ * eqs. (31)–(33). The first iteration of a step uses α^1 = sign(α_prev)·min(first_cap,
+ * |α_prev|) of the previous step's last α (the common α in the very first step); α is
+ * clipped to [alpha_min, alpha_max]; a vanishing denominator keeps the previous α.
+ *
+ * Safeguard (restart_growth > 0): when ‖x_out − x_in‖ exceeds restart_growth × the smallest
+ * residual seen in this step, the iteration goes back to that best iterate and relaxes it
+ * with half the α last applied from it (x_next = x_best + α/2 r_best, repeated failures
+ * halve again); the secant pair of eq. (34) then is (best, next), which is exact again for an
+ * affine map. This breaks the period-3 cycle of eq. (34) on on/off contact: two iterates
+ * without contact make the map locally constant, eq. (34) gives α = 1, i.e. the contact-free
+ * answer, which is the deep contact of the first iterate again (docs/notes/damped_contact.md).
+ *
+ * Keys: first_iteration_cap, alpha_min, alpha_max, restart_growth. Counter: "restarts".
+ */
+#include "cpl_relax_ops.h"
 
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-int cpl_aitken_init(cpl_aitken *a, size_t n, size_t n_blocks, double alpha0, double first_cap,
-                    double alpha_min, double alpha_max, nc_error *err)
+#include "nc_json.h"
+
+typedef struct aitken_settings {
+    double first_cap;        /* cap of |α| in the first iteration of a step */
+    double alpha_min;        /* clipping range of α */
+    double alpha_max;
+    double restart_growth;   /* back to the step's best iterate with half its α when the
+                                residual exceeds this × the best residual (0 = off) */
+} aitken_settings;
+_Static_assert(sizeof(aitken_settings) <= CPL_RELAX_PARAMS_SIZE,
+               "aitken settings too large");
+
+typedef struct aitken_state {
+    size_t n, n_blocks, block;   /* block = n / n_blocks */
+    double alpha0, first_cap, alpha_min, alpha_max;
+    double *alpha;               /* [n_blocks] α of the last iteration */
+    double *r_prev;              /* [n] residual of the previous iteration in this step */
+    int have_prev;               /* r_prev valid (not the first iteration of the step) */
+    int have_alpha;              /* α of a previous step exists */
+    /* safeguard (restart_growth > 0): the iterate of the step with the smallest residual */
+    double restart_growth;       /* back to the best iterate when ‖r‖ > this × ‖r_best‖; 0 off */
+    double *x_best, *r_best;     /* [n] best input of this step and its residual */
+    double *alpha_best;          /* [n_blocks] α applied from the best iterate */
+    double best_norm2;           /* ‖r_best‖² */
+    int have_best;
+    long n_restarts;             /* backtracks so far (diagnostics, tests) */
+} aitken_state;
+
+static const char *const aitken_keys[] = {"first_iteration_cap", "alpha_min", "alpha_max",
+                                          "restart_growth", NULL};
+
+static aitken_settings settings_of(const cpl_relax_settings *s)
 {
-    memset(a, 0, sizeof *a);
-    if (n_blocks == 0 || n % n_blocks != 0)
-        return nc_error_set(err, 1, "aitken: %zu unknowns cannot be split into %zu blocks", n,
-                            n_blocks);
-    a->n = n;
-    a->n_blocks = n_blocks;
-    a->block = n / n_blocks;
-    a->alpha0 = alpha0;
-    a->first_cap = first_cap;
-    a->alpha_min = alpha_min;
-    a->alpha_max = alpha_max;
-    a->alpha = calloc(n_blocks, sizeof *a->alpha);
-    a->r_prev = calloc(n + 1, sizeof *a->r_prev);
-    a->x_best = calloc(n + 1, sizeof *a->x_best);
-    a->r_best = calloc(n + 1, sizeof *a->r_best);
-    a->alpha_best = calloc(n_blocks, sizeof *a->alpha_best);
-    if (!a->alpha || !a->r_prev || !a->x_best || !a->r_best || !a->alpha_best) {
-        cpl_aitken_free(a);
-        return nc_error_set(err, 1, "aitken: out of memory for %zu unknowns", n);
-    }
+    aitken_settings p;
+    memcpy(&p, s->params, sizeof p);
+    return p;
+}
+
+static void aitken_defaults(cpl_relax_settings *s)
+{
+    const aitken_settings p = {.first_cap = 0.5, .alpha_min = 1e-6, .alpha_max = 2.0,
+                               .restart_growth = 4.0};   /* safeguard on (see above) */
+    memcpy(s->params, &p, sizeof p);
+}
+
+static int aitken_parse(cpl_relax_settings *s, const cJSON *obj, const char *where,
+                        nc_error *err)
+{
+    aitken_settings p = settings_of(s);
+    if (nc_json_number_range_opt(obj, where, "first_iteration_cap", p.first_cap, 1e-12, 2.0,
+                                 &p.first_cap, err) ||
+        nc_json_number_range_opt(obj, where, "alpha_min", p.alpha_min, -2.0, 2.0,
+                                 &p.alpha_min, err) ||
+        nc_json_number_range_opt(obj, where, "alpha_max", p.alpha_max, -2.0, 10.0,
+                                 &p.alpha_max, err) ||
+        nc_json_number_range_opt(obj, where, "restart_growth", p.restart_growth, 0.0, 1e6,
+                                 &p.restart_growth, err))
+        return -1;
+    memcpy(s->params, &p, sizeof p);
     return 0;
 }
 
-void cpl_aitken_free(cpl_aitken *a)
+static int aitken_check(const cpl_relax_settings *s, const char *where, nc_error *err)
 {
+    const aitken_settings p = settings_of(s);
+    if (cpl_relax_check_alpha(s, where, err)) return -1;
+    /* below 1 it would back-track on every iteration */
+    if (p.restart_growth > 0.0 && p.restart_growth < 1.0)
+        return nc_error_set(err, 1, "%s: restart_growth: expected 0 (off) or a number >= 1, "
+                                    "got %g", where, p.restart_growth);
+    if (!(p.alpha_min < p.alpha_max))
+        return nc_error_set(err, 1, "%s: alpha_min (%g) must be smaller than alpha_max (%g)",
+                            where, p.alpha_min, p.alpha_max);
+    if (!(p.first_cap > 0.0))
+        return nc_error_set(err, 1, "%s: first_iteration_cap must be > 0, got %g", where,
+                            p.first_cap);
+    return 0;
+}
+
+static int aitken_get(const cpl_relax_settings *s, const char *key, double *value)
+{
+    const aitken_settings p = settings_of(s);
+    const double values[] = {p.first_cap, p.alpha_min, p.alpha_max, p.restart_growth};
+    for (size_t i = 0; aitken_keys[i]; i++)
+        if (strcmp(key, aitken_keys[i]) == 0) {
+            *value = values[i];
+            return 0;
+        }
+    return -1;
+}
+
+static void aitken_free(void *state)
+{
+    aitken_state *a = state;
     if (!a) return;
     free(a->alpha);
     free(a->r_prev);
     free(a->x_best);
     free(a->r_best);
     free(a->alpha_best);
-    memset(a, 0, sizeof *a);
+    free(a);
 }
 
-void cpl_aitken_begin_step(cpl_aitken *a)
+static int aitken_create(void **state, const cpl_relax_settings *s, size_t n, size_t n_blocks,
+                         nc_error *err)
 {
+    const aitken_settings p = settings_of(s);
+    if (n_blocks == 0 || n % n_blocks != 0)
+        return nc_error_set(err, 1, "aitken: %zu unknowns cannot be split into %zu blocks", n,
+                            n_blocks);
+    aitken_state *a = calloc(1, sizeof *a);
+    if (!a) return nc_error_set(err, 1, "aitken: out of memory");
+    a->n = n;
+    a->n_blocks = n_blocks;
+    a->block = n / n_blocks;
+    a->alpha0 = s->alpha;
+    a->first_cap = p.first_cap;
+    a->alpha_min = p.alpha_min;
+    a->alpha_max = p.alpha_max;
+    a->restart_growth = p.restart_growth;
+    a->alpha = calloc(n_blocks, sizeof *a->alpha);
+    a->r_prev = calloc(n + 1, sizeof *a->r_prev);
+    a->x_best = calloc(n + 1, sizeof *a->x_best);
+    a->r_best = calloc(n + 1, sizeof *a->r_best);
+    a->alpha_best = calloc(n_blocks, sizeof *a->alpha_best);
+    if (!a->alpha || !a->r_prev || !a->x_best || !a->r_best || !a->alpha_best) {
+        aitken_free(a);
+        return nc_error_set(err, 1, "aitken: out of memory for %zu unknowns", n);
+    }
+    *state = a;
+    return 0;
+}
+
+static void aitken_begin_step(void *state)
+{
+    aitken_state *a = state;
     a->have_prev = 0;
     a->have_best = 0;
 }
@@ -59,9 +167,10 @@ static double clip(double x, double lo, double hi)
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
-double cpl_aitken_update(cpl_aitken *a, const double *x_in, const double *x_out,
-                         double *x_next)
+static double aitken_update(void *state, const double *x_in, const double *x_out,
+                            double *x_next)
 {
+    aitken_state *a = state;
     double norm2 = 0.0;
     for (size_t i = 0; i < a->n; i++) norm2 += (x_out[i] - x_in[i]) * (x_out[i] - x_in[i]);
     if (a->restart_growth > 0.0 && a->have_best && a->have_prev &&
@@ -107,7 +216,7 @@ double cpl_aitken_update(cpl_aitken *a, const double *x_in, const double *x_out,
                 scale += r * r + a->r_prev[o + i] * a->r_prev[o + i];
             }
             /* guard: residual did not change (converged block or round-off only) */
-            if (den > DBL_MIN && den > 1e-26 * scale) alpha = -a->alpha[b] * num / den; /* (34) */
+            if (den > DBL_MIN && den > 1e-26 * scale) alpha = -a->alpha[b] * num / den; /* eq. (34) */
             else alpha = a->alpha[b];
             if (!isfinite(alpha)) alpha = a->alpha[b];
         }
@@ -124,3 +233,33 @@ double cpl_aitken_update(cpl_aitken *a, const double *x_in, const double *x_out,
     a->have_alpha = 1;
     return a->alpha[0];
 }
+
+static void aitken_forget(void *state, cpl_relax_forget_level level)
+{
+    aitken_state *a = state;
+    a->have_prev = 0;
+    if (level == CPL_RELAX_FORGET_HISTORY) a->have_alpha = 0;   /* next step starts from α0 */
+}
+
+static int aitken_counter(const void *state, const char *name, double *value)
+{
+    const aitken_state *a = state;
+    if (strcmp(name, "restarts") != 0) return -1;
+    *value = (double)a->n_restarts;
+    return 0;
+}
+
+const cpl_relax_ops cpl_relax_aitken = {
+    .name = "aitken",
+    .keys = aitken_keys,
+    .defaults = aitken_defaults,
+    .parse = aitken_parse,
+    .check = aitken_check,
+    .get = aitken_get,
+    .create = aitken_create,
+    .begin_step = aitken_begin_step,
+    .update = aitken_update,
+    .forget = aitken_forget,
+    .counter = aitken_counter,
+    .free = aitken_free,
+};

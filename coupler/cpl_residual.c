@@ -1,4 +1,5 @@
-/* cpl_residual — interface residuals, scaled norms and the convergence test (eqs. 27–30). */
+/* cpl_residual — interface residuals, scaled norms and the convergence test,
+ * eqs. (27)–(30). */
 #include "cpl_residual.h"
 
 #include <math.h>

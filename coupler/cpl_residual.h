@@ -1,4 +1,5 @@
-/* cpl_residual — interface residuals (28)–(30), their scaled norm and the convergence test (27).
+/* cpl_residual — interface residuals, eqs. (28)–(30), their scaled norm and the convergence
+ * test, eq. (27).
  *
  * A residual is r^k = x̃^k − x^k: the value a solver produced in iteration k minus the value
  * that was used as the input of iteration k (the relaxed value of iteration k − 1). Its
@@ -12,7 +13,7 @@
 /* ‖x‖ / sqrt(n), 0 for n = 0. */
 double cpl_scaled_norm(const double *x, size_t n);
 
-/* r = produced − used, returns the scaled norm of r (eqs. 28, 29, 30). */
+/* r = produced − used, returns the scaled norm of r (eqs. (28), (29), (30)). */
 double cpl_residual(const double *produced, const double *used, double *r, size_t n);
 
 /* Convergence criterion of eq. (27) with an optional relative part:

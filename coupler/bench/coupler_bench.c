@@ -219,7 +219,7 @@ int main(int argc, char **argv)
     s.end_time_s = 1e-3 * (double)steps;
     s.tol_abs = 1e-6;
     s.max_iterations = 30;
-    s.relax.method = CPL_RELAX_AITKEN;
+    if (cpl_relax_settings_select(&s.relax, "aitken", &err)) goto out;
     s.relax.alpha = 0.3;
     cpl_participant pf = cpl_remote_participant(&fem), pd = cpl_remote_participant(&dem);
     cpl_history history;

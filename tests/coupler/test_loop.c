@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -97,8 +98,8 @@ static void test_strong_matches_monolithic(void **state)
     run(&MILD, &s, &r, NULL);
     assert_int_equal(r.rc, 0);
     assert_int_equal(r.rec.steps, 50);
-    assert_true(r.u_mono_scale > 1e-3);          /* a real response, not a trivial zero */
-    assert_true(r.u_err < 1e-8);
+    assert_below(1e-3, r.u_mono_scale);          /* a real response, not a trivial zero */
+    assert_below(r.u_err, 1e-8);
     for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
 }
 
@@ -122,15 +123,16 @@ static void test_weak_lags_first_order(void **state)
     run(&soft, &s, &r3, NULL);
     assert_int_equal(r3.rc, 0);
     print_message("weak, linear predictor, dt/2: deviation %.3e\n", r3.u_err);
-    assert_true(r3.u_err < 0.5 * r2.u_err);
+    assert_below(r3.u_err, 0.5 * r2.u_err);
     assert_int_equal(r1.rc, 0);
     assert_int_equal(r2.rc, 0);
     assert_int_equal(r1.timing.iterations, r1.rec.steps);   /* one exchange per step */
     double ratio = r1.u_err / r2.u_err;
     print_message("weak: deviation from monolithic %.3e (dt), %.3e (dt/2), ratio %.3f\n",
                   r1.u_err, r2.u_err, ratio);
-    assert_true(r1.u_err > 1e-3 * r1.u_mono_scale);
-    assert_true(ratio > 1.6 && ratio < 2.5);
+    assert_below(1e-3 * r1.u_mono_scale, r1.u_err);
+    assert_below(1.6, ratio);
+    assert_below(ratio, 2.5);
 }
 
 /* Largest |J| of the per-dof Gauss–Seidel map (K diagonal: one node, no link). */
@@ -169,14 +171,14 @@ static void test_alpha_one_diverges_where_theory_says(void **state)
     (void)state;
     const double dt = 0.01;
     problem ok = problem_with_J(0.8, dt), bad = problem_with_J(1.25, dt);
-    assert_float_equal(max_abs_J(&ok, dt), 0.8, 1e-12);
+    assert_near(max_abs_J(&ok, dt), 0.8, 1e-12);
     cpl_loop_settings s = settings(CPL_SCHEME_STRONG, dt, 0.05);
     s.max_iterations = 400;
     run_result r;
     run(&ok, &s, &r, NULL);
     assert_int_equal(r.rc, 0);
     for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
-    assert_true(r.u_err < 1e-8);
+    assert_below(r.u_err, 1e-8);
 
     s.max_iterations = 40;
     s.end_time_s = dt;   /* one step */
@@ -184,17 +186,30 @@ static void test_alpha_one_diverges_where_theory_says(void **state)
     assert_int_equal(r.rc, 0);                    /* policy: accept with a warning */
     assert_int_equal(r.rec.converged[0], 0);
     assert_int_equal(r.timing.unconverged_steps, 1);
-    assert_true(r.rec.step0_residual[39] > 750.0 * r.rec.step0_residual[0]);
+    assert_below(750.0 * r.rec.step0_residual[0], r.rec.step0_residual[39]);
 }
 
-static long total_iterations(const problem *pb, cpl_relax_method method, double alpha,
+/* The relaxation method by name, one of its keys. */
+static void use_method(cpl_loop_settings *s, const char *method)
+{
+    nc_error err;
+    if (cpl_relax_settings_select(&s->relax, method, &err)) fail_msg("%s", err.message);
+}
+
+static void set(cpl_loop_settings *s, const char *key, double value)
+{
+    nc_error err;
+    if (cpl_relax_settings_set(&s->relax, key, value, &err)) fail_msg("%s", err.message);
+}
+
+static long total_iterations(const problem *pb, const char *method, double alpha,
                              cpl_relaxed_quantity q, double *u_err)
 {
     cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.2);
-    s.relax.method = method;
+    use_method(&s, method);
     s.relax.alpha = alpha;
-    s.relax.first_cap = 0.5;
-    s.relax.iqn_reuse_steps = 0;
+    set(&s, "first_iteration_cap", 0.5);
+    set(&s, "reuse_steps", 0);
     s.relaxed = q;
     s.tol_abs = 1e-9;
     run_result r;
@@ -214,21 +229,23 @@ static void test_aitken_fewer_iterations_than_constant(void **state)
 {
     (void)state;
     double e_const, e_aitken;
-    long n_const = total_iterations(&HARD, CPL_RELAX_CONSTANT, 0.02, CPL_RELAX_FORCE, &e_const);
-    long n_aitken = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02, CPL_RELAX_FORCE, &e_aitken);
+    long n_const = total_iterations(&HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e_const);
+    long n_aitken = total_iterations(&HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e_aitken);
     print_message("force relaxation, 20 steps: constant %ld, aitken %ld iterations\n", n_const,
                   n_aitken);
     assert_true(n_aitken < n_const);
-    assert_true(e_const < 1e-7 && e_aitken < 1e-7);
+    assert_below(e_const, 1e-7);
+    assert_below(e_aitken, 1e-7);
     problem p08 = problem_with_J(0.8, 0.01);
-    n_const = total_iterations(&p08, CPL_RELAX_CONSTANT, 0.5, CPL_RELAX_DISPLACEMENT_VELOCITY,
+    n_const = total_iterations(&p08, "constant", 0.5, CPL_RELAXED_DISPLACEMENT_VELOCITY,
                                &e_const);
-    n_aitken = total_iterations(&p08, CPL_RELAX_AITKEN, 0.5, CPL_RELAX_DISPLACEMENT_VELOCITY,
+    n_aitken = total_iterations(&p08, "aitken", 0.5, CPL_RELAXED_DISPLACEMENT_VELOCITY,
                                 &e_aitken);
     print_message("u/v relaxation, |J| = 0.8: constant %ld, aitken %ld iterations\n", n_const,
                   n_aitken);
     assert_true(n_aitken < n_const);
-    assert_true(e_const < 1e-7 && e_aitken < 1e-7);
+    assert_below(e_const, 1e-7);
+    assert_below(e_aitken, 1e-7);
 }
 
 /* IQN-ILS on the linear hard problem (2 linked nodes): at most n + 1 quasi-Newton updates
@@ -240,11 +257,11 @@ static void test_iqn_bound_on_linear_problem(void **state)
     (void)state;
     for (int mode = 0; mode < 2; mode++) {
         cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
-        s.relax.method = CPL_RELAX_IQN_ILS;
+        use_method(&s, "iqn-ils");
         s.relax.alpha = 0.02;
-        s.relax.iqn_reuse_steps = 0;
-        s.relax.iqn_filter = 1e-10;   /* keep every independent column: exact for linear */
-        s.relaxed = mode ? CPL_RELAX_FORCE : CPL_RELAX_DISPLACEMENT_VELOCITY;
+        set(&s, "reuse_steps", 0);
+        set(&s, "filter", 1e-10);   /* keep every independent column: exact for linear */
+        s.relaxed = mode ? CPL_RELAXED_FORCE : CPL_RELAXED_DISPLACEMENT_VELOCITY;
         s.tol_abs = 1e-9;
         run_result r;
         run(&HARD, &s, &r, NULL);
@@ -257,7 +274,7 @@ static void test_iqn_bound_on_linear_problem(void **state)
         }
         print_message("iqn-ils, %s relaxation: at most %d iterations per step (bound %d)\n",
                       mode ? "force" : "u/v", worst, bound);
-        assert_true(r.u_err < 1e-7);
+        assert_below(r.u_err, 1e-7);
     }
 }
 
@@ -267,13 +284,15 @@ static void test_force_vs_displacement_relaxation(void **state)
 {
     (void)state;
     double e1, e2, e3;
-    long n_disp = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02,
-                                   CPL_RELAX_DISPLACEMENT_VELOCITY, &e1);
-    long n_force = total_iterations(&HARD, CPL_RELAX_AITKEN, 0.02, CPL_RELAX_FORCE, &e2);
-    long n_force_const = total_iterations(&HARD, CPL_RELAX_CONSTANT, 0.02, CPL_RELAX_FORCE, &e3);
+    long n_disp = total_iterations(&HARD, "aitken", 0.02,
+                                   CPL_RELAXED_DISPLACEMENT_VELOCITY, &e1);
+    long n_force = total_iterations(&HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e2);
+    long n_force_const = total_iterations(&HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e3);
     print_message("aitken: displacement %ld, force %ld iterations; constant force %ld\n",
                   n_disp, n_force, n_force_const);
-    assert_true(e1 < 1e-7 && e2 < 1e-7 && e3 < 1e-7);
+    assert_below(e1, 1e-7);
+    assert_below(e2, 1e-7);
+    assert_below(e3, 1e-7);
     assert_true(n_force < n_force_const);
 }
 
@@ -294,11 +313,11 @@ static void test_far_step_option(void **state)
     run_result r;
     run(&MILD, &s, &r, far_until);
     assert_int_equal(r.rc, 0);
-    assert_float_equal(r.rec.dt[0], 0.001, 1e-15);   /* nothing known yet: nominal */
-    assert_float_equal(r.rec.dt[1], 0.01, 1e-15);
-    assert_float_equal(r.fem_dt_max, 0.01, 1e-15);
-    assert_float_equal(r.rec.dt[r.rec.steps - 1], 0.001, 1e-12);
-    assert_float_equal(r.rec.time[r.rec.steps - 1], 0.2, 1e-12);
+    assert_near(r.rec.dt[0], 0.001, 1e-15);   /* nothing known yet: nominal */
+    assert_near(r.rec.dt[1], 0.01, 1e-15);
+    assert_near(r.fem_dt_max, 0.01, 1e-15);
+    assert_near(r.rec.dt[r.rec.steps - 1], 0.001, 1e-12);
+    assert_near(r.rec.time[r.rec.steps - 1], 0.2, 1e-12);
     /* 0.001 + 9 × 0.01 = 0.091 < 0.1, then a large step to 0.101, then 99 small ones */
     assert_int_equal(r.rec.steps, 1 + 10 + 99);
 }
@@ -324,7 +343,7 @@ static void test_skip_fem_without_contact(void **state)
     run(&MILD, &s, &r, NULL);
     assert_true(r.fem_solves >= 10);
     assert_int_equal(r.fem_begins, 10);
-    assert_true(r.u_err < 1e-8);   /* still the monolithic answer */
+    assert_below(r.u_err, 1e-8);   /* still the monolithic answer */
 }
 
 static void test_max_iterations_stop_policy(void **state)
@@ -352,7 +371,7 @@ static void test_participant_error_names_where(void **state)
 {
     (void)state;
     cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
-    s.relax.method = CPL_RELAX_AITKEN;
+    use_method(&s, "aitken");
     s.relax.alpha = 0.02;
     run_result r;
     run(&HARD, &s, &r, fem_fails);
@@ -399,9 +418,9 @@ static void test_settings_check(void **state)
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
     assert_non_null(strstr(err.message, "coupler.json: tolerance"));
     s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
-    s.relax.method = CPL_RELAX_AITKEN;
-    s.relax.alpha_min = 1.0;
-    s.relax.alpha_max = 0.5;
+    use_method(&s, "aitken");
+    set(&s, "alpha_min", 1.0);
+    set(&s, "alpha_max", 0.5);
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
 }
 

@@ -6,46 +6,90 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "../../coupler/cpl_relax.h"
-#include "../../coupler/cpl_relax_aitken.h"
-#include "../../coupler/cpl_relax_iqn.h"
 
-static cpl_relax *make(cpl_relax_method method, double alpha, size_t n, size_t blocks)
+static void set(cpl_relax_settings *s, const char *key, double value)
 {
-    cpl_relax_settings s;
-    cpl_relax_settings_default(&s);
-    s.method = method;
-    s.alpha = alpha;
-    s.iqn_reuse_steps = 0;
-    s.iqn_filter = 1e-10;   /* exactness claims need all independent columns */
+    nc_error err;
+    if (cpl_relax_settings_set(s, key, value, &err)) fail_msg("%s", err.message);
+}
+
+static cpl_relax *create(const cpl_relax_settings *s, size_t n, size_t blocks)
+{
     cpl_relax *r = NULL;
     nc_error err;
-    assert_int_equal(cpl_relax_create(&r, &s, n, blocks, &err), 0);
+    assert_int_equal(cpl_relax_settings_check(s, "relaxation", &err), 0);
+    assert_int_equal(cpl_relax_create(&r, s, n, blocks, &err), 0);
     return r;
+}
+
+static cpl_relax *make(const char *method, double alpha, size_t n, size_t blocks)
+{
+    cpl_relax_settings s;
+    nc_error err;
+    cpl_relax_settings_default(&s);
+    assert_int_equal(cpl_relax_settings_select(&s, method, &err), 0);
+    s.alpha = alpha;
+    set(&s, "reuse_steps", 0);
+    set(&s, "filter", 1e-10);   /* exactness claims need all independent columns */
+    return create(&s, n, blocks);
+}
+
+/* Aitken with α0, first-iteration cap, clipping range and safeguard. */
+static cpl_relax *make_aitken(double alpha0, double first_cap, double alpha_min,
+                              double alpha_max, double restart_growth, size_t n, size_t blocks)
+{
+    cpl_relax_settings s;
+    nc_error err;
+    cpl_relax_settings_default(&s);
+    assert_int_equal(cpl_relax_settings_select(&s, "aitken", &err), 0);
+    s.alpha = alpha0;
+    set(&s, "first_iteration_cap", first_cap);
+    set(&s, "alpha_min", alpha_min);
+    set(&s, "alpha_max", alpha_max);
+    set(&s, "restart_growth", restart_growth);
+    return create(&s, n, blocks);
+}
+
+/* One update; returns the α applied. */
+static double update(cpl_relax *r, const double *x_in, const double *x_out, double *x_next)
+{
+    double alpha;
+    nc_error err;
+    if (cpl_relax_update(r, x_in, x_out, x_next, &alpha, &err)) fail_msg("%s", err.message);
+    return alpha;
+}
+
+static double counter(const cpl_relax *r, const char *name)
+{
+    double value;
+    assert_int_equal(cpl_relax_counter(r, name, &value), 0);
+    return value;
 }
 
 static void test_constant_and_none(void **state)
 {
     (void)state;
-    cpl_relax *r = make(CPL_RELAX_CONSTANT, 0.25, 2, 1);
+    cpl_relax *r = make("constant", 0.25, 2, 1);
     const double in[2] = {1.0, 2.0}, out[2] = {5.0, -2.0};
     double next[2], alpha;
     nc_error err;
     cpl_relax_begin_step(r);
     assert_int_equal(cpl_relax_update(r, in, out, next, &alpha, &err), 0);
-    assert_float_equal(next[0], 2.0, 1e-15);   /* 1 + 0.25 · 4 */
-    assert_float_equal(next[1], 1.0, 1e-15);   /* 2 + 0.25 · (−4) */
-    assert_float_equal(alpha, 0.25, 0.0);
+    assert_near(next[0], 2.0, 1e-15);   /* 1 + 0.25 · 4 */
+    assert_near(next[1], 1.0, 1e-15);   /* 2 + 0.25 · (−4) */
+    assert_near(alpha, 0.25, 0.0);
     cpl_relax_free(r);
-    r = make(CPL_RELAX_NONE, 0.5, 2, 1);
+    r = make("none", 0.5, 2, 1);
     assert_int_equal(cpl_relax_update(r, in, out, next, &alpha, &err), 0);
-    assert_float_equal(next[0], 5.0, 0.0);
-    assert_float_equal(alpha, 1.0, 0.0);
+    assert_near(next[0], 5.0, 0.0);
+    assert_near(alpha, 1.0, 0.0);
     cpl_relax_free(r);
 }
 
@@ -55,7 +99,7 @@ static void test_aitken_exact_on_scalar_affine_map(void **state)
 {
     (void)state;
     const double a = -3.0, b = 2.0, xstar = b / (1.0 - a);
-    cpl_relax *r = make(CPL_RELAX_AITKEN, 0.5, 1, 1);
+    cpl_relax *r = make("aitken", 0.5, 1, 1);
     double x = 0.0, out, alpha;
     nc_error err;
     cpl_relax_begin_step(r);
@@ -63,57 +107,58 @@ static void test_aitken_exact_on_scalar_affine_map(void **state)
         out = a * x + b;
         assert_int_equal(cpl_relax_update(r, &x, &out, &x, &alpha, &err), 0);
     }
-    assert_float_equal(alpha, 1.0 / (1.0 - a), 1e-12);
-    assert_float_equal(x, xstar, 1e-12);
+    assert_near(alpha, 1.0 / (1.0 - a), 1e-12);
+    assert_near(x, xstar, 1e-12);
     cpl_relax_free(r);
 }
 
 static void test_aitken_first_iteration_cap_and_sign(void **state)
 {
     (void)state;
-    cpl_aitken a;
-    nc_error err;
     /* α0 = 0.9, cap 0.5: a later step's first α is min(0.5, 0.9) */
-    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.9, 0.5, -1.0, 2.0, &err), 0);
+    cpl_relax *r = make_aitken(0.9, 0.5, -1.0, 2.0, 0.0, 1, 1);
     double x = 0.0, out = 1.0;
-    cpl_aitken_begin_step(&a);
-    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), 0.9, 0.0);   /* very first: α0 */
-    cpl_aitken_begin_step(&a);
-    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), 0.5, 0.0);   /* capped */
-    /* a negative previous α keeps its sign: sign(α)·min(cap, |α|) */
-    a.alpha[0] = -0.3;
-    cpl_aitken_begin_step(&a);
-    assert_float_equal(cpl_aitken_update(&a, &x, &out, &x), -0.3, 0.0);
-    cpl_aitken_free(&a);
+    cpl_relax_begin_step(r);
+    assert_near(update(r, &x, &out, &x), 0.9, 0.0);   /* very first: α0 */
+    x = 0.0;
+    cpl_relax_begin_step(r);
+    assert_near(update(r, &x, &out, &x), 0.5, 0.0);   /* capped */
+    /* a negative previous α keeps its sign: sign(α)·min(cap, |α|). From x = 0.5 (r = 1),
+     * out = 3.5 (r = 3) gives α = −0.5 · 1 · 2 / 4 = −0.25 by eq. (34) */
+    out = 3.5;
+    assert_near(update(r, &x, &out, &x), -0.25, 0.0);
+    x = 0.0;
+    out = 1.0;
+    cpl_relax_begin_step(r);
+    assert_near(update(r, &x, &out, &x), -0.25, 0.0);
+    cpl_relax_free(r);
 }
 
 static void test_aitken_clipping_and_zero_denominator(void **state)
 {
     (void)state;
-    cpl_aitken a;
-    nc_error err;
     /* H(x) = 3x + 1 (slope > 1): eq. (34) gives α = 1/(1 − 3) = −0.5, clipped to 1e-3 */
-    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-3, 2.0, &err), 0);
-    double x = 0.0, out;
-    cpl_aitken_begin_step(&a);
+    cpl_relax *r = make_aitken(0.5, 0.5, 1e-3, 2.0, 0.0, 1, 1);
+    double x = 0.0, out, alpha = 0.0;
+    cpl_relax_begin_step(r);
     for (int k = 0; k < 2; k++) {
         out = 3.0 * x + 1.0;
-        cpl_aitken_update(&a, &x, &out, &x);
+        alpha = update(r, &x, &out, &x);
     }
-    assert_float_equal(a.alpha[0], 1e-3, 0.0);
-    cpl_aitken_free(&a);
+    assert_near(alpha, 1e-3, 0.0);
+    cpl_relax_free(r);
 
     /* identical residuals twice: ‖Δr‖ = 0, α must stay the previous one (no NaN) */
-    assert_int_equal(cpl_aitken_init(&a, 2, 2, 0.4, 0.5, 1e-6, 2.0, &err), 0);
+    r = make_aitken(0.4, 0.5, 1e-6, 2.0, 0.0, 2, 2);
     double in[2] = {1.0, 1.0}, o[2] = {2.0, 3.0}, next[2];
-    cpl_aitken_begin_step(&a);
-    cpl_aitken_update(&a, in, o, next);
-    double alpha = cpl_aitken_update(&a, in, o, next);
-    assert_float_equal(alpha, 0.4, 0.0);
+    cpl_relax_begin_step(r);
+    update(r, in, o, next);
+    alpha = update(r, in, o, next);
+    assert_near(alpha, 0.4, 0.0);
     assert_true(isfinite(next[0]) && isfinite(next[1]));
     /* blocks get separate factors: block 1's residual is twice block 0's, same α here */
-    assert_float_equal(a.alpha[1], 0.4, 0.0);
-    cpl_aitken_free(&a);
+    assert_near(next[1], 1.0 + 0.4 * 2.0, 0.0);
+    cpl_relax_free(r);
 }
 
 /* On/off contact as a scalar map (the first contact step of case 7.2 with a damped contact):
@@ -133,23 +178,20 @@ static double onoff_map(double x)
 
 static int onoff_evaluations(double restart_growth, int max_eval, double *x_end, long *restarts)
 {
-    cpl_aitken a;
-    nc_error err;
-    assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-6, 2.0, &err), 0);
-    a.restart_growth = restart_growth;
+    cpl_relax *r = make_aitken(0.5, 0.5, 1e-6, 2.0, restart_growth, 1, 1);
     const double xstar = 40.0 * -0.01 / 41.0;
     double x = 0.0;
     int k;
-    cpl_aitken_begin_step(&a);
+    cpl_relax_begin_step(r);
     for (k = 1; k <= max_eval; k++) {
         double out = onoff_map(x);
         if (fabs(out - x) < 1e-9 && fabs(x - xstar) < 1e-9) break;
-        if (k == 4 && restart_growth == 0.0) assert_float_equal(x, 0.0, 1e-15); /* the cycle */
-        cpl_aitken_update(&a, &x, &out, &x);
+        if (k == 4 && restart_growth == 0.0) assert_near(x, 0.0, 1e-15); /* the cycle */
+        update(r, &x, &out, &x);
     }
     *x_end = x;
-    *restarts = a.n_restarts;
-    cpl_aitken_free(&a);
+    *restarts = (long)counter(r, "restarts");
+    cpl_relax_free(r);
     return k;
 }
 
@@ -160,13 +202,13 @@ static void test_aitken_restart_breaks_onoff_cycle(void **state)
     long restarts;
     int plain = onoff_evaluations(0.0, 30, &x, &restarts);
     assert_true(plain > 30);                           /* not converged in 30 evaluations */
-    assert_true(fabs(x - 40.0 * -0.01 / 41.0) > 1e-3);
+    assert_below(1e-3, fabs(x - 40.0 * -0.01 / 41.0));
     assert_int_equal(restarts, 0);
     int safe = onoff_evaluations(2.0, 30, &x, &restarts);
     print_message("on/off contact map: plain Aitken > 30 evaluations, restart_growth 2: %d "
                   "(%ld restarts)\n", safe, restarts);
     assert_true(safe <= 30);
-    assert_float_equal(x, 40.0 * -0.01 / 41.0, 1e-9);
+    assert_near(x, 40.0 * -0.01 / 41.0, 1e-9);
     assert_true(restarts > 0);
 }
 
@@ -176,19 +218,16 @@ static void test_aitken_restart_inactive_when_converging(void **state)
 {
     (void)state;
     for (int on = 0; on < 2; on++) {
-        cpl_aitken a;
-        nc_error err;
-        assert_int_equal(cpl_aitken_init(&a, 1, 1, 0.5, 0.5, 1e-6, 2.0, &err), 0);
-        a.restart_growth = on ? 2.0 : 0.0;
+        cpl_relax *r = make_aitken(0.5, 0.5, 1e-6, 2.0, on ? 2.0 : 0.0, 1, 1);
         double x = 0.0, out;
-        cpl_aitken_begin_step(&a);
+        cpl_relax_begin_step(r);
         for (int k = 0; k < 2; k++) {
             out = 0.5 * x + 1.0;   /* x* = 2 */
-            cpl_aitken_update(&a, &x, &out, &x);
+            update(r, &x, &out, &x);
         }
-        assert_float_equal(x, 2.0, 1e-12);
-        assert_int_equal(a.n_restarts, 0);
-        cpl_aitken_free(&a);
+        assert_near(x, 2.0, 1e-12);
+        assert_int_equal((long)counter(r, "restarts"), 0);
+        cpl_relax_free(r);
     }
 }
 
@@ -209,7 +248,7 @@ static void test_iqn_linear_in_n_plus_1_updates(void **state)
         A[i * N + i] -= 1.5;   /* makes plain fixed-point iteration diverge */
         b[i] = 1.0 + i;
     }
-    cpl_relax *r = make(CPL_RELAX_IQN_ILS, 0.1, N, 1);
+    cpl_relax *r = make("iqn-ils", 0.1, N, 1);
     double x[N] = {0}, out[N], alpha;
     nc_error err;
     cpl_relax_begin_step(r);
@@ -226,10 +265,10 @@ static void test_iqn_linear_in_n_plus_1_updates(void **state)
         res = sqrt(res);
         if (res < 1e-9) break;
         assert_int_equal(cpl_relax_update(r, x, out, x, &alpha, &err), 0);
-        if (k == 0) assert_float_equal(alpha, 0.1, 0.0);   /* no columns: plain step */
+        if (k == 0) assert_near(alpha, 0.1, 0.0);   /* no columns: plain step */
         else assert_true(isnan(alpha));
     }
-    assert_true(res < 1e-9);
+    assert_below(res, 1e-9);
     assert_true(evaluations <= N + 2);
     cpl_relax_free(r);
 }
@@ -238,26 +277,31 @@ static void test_iqn_linear_in_n_plus_1_updates(void **state)
 static void test_iqn_filter_drops_dependent_columns(void **state)
 {
     (void)state;
-    cpl_iqn q;
+    cpl_relax_settings s;
     nc_error err;
-    assert_int_equal(cpl_iqn_init(&q, 3, 0, 0.5, 1e-8, 0, &err), 0);
-    cpl_iqn_begin_step(&q);
+    cpl_relax_settings_default(&s);
+    assert_int_equal(cpl_relax_settings_select(&s, "iqn-ils", &err), 0);
+    s.alpha = 0.5;
+    set(&s, "filter", 1e-8);
+    set(&s, "reuse_steps", 0);
+    cpl_relax *r = create(&s, 3, 1);
+    cpl_relax_begin_step(r);
     double x[3] = {1, 2, 3}, out[3] = {2, 2, 2}, next[3];
-    cpl_iqn_update(&q, x, out, next);
-    cpl_iqn_update(&q, x, out, next);   /* identical pair -> zero column */
-    assert_true(q.dropped >= 1);
-    assert_int_equal((int)q.cols, 0);
+    update(r, x, out, next);
+    update(r, x, out, next);   /* identical pair -> zero column */
+    assert_true(counter(r, "dropped_columns") >= 1);
+    assert_int_equal((int)counter(r, "columns"), 0);
     for (int i = 0; i < 3; i++) assert_true(isfinite(next[i]));
     /* parallel columns (new step, so only these pairs count): equal residual differences */
-    cpl_iqn_begin_step(&q);
+    cpl_relax_begin_step(r);
     double x2[3] = {0, 0, 0}, o2[3] = {1, 1, 1};
-    cpl_iqn_update(&q, x2, o2, next);
+    update(r, x2, o2, next);
     double x3[3] = {1, 1, 1}, o3[3] = {3, 3, 3};
-    cpl_iqn_update(&q, x3, o3, next);
+    update(r, x3, o3, next);
     double x4[3] = {2, 2, 2}, o4[3] = {5, 5, 5};
-    cpl_iqn_update(&q, x4, o4, next);
-    assert_true(q.cols <= 1);
-    cpl_iqn_free(&q);
+    update(r, x4, o4, next);
+    assert_true(counter(r, "columns") <= 1);
+    cpl_relax_free(r);
 }
 
 static int solve_affine(cpl_relax *r, const double *A, const double *b, int n)
@@ -295,14 +339,13 @@ static void test_iqn_reuse_previous_steps(void **state)
         b2[i] = 1.0 + 0.1 * i;
     }
     cpl_relax_settings s;
-    cpl_relax_settings_default(&s);
-    s.method = CPL_RELAX_IQN_ILS;
-    s.alpha = 0.2;
-    s.iqn_reuse_steps = 2;
-    s.iqn_filter = 1e-10;
-    cpl_relax *r;
     nc_error err;
-    assert_int_equal(cpl_relax_create(&r, &s, N, 1, &err), 0);
+    cpl_relax_settings_default(&s);
+    assert_int_equal(cpl_relax_settings_select(&s, "iqn-ils", &err), 0);
+    s.alpha = 0.2;
+    set(&s, "reuse_steps", 2);
+    set(&s, "filter", 1e-10);
+    cpl_relax *r = create(&s, N, 1);
     int first = solve_affine(r, A, b1, N);
     int second = solve_affine(r, A, b2, N);
     assert_true(first <= N + 2);
@@ -313,7 +356,7 @@ static void test_iqn_reuse_previous_steps(void **state)
 static void test_divergence_reported(void **state)
 {
     (void)state;
-    cpl_relax *r = make(CPL_RELAX_CONSTANT, 1.0, 1, 1);
+    cpl_relax *r = make("constant", 1.0, 1, 1);
     double x = 0.0, out = INFINITY, alpha;
     nc_error err;
     assert_int_equal(cpl_relax_update(r, &x, &out, &x, &alpha, &err), -1);
