@@ -1,23 +1,22 @@
 /* cpl_relax_methods — the one list of relaxation methods. Adding a method: its file
- * cpl_relax_<name>.c (see cpl_relax_ops.h), its declaration and its table entry below. */
+ * cpl_relax_<name>.c exporting `const cpl_relax_ops cpl_relax_<name>` (see cpl_relax_ops.h)
+ * and one line X(cpl_relax_<name>) in CPL_RELAX_METHOD_LIST below, which both declares it
+ * and enters it in the table. */
 #include "cpl_relax_ops.h"
 
 #include <string.h>
 
-/* one line each: defined in cpl_relax_none.c, cpl_relax_constant.c, ... */
-extern const cpl_relax_ops cpl_relax_none;
-extern const cpl_relax_ops cpl_relax_constant;
-extern const cpl_relax_ops cpl_relax_aitken;
-extern const cpl_relax_ops cpl_relax_iqn_ils;
-
 /* in documentation order (messages list the names in this order) */
-static const cpl_relax_ops *const methods[] = {
-    &cpl_relax_none,
-    &cpl_relax_constant,
-    &cpl_relax_aitken,
-    &cpl_relax_iqn_ils,
-    NULL,
-};
+#define CPL_RELAX_METHOD_LIST(X) \
+    X(cpl_relax_none)            \
+    X(cpl_relax_constant)        \
+    X(cpl_relax_aitken)          \
+    X(cpl_relax_iqn_ils)
+
+#define DECLARE_METHOD(ops) extern const cpl_relax_ops ops;
+#define LIST_METHOD(ops) &ops,
+CPL_RELAX_METHOD_LIST(DECLARE_METHOD)
+static const cpl_relax_ops *const methods[] = {CPL_RELAX_METHOD_LIST(LIST_METHOD) NULL};
 
 const cpl_relax_ops *const *cpl_relax_methods(void)
 {
