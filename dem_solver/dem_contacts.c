@@ -86,7 +86,7 @@ typedef struct contact_in {
 
 /* Where a thread writes the contacts of the sphere it is working on, and where the forces go.
  * Forces are summed while contacts are found, in contact order (by sphere i, then discovery
- * order): directly into s->sph.force/torque for spheres whose contributions all come from this
+ * order): directly into s->model.sph.force/torque for spheres whose contributions all come from this
  * thread's range, through the thread's spill list for walls, net nodes and spheres shared with
  * another range (those lists are summed afterwards in thread order, which is contact order).
  * So every sum runs in the same order whatever the number of threads. */
@@ -121,8 +121,8 @@ static int spill_add(dem_spills *sp, int kind, int32_t index, double weight, con
 static inline int add_to_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, const double f[3],
                                 const double t[3])
 {
-    if (s->shared_sphere[i]) return spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)i, 0.0, f, t);
-    double *fi = s->sph.force + 3 * i, *ti = s->sph.torque + 3 * i;
+    if (s->work.shared_sphere[i]) return spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)i, 0.0, f, t);
+    double *fi = s->model.sph.force + 3 * i, *ti = s->model.sph.torque + 3 * i;
     fi[0] += f[0];
     fi[1] += f[1];
     fi[2] += f[2];
@@ -148,8 +148,8 @@ static inline __attribute__((always_inline)) long new_record(const dem_sim *s, e
     out->kind[c] = kind;
     out->j[c] = j;
     out->aux[c] = aux;
-    const dem_contacts *pv = &s->prev;
-    int32_t lo = s->prev_first[i], hi = s->prev_first[i + 1];
+    const dem_contacts *pv = &s->contact.prev;
+    int32_t lo = s->contact.prev_first[i], hi = s->contact.prev_first[i + 1];
     int32_t hint = lo + (int32_t)(c - ctx->first);
     int32_t found = -1;
     if (hint < hi && pv->j[hint] == j && pv->kind[hint] == kind && pv->aux[hint] == aux) {
@@ -206,23 +206,23 @@ static int emit(const dem_sim *s, emit_ctx *ctx, size_t i, contact_in *in, doubl
          * centre crossed the line (the net moved more than the overlap in one step).
          * Keep the side of the ongoing contact and count the crossing as overlap, so
          * the net pushes the sphere back instead of letting it through. */
-        const double *np = s->prev.normal + 3 * (size_t)p;
+        const double *np = s->contact.prev.normal + 3 * (size_t)p;
         if (np[0] * in->n[0] + np[1] * in->n[1] + np[2] * in->n[2] < 0.0) {
             double dist = in->reach - in->overlap;
             in->overlap = in->reach + dist;
             for (int k = 0; k < 3; k++) in->n[k] = -in->n[k];
-            in->lever_i = fmax(0.0, s->sph.radius[i] - 0.5 * in->overlap);
+            in->lever_i = fmax(0.0, s->model.sph.radius[i] - 0.5 * in->overlap);
         }
     }
-    const double *v_i = s->sph.vel + 3 * i;
-    const double *w_i = s->bod.omega + 3 * (size_t)s->sph.body[i];
+    const double *v_i = s->model.sph.vel + 3 * i;
+    const double *w_i = s->model.bod.omega + 3 * (size_t)s->model.sph.body[i];
     double r_i[3] = {in->lever_i * in->n[0], in->lever_i * in->n[1], in->lever_i * in->n[2]};
     double wr[3];
     cross3(w_i, r_i, wr);
     double vc[3]; /* (A.2) */
     for (int k = 0; k < 3; k++) vc[k] = in->v_other[k] - (v_i[k] + wr[k]);
     double f[3], t[3];
-    dem_contact_force(&s->prm, &in->pair, in->overlap, in->n, vc, dt, ft, &kt_prev, &fn_prev, f);
+    dem_contact_force(&s->model.prm, &in->pair, in->overlap, in->n, vc, dt, ft, &kt_prev, &fn_prev, f);
     store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, in->overlap, in->n);
     cross3(r_i, f, t);
     if (add_to_sphere(s, ctx, i, f, t)) return -1;
@@ -236,35 +236,35 @@ static int emit(const dem_sim *s, emit_ctx *ctx, size_t i, contact_in *in, doubl
 static void wall_pair(const dem_sim *s, size_t i, double e, double nu, double g, double zeta_w,
                       double mu_w, dem_pair *p)
 {
-    const dem_material *m = &s->materials[s->sph.material[i]];
+    const dem_material *m = &s->model.materials[s->model.sph.material[i]];
     p->e_star = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio, e, nu);
     p->g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio, g, nu);
-    p->r_star = s->sph.radius[i];
-    p->m_star = s->bod.mass[s->sph.body[i]];
+    p->r_star = s->model.sph.radius[i];
+    p->m_star = s->model.bod.mass[s->model.sph.body[i]];
     p->zeta = 0.5 * (m->zeta + (zeta_w >= 0.0 ? zeta_w : m->zeta));
     p->mu = 0.5 * (m->friction + mu_w);
-    p->kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
-                                                         : sqrt(s->prm.linear_kt_ratio);
+    p->kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
+                                                         : sqrt(s->model.prm.linear_kt_ratio);
 }
 
 /* The same from the table made by dem_contacts_prepare (no divisions per contact). */
 static void material_wall_pair(const dem_sim *s, size_t i, int material, dem_pair *p)
 {
-    *p = s->wall_pairs[(size_t)s->sph.material[i] * s->n_materials + (size_t)material];
-    p->r_star = s->sph.radius[i];
-    p->m_star = s->bod.mass[s->sph.body[i]];
+    *p = s->contact.wall_pairs[(size_t)s->model.sph.material[i] * s->model.n_materials + (size_t)material];
+    p->r_star = s->model.sph.radius[i];
+    p->m_star = s->model.bod.mass[s->model.sph.body[i]];
 }
 
 int dem_contacts_prepare(dem_sim *s, nc_error *err)
 {
-    size_t nm = s->n_materials;
-    free(s->wall_pairs);
-    s->wall_pairs = malloc((nm ? nm * nm : 1) * sizeof *s->wall_pairs);
-    if (!s->wall_pairs) return nc_error_set(err, 1, "dem: out of memory for the material pairs");
+    size_t nm = s->model.n_materials;
+    free(s->contact.wall_pairs);
+    s->contact.wall_pairs = malloc((nm ? nm * nm : 1) * sizeof *s->contact.wall_pairs);
+    if (!s->contact.wall_pairs) return nc_error_set(err, 1, "dem: out of memory for the material pairs");
     for (size_t a = 0; a < nm; a++)
         for (size_t b = 0; b < nm; b++) {
-            const dem_material *m = &s->materials[a], *w = &s->materials[b];
-            dem_pair *p = &s->wall_pairs[a * nm + b];
+            const dem_material *m = &s->model.materials[a], *w = &s->model.materials[b];
+            dem_pair *p = &s->contact.wall_pairs[a * nm + b];
             p->e_star = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
                                               w->youngs_modulus_pa, w->poisson_ratio);
             p->g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio,
@@ -272,8 +272,8 @@ int dem_contacts_prepare(dem_sim *s, nc_error *err)
             p->r_star = p->m_star = 0.0;
             p->zeta = 0.5 * (m->zeta + (w->zeta >= 0.0 ? w->zeta : m->zeta));
             p->mu = 0.5 * (m->friction + w->friction);
-            p->kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
-                                                                 : sqrt(s->prm.linear_kt_ratio);
+            p->kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
+                                                                 : sqrt(s->model.prm.linear_kt_ratio);
         }
     return 0;
 }
@@ -284,21 +284,21 @@ int dem_contacts_prepare(dem_sim *s, nc_error *err)
  * contact data kept in registers (no contact_in record). */
 static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
 {
-    const double *pi = s->sph.pos + 3 * i;
-    double ri = s->sph.radius[i];
-    int32_t bi = s->sph.body[i];
-    int32_t mat_i = s->sph.material[i];
-    const dem_material *mi = &s->materials[mat_i];
-    double m_i = s->bod.mass[bi];
-    const double *v_i = s->sph.vel + 3 * i;
-    const double *w_i = s->bod.omega + 3 * (size_t)bi;
-    int shared_i = s->shared_sphere[i];
-    for (int32_t q = s->nbr_first[i]; q < s->nbr_first[i + 1]; q++) {
-        size_t j = (size_t)s->nbr[q];
-        const double *pj = s->sph.pos + 3 * j;
+    const double *pi = s->model.sph.pos + 3 * i;
+    double ri = s->model.sph.radius[i];
+    int32_t bi = s->model.sph.body[i];
+    int32_t mat_i = s->model.sph.material[i];
+    const dem_material *mi = &s->model.materials[mat_i];
+    double m_i = s->model.bod.mass[bi];
+    const double *v_i = s->model.sph.vel + 3 * i;
+    const double *w_i = s->model.bod.omega + 3 * (size_t)bi;
+    int shared_i = s->work.shared_sphere[i];
+    for (int32_t q = s->nlist.first[i]; q < s->nlist.first[i + 1]; q++) {
+        size_t j = (size_t)s->nlist.nbr[q];
+        const double *pj = s->model.sph.pos + 3 * j;
         double d[3] = {pj[0] - pi[0], pj[1] - pi[1], pj[2] - pi[2]};
         double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        double rj = s->sph.radius[j];
+        double rj = s->model.sph.radius[j];
         double rs = ri + rj;
         if (d2 >= rs * rs || d2 == 0.0) continue; /* (13) */
         double dist = sqrt(d2);
@@ -307,17 +307,17 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
         double n[3] = {d[0] * inv_dist, d[1] * inv_dist, d[2] * inv_dist};
         double lever_i = ri - 0.5 * overlap;
         double lever_j = rj - 0.5 * overlap;
-        int32_t bj = s->sph.body[j];
-        const double *vj = s->sph.vel + 3 * j;
-        const double *wj = s->bod.omega + 3 * (size_t)bj;
+        int32_t bj = s->model.sph.body[j];
+        const double *vj = s->model.sph.vel + 3 * j;
+        const double *wj = s->model.bod.omega + 3 * (size_t)bj;
         double rj_vec[3] = {-lever_j * n[0], -lever_j * n[1], -lever_j * n[2]};
         double wr[3];
         cross3(wj, rj_vec, wr);
         double v_other[3] = {vj[0] + wr[0], vj[1] + wr[1], vj[2] + wr[2]};
         dem_pair pair;
-        int32_t mat_j = s->sph.material[j];
-        const dem_material *mj = &s->materials[mat_j];
-        double m_j = s->bod.mass[bj];
+        int32_t mat_j = s->model.sph.material[j];
+        const dem_material *mj = &s->model.materials[mat_j];
+        double m_j = s->model.bod.mass[bj];
         if (mat_i == mat_j) { /* common case: no divisions */
             pair.e_star = mi->pair_e_star;
             pair.g_star = mi->pair_g_star;
@@ -327,9 +327,9 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
                                                 mj->youngs_modulus_pa, mj->poisson_ratio);
             pair.g_star = dem_effective_shear(mi->shear_modulus_pa, mi->poisson_ratio,
                                               mj->shear_modulus_pa, mj->poisson_ratio);
-            pair.kt_kn_root = s->prm.law == DEM_LAW_HERTZ_MINDLIN
+            pair.kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN
                                   ? sqrt(4.0 * pair.g_star / pair.e_star)
-                                  : sqrt(s->prm.linear_kt_ratio);
+                                  : sqrt(s->model.prm.linear_kt_ratio);
         }
         pair.r_star = ri * rj / rs;
         pair.m_star = m_i * m_j / (m_i + m_j);
@@ -345,7 +345,7 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
         double vc[3] = {v_other[0] - (v_i[0] + wr[0]), v_other[1] - (v_i[1] + wr[1]),
                         v_other[2] - (v_i[2] + wr[2])}; /* (A.2) */
         double f[3];
-        dem_contact_force(&s->prm, &pair, overlap, n, vc, dt, ft, &kt_prev, &fn_prev, f);
+        dem_contact_force(&s->model.prm, &pair, overlap, n, vc, dt, ft, &kt_prev, &fn_prev, f);
         store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, overlap, n);
         double ti[3], tj[3];
         cross3(r_i, f, ti);
@@ -355,7 +355,7 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
         if (shared_i) {
             if (spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)i, 0.0, f, ti)) return -1;
         } else {
-            double *fi = s->sph.force + 3 * i, *tq = s->sph.torque + 3 * i;
+            double *fi = s->model.sph.force + 3 * i, *tq = s->model.sph.torque + 3 * i;
             fi[0] += f[0];
             fi[1] += f[1];
             fi[2] += f[2];
@@ -363,11 +363,11 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
             tq[1] += ti[1];
             tq[2] += ti[2];
         }
-        if (s->shared_sphere[j]) {
+        if (s->work.shared_sphere[j]) {
             double mf[3] = {-f[0], -f[1], -f[2]}; /* x + (-f) rounds exactly as x - f */
             if (spill_add(ctx->spill, DEM_CONTACT_SPHERE, (int32_t)j, 0.0, mf, tj)) return -1;
         } else {
-            double *fj = s->sph.force + 3 * j, *tq = s->sph.torque + 3 * j;
+            double *fj = s->model.sph.force + 3 * j, *tq = s->model.sph.torque + 3 * j;
             fj[0] -= f[0];
             fj[1] -= f[1];
             fj[2] -= f[2];
@@ -383,10 +383,10 @@ static int sphere_sphere(const dem_sim *s, emit_ctx *ctx, size_t i, double dt)
  * the cell grid, and lists the first `room` of them in out (if not NULL). */
 static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *out, size_t room)
 {
-    const double *pi = s->sph.pos + 3 * i;
-    double ri = s->sph.radius[i];
-    int32_t bi = s->sph.body[i], count = 0;
-    const dem_cell_grid *g = &s->grid;
+    const double *pi = s->model.sph.pos + 3 * i;
+    double ri = s->model.sph.radius[i];
+    int32_t bi = s->model.sph.body[i], count = 0;
+    const dem_cell_grid *g = &s->nlist.grid;
     int c[3];
     dem_cell_grid_coords(g, pi, c);
     for (int dz = -1; dz <= 1; dz++) {
@@ -406,10 +406,10 @@ static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *o
                 while (first > q0 && (size_t)g->cell_items[first - 1] > i) first--;
                 for (int32_t q = first; q < q1; q++) {
                     int32_t j = g->cell_items[q];
-                    if (s->sph.body[j] == bi) continue;
-                    const double *pj = s->sph.pos + 3 * (size_t)j;
+                    if (s->model.sph.body[j] == bi) continue;
+                    const double *pj = s->model.sph.pos + 3 * (size_t)j;
                     double d[3] = {pj[0] - pi[0], pj[1] - pi[1], pj[2] - pi[2]};
-                    double cut = ri + s->sph.radius[j] + skin;
+                    double cut = ri + s->model.sph.radius[j] + skin;
                     if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= cut * cut) continue;
                     if (out && (size_t)count < room) out[count] = j;
                     count++;
@@ -425,21 +425,21 @@ static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *o
  * then joined in range order: the list does not depend on the thread count. */
 static int update_neighbour_list(dem_sim *s, nc_error *err)
 {
-    size_t n = s->sph.n;
-    int nb = s->n_buffers;
-    /* s->max_disp2 was measured by dem_integrate_bodies() while moving the spheres */
-    if (!(s->max_disp2 <= 0.25 * s->skin_m * s->skin_m)) s->rebuild = 1; /* also NaN */
-    if (!s->rebuild) return 0;
-    if (dem_cell_grid_build(&s->grid, n, s->sph.pos, 2.0 * s->r_max + s->skin_m, err)) return -1;
+    size_t n = s->model.sph.n;
+    int nb = s->work.n_buffers;
+    /* s->nlist.max_disp2 was measured by dem_integrate_bodies() while moving the spheres */
+    if (!(s->nlist.max_disp2 <= 0.25 * s->nlist.skin_m * s->nlist.skin_m)) s->nlist.rebuild = 1; /* also NaN */
+    if (!s->nlist.rebuild) return 0;
+    if (dem_cell_grid_build(&s->nlist.grid, n, s->model.sph.pos, 2.0 * s->model.r_max + s->nlist.skin_m, err)) return -1;
     int failed = 0;
 #pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
     for (int b = 0; b < nb; b++) {
-        struct dem_nbr_part *part = &s->nbr_part[b];
-        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        struct dem_nbr_part *part = &s->nlist.part[b];
+        size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
         size_t used = 0;
         for (size_t i = lo; i < hi && !failed; i++) {
             size_t room = part->cap - used;
-            int32_t count = neighbours_of(s, i, s->skin_m, part->a ? part->a + used : NULL, room);
+            int32_t count = neighbours_of(s, i, s->nlist.skin_m, part->a ? part->a + used : NULL, room);
             if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
                 size_t cap = 2 * (used + (size_t)count) + 1024;
                 int32_t *a = realloc(part->a, cap * sizeof *a);
@@ -449,36 +449,36 @@ static int update_neighbour_list(dem_sim *s, nc_error *err)
                 }
                 part->a = a;
                 part->cap = cap;
-                if ((size_t)count > room) neighbours_of(s, i, s->skin_m, part->a + used, (size_t)count);
+                if ((size_t)count > room) neighbours_of(s, i, s->nlist.skin_m, part->a + used, (size_t)count);
             }
-            s->nbr_first[i + 1] = count;
+            s->nlist.first[i + 1] = count;
             used += (size_t)count;
         }
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory for the neighbour list");
-    s->nbr_first[0] = 0;
-    for (size_t i = 0; i < n; i++) s->nbr_first[i + 1] += s->nbr_first[i];
-    size_t total = (size_t)s->nbr_first[n];
+    s->nlist.first[0] = 0;
+    for (size_t i = 0; i < n; i++) s->nlist.first[i + 1] += s->nlist.first[i];
+    size_t total = (size_t)s->nlist.first[n];
     if (nb == 1) { /* the single part is the list: no copy */
-        int32_t *a = s->nbr;
-        size_t cap = s->nbr_cap;
-        s->nbr = s->nbr_part[0].a;
-        s->nbr_cap = s->nbr_part[0].cap;
-        s->nbr_part[0].a = a;
-        s->nbr_part[0].cap = cap;
+        int32_t *a = s->nlist.nbr;
+        size_t cap = s->nlist.cap;
+        s->nlist.nbr = s->nlist.part[0].a;
+        s->nlist.cap = s->nlist.part[0].cap;
+        s->nlist.part[0].a = a;
+        s->nlist.part[0].cap = cap;
     } else {
-        if (total > s->nbr_cap) {
+        if (total > s->nlist.cap) {
             size_t cap = total + total / 4 + 64;
-            int32_t *p = realloc(s->nbr, cap * sizeof *p);
+            int32_t *p = realloc(s->nlist.nbr, cap * sizeof *p);
             if (!p) return nc_error_set(err, 1, "dem: out of memory for %zu neighbour pairs", cap);
-            s->nbr = p;
-            s->nbr_cap = cap;
+            s->nlist.nbr = p;
+            s->nlist.cap = cap;
         }
 #pragma omp parallel for schedule(static, 1) num_threads(nb) if (total >= DEM_PARALLEL_MIN)
         for (int b = 0; b < nb; b++) {
-            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
-            size_t from = (size_t)s->nbr_first[lo], count = (size_t)s->nbr_first[hi] - from;
-            if (count) memcpy(s->nbr + from, s->nbr_part[b].a, count * sizeof(int32_t));
+            size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
+            size_t from = (size_t)s->nlist.first[lo], count = (size_t)s->nlist.first[hi] - from;
+            if (count) memcpy(s->nlist.nbr + from, s->nlist.part[b].a, count * sizeof(int32_t));
         }
     }
     /* new ranges for the contact passes, balanced by the expected work of each sphere: its
@@ -486,41 +486,41 @@ static int update_neighbour_list(dem_sim *s, nc_error *err)
     if (nb > 1) {
         double work = 0.0;
         for (size_t i = 0; i < n; i++)
-            work += 1.0 + (double)(s->nbr_first[i + 1] - s->nbr_first[i]) +
-                    4.0 * (double)(s->prev_first[i + 1] - s->prev_first[i]);
+            work += 1.0 + (double)(s->nlist.first[i + 1] - s->nlist.first[i]) +
+                    4.0 * (double)(s->contact.prev_first[i + 1] - s->contact.prev_first[i]);
         double acc = 0.0;
         int b = 1;
-        s->range_first[0] = 0;
+        s->work.range_first[0] = 0;
         for (size_t i = 0; i < n && b < nb; i++) {
-            while (b < nb && acc >= work * (double)b / (double)nb) s->range_first[b++] = i;
-            acc += 1.0 + (double)(s->nbr_first[i + 1] - s->nbr_first[i]) +
-                   4.0 * (double)(s->prev_first[i + 1] - s->prev_first[i]);
+            while (b < nb && acc >= work * (double)b / (double)nb) s->work.range_first[b++] = i;
+            acc += 1.0 + (double)(s->nlist.first[i + 1] - s->nlist.first[i]) +
+                   4.0 * (double)(s->contact.prev_first[i + 1] - s->contact.prev_first[i]);
         }
-        while (b < nb) s->range_first[b++] = n;
-        s->range_first[nb] = n;
+        while (b < nb) s->work.range_first[b++] = n;
+        s->work.range_first[nb] = n;
     }
     /* spheres with a neighbour in another thread's range get their force sums through the
      * spills (the ranges are those of dem_compute_contacts) */
-    memset(s->shared_sphere, 0, n * sizeof *s->shared_sphere);
+    memset(s->work.shared_sphere, 0, n * sizeof *s->work.shared_sphere);
     for (int b = 0; b + 1 < nb; b++) {
-        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
         for (size_t i = lo; i < hi; i++)
-            for (int32_t q = s->nbr_first[i]; q < s->nbr_first[i + 1]; q++)
-                if ((size_t)s->nbr[q] >= hi) s->shared_sphere[s->nbr[q]] = 1;
+            for (int32_t q = s->nlist.first[i]; q < s->nlist.first[i + 1]; q++)
+                if ((size_t)s->nlist.nbr[q] >= hi) s->work.shared_sphere[s->nlist.nbr[q]] = 1;
     }
-    memcpy(s->pos_at_build, s->sph.pos, 3 * n * sizeof(double));
-    s->max_disp2 = 0.0;
-    s->rebuild = 0;
-    s->n_builds++;
+    memcpy(s->nlist.pos_at_build, s->model.sph.pos, 3 * n * sizeof(double));
+    s->nlist.max_disp2 = 0.0;
+    s->nlist.rebuild = 0;
+    s->nlist.n_builds++;
     return 0;
 }
 
 static int sphere_planes(const dem_sim *s, emit_ctx *out, size_t i, double dt)
 {
-    const double *p = s->sph.pos + 3 * i;
-    double r = s->sph.radius[i];
-    for (size_t w = 0; w < s->n_planes; w++) {
-        const dem_plane *pl = &s->planes[w];
+    const double *p = s->model.sph.pos + 3 * i;
+    double r = s->model.sph.radius[i];
+    for (size_t w = 0; w < s->model.n_planes; w++) {
+        const dem_plane *pl = &s->model.planes[w];
         double d = (p[0] - pl->point[0]) * pl->normal[0] + (p[1] - pl->point[1]) * pl->normal[1] +
                    (p[2] - pl->point[2]) * pl->normal[2];
         if (fabs(d) >= r) continue; /* one-sided: centres behind the plane are ignored */
@@ -563,11 +563,11 @@ static int add_feature(feature *f, int *n, const feature *x, int *overflow)
 
 static int sphere_meshes(const dem_sim *s, emit_ctx *out, size_t i, double dt, int *overflow)
 {
-    const double *pw = s->sph.pos + 3 * i;
-    double r = s->sph.radius[i];
+    const double *pw = s->model.sph.pos + 3 * i;
+    double r = s->model.sph.radius[i];
     feature f[DEM_MAX_FEATURES];
-    for (size_t m = 0; m < s->n_meshes; m++) {
-        const dem_mesh *mesh = &s->meshes[m];
+    for (size_t m = 0; m < s->model.n_meshes; m++) {
+        const dem_mesh *mesh = &s->model.meshes[m];
         double p[3] = {pw[0] - mesh->offset[0], pw[1] - mesh->offset[1], pw[2] - mesh->offset[2]};
         const int32_t *items;
         size_t count = dem_item_grid_query(mesh->grid, p, &items);
@@ -635,9 +635,9 @@ static int sphere_meshes(const dem_sim *s, emit_ctx *out, size_t i, double dt, i
 
 static int sphere_net(const dem_sim *s, emit_ctx *out, size_t i, double dt, int *overflow)
 {
-    const dem_net *net = &s->net;
-    const double *p = s->sph.pos + 3 * i;
-    double reach = s->sph.radius[i] + net->cable_radius_m;
+    const dem_net *net = &s->model.net;
+    const double *p = s->model.sph.pos + 3 * i;
+    double reach = s->model.sph.radius[i] + net->cable_radius_m;
     const int32_t *items;
     size_t count = dem_item_grid_query(net->grid, p, &items);
     feature f[DEM_MAX_FEATURES];
@@ -677,7 +677,7 @@ static int sphere_net(const dem_sim *s, emit_ctx *out, size_t i, double dt, int 
         in.reach = reach;
         in.overlap = reach - dist;
         for (int k = 0; k < 3; k++) in.n[k] = (f[a].q[k] - p[k]) / dist;
-        in.lever_i = s->sph.radius[i] - 0.5 * in.overlap;
+        in.lever_i = s->model.sph.radius[i] - 0.5 * in.overlap;
         in.lever_j = 0.0;
         if (f[a].type == 1) {
             in.kind = DEM_CONTACT_NET_EDGE;
@@ -701,15 +701,15 @@ static int sphere_net(const dem_sim *s, emit_ctx *out, size_t i, double dt, int 
 
 int dem_contacts_close_pairs(dem_sim *s, double gap, long *count, nc_error *err)
 {
-    size_t n = s->sph.n;
+    size_t n = s->model.sph.n;
     *count = 0;
     if (n < 2) return 0;
-    if (dem_cell_grid_build(&s->grid, n, s->sph.pos, 2.0 * s->r_max + gap, err)) return -1;
+    if (dem_cell_grid_build(&s->nlist.grid, n, s->model.sph.pos, 2.0 * s->model.r_max + gap, err)) return -1;
     long nl = (long)n, total = 0;
-#pragma omp parallel for schedule(static) reduction(+ : total) num_threads(s->n_buffers) if (nl >= DEM_PARALLEL_MIN)
+#pragma omp parallel for schedule(static) reduction(+ : total) num_threads(s->work.n_buffers) if (nl >= DEM_PARALLEL_MIN)
     for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL, 0);
     *count = total;
-    s->rebuild = 1; /* the grid now has another cell size */
+    s->nlist.rebuild = 1; /* the grid now has another cell size */
     return 0;
 }
 
@@ -717,85 +717,85 @@ int dem_contacts_close_pairs(dem_sim *s, double gap, long *count, nc_error *err)
 
 int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
 {
-    size_t n = s->sph.n;
+    size_t n = s->model.sph.n;
     /* the current list becomes the history */
-    dem_contacts tmp = s->prev;
-    s->prev = s->contacts;
-    s->contacts = tmp;
-    int32_t *tf = s->prev_first;
-    s->prev_first = s->contact_first;
-    s->contact_first = tf;
+    dem_contacts tmp = s->contact.prev;
+    s->contact.prev = s->contact.list;
+    s->contact.list = tmp;
+    int32_t *tf = s->contact.prev_first;
+    s->contact.prev_first = s->contact.first;
+    s->contact.first = tf;
 
     if (update_neighbour_list(s, err)) return -1;
 
-    int nb = s->n_buffers;
+    int nb = s->work.n_buffers;
     int failed = 0;
     /* Fixed contiguous ranges per buffer: the concatenation order never changes. */
 #pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
     for (int b = 0; b < nb; b++) {
-        emit_ctx out = {&s->buffers[b], &s->spills[b], 0};
+        emit_ctx out = {&s->work.buffers[b], &s->work.spills[b], 0};
         out.out->n = 0;
         out.spill->n = 0;
-        s->buffer_overflow[b] = 0;
-        size_t lo = s->range_first[b], hi = s->range_first[b + 1];
+        s->work.overflow[b] = 0;
+        size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
         /* only this range writes the sums of its unshared spheres */
-        memset(s->sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
-        memset(s->sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+        memset(s->model.sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+        memset(s->model.sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
         for (size_t i = lo; i < hi && !failed; i++) {
             out.first = out.out->n;
-            s->contact_first[i] = (int32_t)out.first; /* + the buffer's offset, below */
+            s->contact.first[i] = (int32_t)out.first; /* + the buffer's offset, below */
             if (sphere_sphere(s, &out, i, dt) || sphere_planes(s, &out, i, dt) ||
-                (s->n_meshes && sphere_meshes(s, &out, i, dt, &s->buffer_overflow[b])) ||
-                (s->net.active && sphere_net(s, &out, i, dt, &s->buffer_overflow[b])))
+                (s->model.n_meshes && sphere_meshes(s, &out, i, dt, &s->work.overflow[b])) ||
+                (s->model.net.active && sphere_net(s, &out, i, dt, &s->work.overflow[b])))
                 failed = 1;
         }
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory growing the contact list");
     size_t total = 0;
     for (int b = 0; b < nb; b++) {
-        if (s->buffer_overflow[b])
+        if (s->work.overflow[b])
             return nc_error_set(err, 1, "dem: a sphere touches more than %d features of one wall "
                                         "mesh or of the net (mesh much finer than the spheres?)",
                                 DEM_MAX_FEATURES);
-        total += s->buffers[b].n;
+        total += s->work.buffers[b].n;
     }
     if (nb == 1) { /* the single buffer becomes the list: no copy */
-        dem_contacts t = s->contacts;
-        s->contacts = s->buffers[0];
-        s->buffers[0] = t;
+        dem_contacts t = s->contact.list;
+        s->contact.list = s->work.buffers[0];
+        s->work.buffers[0] = t;
     } else {
-        if (dem_contacts_reserve(&s->contacts, total, err)) return -1;
+        if (dem_contacts_reserve(&s->contact.list, total, err)) return -1;
         size_t at[DEM_MAX_BUFFERS + 1];
         at[0] = 0;
-        for (int b = 0; b < nb; b++) at[b + 1] = at[b] + s->buffers[b].n;
+        for (int b = 0; b < nb; b++) at[b + 1] = at[b] + s->work.buffers[b].n;
 #pragma omp parallel for schedule(static, 1) num_threads(nb) if (total >= DEM_PARALLEL_MIN)
-        for (int b = 0; b < nb; b++) copy_range(&s->contacts, at[b], &s->buffers[b], 0, s->buffers[b].n);
-        s->contacts.n = total;
+        for (int b = 0; b < nb; b++) copy_range(&s->contact.list, at[b], &s->work.buffers[b], 0, s->work.buffers[b].n);
+        s->contact.list.n = total;
     }
 
     /* CSR index by sphere: each buffer's local first contacts, shifted by its offset */
     if (nb > 1) {
         size_t off = 0;
         for (int b = 0; b < nb; b++) {
-            size_t lo = s->range_first[b], hi = s->range_first[b + 1];
-            for (size_t i = lo; i < hi; i++) s->contact_first[i] += (int32_t)off;
-            off += s->buffers[b].n;
+            size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
+            for (size_t i = lo; i < hi; i++) s->contact.first[i] += (int32_t)off;
+            off += s->work.buffers[b].n;
         }
     }
-    s->contact_first[n] = (int32_t)total;
+    s->contact.first[n] = (int32_t)total;
 
     /* the sums that cross ranges, in contact order (thread ranges are in sphere order) */
     memset(s->wall_force, 0, 3 * s->n_walls * sizeof(double));
-    if (s->net.active) memset(s->net.force, 0, 3 * s->net.n_nodes * sizeof(double));
-    double *net_total = s->wall_force + 3 * (s->n_planes + s->n_meshes);
+    if (s->model.net.active) memset(s->model.net.force, 0, 3 * s->model.net.n_nodes * sizeof(double));
+    double *net_total = s->wall_force + 3 * (s->model.n_planes + s->model.n_meshes);
     for (int b = 0; b < nb; b++) {
-        const dem_spills *sp = &s->spills[b];
+        const dem_spills *sp = &s->work.spills[b];
         for (size_t k = 0; k < sp->n; k++) {
             const dem_spill *r = &sp->r[k];
             const double *f = r->f;
             switch (r->kind) {
             case DEM_CONTACT_SPHERE: {
-                double *fs = s->sph.force + 3 * (size_t)r->index, *ts = s->sph.torque + 3 * (size_t)r->index;
+                double *fs = s->model.sph.force + 3 * (size_t)r->index, *ts = s->model.sph.torque + 3 * (size_t)r->index;
                 for (int d = 0; d < 3; d++) {
                     fs[d] += f[d];
                     ts[d] += r->t[d];
@@ -806,21 +806,21 @@ int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
                 for (int d = 0; d < 3; d++) s->wall_force[3 * (size_t)r->index + d] -= f[d];
                 break;
             case DEM_CONTACT_MESH:
-                for (int d = 0; d < 3; d++) s->wall_force[3 * (s->n_planes + (size_t)r->index) + d] -= f[d];
+                for (int d = 0; d < 3; d++) s->wall_force[3 * (s->model.n_planes + (size_t)r->index) + d] -= f[d];
                 break;
             case DEM_CONTACT_NET_EDGE: { /* consistent nodal loads: (1-t) f, t f */
-                const int32_t *e = s->net.edges + 2 * (size_t)r->index;
+                const int32_t *e = s->model.net.edges + 2 * (size_t)r->index;
                 double t = r->weight;
                 for (int d = 0; d < 3; d++) {
-                    s->net.force[3 * (size_t)e[0] + d] -= (1.0 - t) * f[d];
-                    s->net.force[3 * (size_t)e[1] + d] -= t * f[d];
+                    s->model.net.force[3 * (size_t)e[0] + d] -= (1.0 - t) * f[d];
+                    s->model.net.force[3 * (size_t)e[1] + d] -= t * f[d];
                     net_total[d] -= f[d];
                 }
                 break;
             }
             case DEM_CONTACT_NET_NODE:
                 for (int d = 0; d < 3; d++) {
-                    s->net.force[3 * (size_t)r->index + d] -= f[d];
+                    s->model.net.force[3 * (size_t)r->index + d] -= f[d];
                     net_total[d] -= f[d];
                 }
                 break;
@@ -835,7 +835,7 @@ int dem_compute_contacts(dem_sim *s, double dt, nc_error *err)
 
 double dem_contacts_elastic_energy(const dem_sim *s)
 {
-    const dem_contacts *c = &s->contacts;
+    const dem_contacts *c = &s->contact.list;
     double e = 0.0;
     for (size_t k = 0; k < c->n; k++) {
         size_t i = (size_t)c->i[k];
@@ -843,29 +843,29 @@ double dem_contacts_elastic_energy(const dem_sim *s)
         switch (c->kind[k]) {
         case DEM_CONTACT_SPHERE: {
             size_t j = (size_t)c->j[k];
-            const dem_material *mi = &s->materials[s->sph.material[i]];
-            const dem_material *mj = &s->materials[s->sph.material[j]];
+            const dem_material *mi = &s->model.materials[s->model.sph.material[i]];
+            const dem_material *mj = &s->model.materials[s->model.sph.material[j]];
             p.e_star = dem_effective_modulus(mi->youngs_modulus_pa, mi->poisson_ratio,
                                              mj->youngs_modulus_pa, mj->poisson_ratio);
-            p.r_star = s->sph.radius[i] * s->sph.radius[j] / (s->sph.radius[i] + s->sph.radius[j]);
+            p.r_star = s->model.sph.radius[i] * s->model.sph.radius[j] / (s->model.sph.radius[i] + s->model.sph.radius[j]);
             break;
         }
         case DEM_CONTACT_PLANE:
-            material_wall_pair(s, i, s->planes[c->j[k]].material, &p);
+            material_wall_pair(s, i, s->model.planes[c->j[k]].material, &p);
             break;
         case DEM_CONTACT_MESH:
-            material_wall_pair(s, i, s->meshes[c->aux[k]].material, &p);
+            material_wall_pair(s, i, s->model.meshes[c->aux[k]].material, &p);
             break;
         default:
-            wall_pair(s, i, s->net.youngs_modulus_pa, s->net.poisson_ratio,
-                      s->net.shear_modulus_pa, s->net.zeta, s->net.friction, &p);
+            wall_pair(s, i, s->model.net.youngs_modulus_pa, s->model.net.poisson_ratio,
+                      s->model.net.shear_modulus_pa, s->model.net.zeta, s->model.net.friction, &p);
             break;
         }
         double d = c->overlap[k];
-        if (s->prm.law == DEM_LAW_HERTZ_MINDLIN)
+        if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN)
             e += 8.0 / 15.0 * p.e_star * sqrt(p.r_star) * pow(d, 2.5); /* ∫ 4/3 E* sqrt(R*) δ^1.5 dδ */
         else
-            e += 0.5 * s->prm.linear_kn_n_per_m * d * d;
+            e += 0.5 * s->model.prm.linear_kn_n_per_m * d * d;
         const double *ft = c->ft + 3 * k;
         if (c->kt_prev[k] > 0.0) e += 0.5 * (ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]) / c->kt_prev[k];
     }

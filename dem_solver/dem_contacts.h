@@ -24,7 +24,7 @@ int dem_contacts_copy(dem_contacts *dst, const dem_contacts *src, nc_error *err)
 int dem_contacts_prepare(dem_sim *s, nc_error *err);
 
 /* Finds contacts at the current positions, computes forces for step dt and sums them into
- * s->sph.force/torque (per sphere), s->net.force and s->wall_force. */
+ * s->model.sph.force/torque (per sphere), s->model.net.force and s->wall_force. */
 int dem_compute_contacts(dem_sim *s, double dt, nc_error *err);
 
 /* Number of sphere pairs (of different bodies) whose surfaces are closer than `gap`. */

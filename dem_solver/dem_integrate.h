@@ -8,8 +8,8 @@
 #include "dem_solver.h"
 
 /* Advances every body by dt: sums its spheres' contact forces and torques (about the centre
- * of mass) into s->bod.force/torque, integrates with gravity, moves its spheres and records
- * the largest sphere displacement since the neighbour list was built (s->max_disp2). One
+ * of mass) into s->model.bod.force/torque, integrates with gravity, moves its spheres and records
+ * the largest sphere displacement since the neighbour list was built (s->nlist.max_disp2). One
  * parallel loop over bodies (a single barrier per step). */
 void dem_integrate_bodies(dem_sim *s, double dt);
 /* Exact ballistic motion over dt without contacts: x += v dt + ½ g dt², v += g dt; clusters

@@ -30,7 +30,7 @@ typedef struct dem_snapshot {
     size_t net_nodes;      /* allocated size of net_cur / net_vel */
 } dem_snapshot;
 
-typedef struct dem_sim {
+typedef struct dem_model {
     char source[512];              /* input file name, for messages */
     dem_params prm;
     size_t n_materials;
@@ -42,46 +42,49 @@ typedef struct dem_sim {
     size_t n_meshes;
     dem_mesh *meshes;
     dem_net net;
+    double r_max, r_min;
+} dem_model;
 
-    /* contact lists: `contacts` is the current one, `prev` the previous step's (history) */
-    dem_contacts contacts, prev;
-    int32_t *contact_first, *prev_first; /* n_spheres + 1: first contact of each sphere */
+typedef struct dem_contact_state {
+    dem_contacts list, prev;
+    int32_t *first, *prev_first;
+    struct dem_pair *wall_pairs;
+} dem_contact_state;
+
+typedef struct dem_thread_work {
     int n_buffers;
-    dem_contacts *buffers;         /* one per thread, concatenated in order */
-    dem_spills *spills;            /* one per thread: sums done after the parallel pass */
-    int *buffer_overflow;
-    struct dem_pair *wall_pairs;   /* n_materials²: sphere material a against a wall of
-                                      material b (r_star, m_star filled per contact) */
-    size_t *range_first;           /* n_buffers + 1: the spheres of buffer b are
-                                      range_first[b] .. range_first[b+1]-1, balanced by the
-                                      expected work at every neighbour-list build (results do
-                                      not depend on the ranges) */
-    uint8_t *shared_sphere;        /* per sphere: 1 if a Verlet neighbour lies in another
-                                      thread's range (its force sum goes through the spills) */
+    dem_contacts *buffers;
+    dem_spills *spills;
+    int *overflow;
+    size_t *range_first;
+    uint8_t *shared_sphere;
+} dem_thread_work;
 
+typedef struct dem_neighbor_list {
     dem_cell_grid grid;
-    /* Verlet neighbour list of sphere pairs (j > i) within r_i + r_j + skin, rebuilt when a
-     * sphere has moved more than skin/2 since the last build, and always after a restore so
-     * that a repeated step follows exactly the same path. */
     double skin_m;
     int rebuild;
-    int32_t *nbr_first;            /* n_spheres + 1 */
-    int32_t *nbr;                  /* neighbour indices */
-    size_t nbr_cap;
-    struct dem_nbr_part {          /* one per thread: its range's lists while building */
+    int32_t *first;
+    int32_t *nbr;
+    size_t cap;
+    struct dem_nbr_part {
         int32_t *a;
         size_t cap;
-    } *nbr_part;
-    double *pos_at_build;          /* 3 per sphere */
-    double max_disp2;              /* largest squared sphere displacement since the build */
+    } *part;
+    double *pos_at_build;
+    double max_disp2;
     long n_builds;
-    double r_max, r_min;
-    int prepared;
+} dem_neighbor_list;
 
+typedef struct dem_sim {
+    dem_model model;
+    dem_contact_state contact;
+    dem_thread_work work;
+    dem_neighbor_list nlist;
+    int prepared;
     double time_s;
     long step;
-    double *wall_force;            /* 3 per wall: planes, then meshes, then the net: force on
-                                      the wall in the last step (N) */
+    double *wall_force;
     size_t n_walls;
     dem_snapshot snap;
 } dem_sim;

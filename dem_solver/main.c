@@ -80,10 +80,10 @@ static int parse_args(int argc, char **argv, options *o)
 static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic_t *stop,
                           nc_error *err)
 {
-    double dt = s->prm.dt_s, end = s->prm.end_time_s, interval = s->prm.output_interval_s;
+    double dt = s->model.prm.dt_s, end = s->model.prm.end_time_s, interval = s->model.prm.output_interval_s;
     long steps = (long)ceil(end / dt - 1e-9);
     printf("dem_solver: %zu spheres in %zu bodies, dt = %.3e s (critical %.3e s), %ld steps\n",
-           s->sph.n, s->bod.n, dt, dem_sim_critical_dt(s), steps);
+           s->model.sph.n, s->model.bod.n, dt, dem_sim_critical_dt(s), steps);
     if (dem_output_write(out, s, NULL, err)) return -1;
     double next_out = interval;
     double t0 = nc_clock_now_s();
@@ -102,8 +102,8 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
     }
     double wall = nc_clock_now_s() - t0;
     printf("dem_solver: done, t = %g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
-           s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->sph.n / wall : 0.0,
-           s->contacts.n);
+           s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->model.sph.n / wall : 0.0,
+           s->contact.list.n);
     return 0;
 }
 
@@ -155,11 +155,11 @@ static int handle(dem_sim *s, dem_output *out, proto_participant *p, const proto
         cs->step_begun = rc == 0;
         break;
     case PROTO_MSG_SOLVE: {
-        if (!s->net.active) {
+        if (!s->model.net.active) {
             rc = nc_error_set(&cmd_err, 1, "dem: SOLVE before INTERFACE");
             break;
         }
-        size_t n = s->net.n_nodes;
+        size_t n = s->model.net.n_nodes;
         const double *disp, *vel;
         if (proto_message_get_f64(cmd, "displacement", n, 3, &disp, NULL, &cmd_err) ||
             proto_message_get_f64(cmd, "velocity", n, 3, &vel, NULL, &cmd_err)) {
@@ -190,7 +190,7 @@ static int handle(dem_sim *s, dem_output *out, proto_participant *p, const proto
         cs->step_begun = 0;
         if (s->time_s >= cs->next_out - 1e-12) {
             rc = dem_output_write(out, s, cs->force, &cmd_err);
-            double interval = s->prm.output_interval_s;
+            double interval = s->model.prm.output_interval_s;
             if (interval > 0.0)
                 while (cs->next_out <= s->time_s + 1e-12) cs->next_out += interval;
             else cs->next_out = s->time_s;
@@ -217,10 +217,10 @@ static int handle(dem_sim *s, dem_output *out, proto_participant *p, const proto
 static int run_coupled(dem_sim *s, dem_output *out, const options *o,
                        const volatile sig_atomic_t *stop, nc_error *err)
 {
-    if (!(s->net.youngs_modulus_pa > 0.0))
+    if (!(s->model.net.youngs_modulus_pa > 0.0))
         return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
                                     "material: youngs_modulus_pa, poisson_ratio, friction)",
-                            s->source);
+                            s->model.source);
     proto_options popt;
     proto_options_default(&popt);
     if (o->idle_timeout_s >= 0.0) popt.idle_timeout_ms = (int)(o->idle_timeout_s * 1000.0);
@@ -231,7 +231,7 @@ static int run_coupled(dem_sim *s, dem_output *out, const options *o,
         proto_participant_close(p);
         return -1;
     }
-    printf("dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->sph.n, s->prm.dt_s,
+    printf("dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->model.sph.n, s->model.prm.dt_s,
            proto_participant_endpoint(p));
     fflush(stdout);
     proto_message cmd, reply;
@@ -239,7 +239,7 @@ static int run_coupled(dem_sim *s, dem_output *out, const options *o,
     memset(&reply, 0, sizeof reply);
     coupled_state cs;
     memset(&cs, 0, sizeof cs);
-    cs.next_out = s->prm.output_interval_s;
+    cs.next_out = s->model.prm.output_interval_s;
     int rc = 0;
     for (;;) {
         if (*stop) {

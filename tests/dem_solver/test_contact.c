@@ -47,18 +47,18 @@ static double bounce(const char *law, const char *damping, double e, double *dur
     nc_error err;
     double t_start = -1, t_end = -1, fmax = 0;
     for (int k = 0; k < 200000; k++) {
-        assert_int_equal(dem_sim_step(&s, s.prm.dt_s, &err), 0);
-        int touching = s.contacts.n > 0;
+        assert_int_equal(dem_sim_step(&s, s.model.prm.dt_s, &err), 0);
+        int touching = s.contact.list.n > 0;
         double f = s.wall_force[2] < 0 ? -s.wall_force[2] : 0;
         if (f > fmax) fmax = f;
-        if (touching && t_start < 0) t_start = s.time_s - s.prm.dt_s;
+        if (touching && t_start < 0) t_start = s.time_s - s.model.prm.dt_s;
         if (!touching && t_start >= 0) {
-            t_end = s.time_s - s.prm.dt_s;
+            t_end = s.time_s - s.model.prm.dt_s;
             break;
         }
     }
     assert_true(t_end > 0);
-    double v = s.bod.vel[2];
+    double v = s.model.bod.vel[2];
     if (duration) *duration = t_end - t_start;
     if (peak) *peak = fmax;
     dem_sim_free(&s);
@@ -126,8 +126,8 @@ static void test_energy_conservation(void **state)
     double worst = 0.0;
     long collisions = 0;
     for (int k = 0; k < 100000; k++) { /* 0.5 s: every sphere hits the floor */
-        assert_int_equal(dem_sim_step(&s, s.prm.dt_s, &err), 0);
-        collisions += (long)s.contacts.n;
+        assert_int_equal(dem_sim_step(&s, s.model.prm.dt_s, &err), 0);
+        collisions += (long)s.contact.list.n;
         double e = dem_sim_kinetic_energy(&s) + dem_sim_potential_energy(&s) +
                    dem_contacts_elastic_energy(&s);
         if (fabs(e - e0) > worst) worst = fabs(e - e0);

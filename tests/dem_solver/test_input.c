@@ -154,8 +154,8 @@ static void rest_on_mesh(double x, double y, size_t *contacts, double *force_rat
     dem_test_build(&s, json);
     nc_error err;
     for (int k = 0; k < 25000; k++) assert_int_equal(dem_sim_step(&s, 2e-5, &err), 0); /* 0.5 s */
-    *contacts = s.contacts.n;
-    *force_ratio = -s.wall_force[2] / (s.bod.mass[0] * 9.81);
+    *contacts = s.contact.list.n;
+    *force_ratio = -s.wall_force[2] / (s.model.bod.mass[0] * 9.81);
     dem_sim_free(&s);
 }
 

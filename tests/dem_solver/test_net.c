@@ -55,7 +55,7 @@ static void run_fixed(dem_sim *s, int steps, double dt, double *force, dem_coupl
 
 static double weight(const dem_sim *s)
 {
-    return s->bod.mass[0] * 9.81;
+    return s->model.bod.mass[0] * 9.81;
 }
 
 static void test_rest_on_edge_lever_rule(void **state)
@@ -95,7 +95,7 @@ static void test_shared_vertex_counted_once(void **state)
         double f[9];
         dem_coupled_info info;
         run_fixed(&s, 1000, 1e-3, f, &info);
-        double W = weight(&s), x = s.bod.pos[0];
+        double W = weight(&s), x = s.model.bod.pos[0];
         print_message("x = %.4f: nodes %.5f %.5f %.5f N (weight %.5f), contacts %ld\n", x, f[2],
                       f[5], f[8], W, info.contacts);
         assert_int_equal(info.contacts, 1); /* one contact, not one per edge */
@@ -119,9 +119,9 @@ static double edge_bounce(const char *law, double e)
     for (int k = 0; k < 200; k++) {
         run_fixed(&s, 1, 1e-3, f, &info);
         if (info.contacts) was = 1;
-        if (was && !info.contacts && s.bod.vel[2] > 0) break;
+        if (was && !info.contacts && s.model.bod.vel[2] > 0) break;
     }
-    double v = s.bod.vel[2];
+    double v = s.model.bod.vel[2];
     dem_sim_free(&s);
     return v;
 }
@@ -151,7 +151,7 @@ static double drop_between(double r)
     double f[18];
     dem_coupled_info info;
     run_fixed(&s, 800, 1e-3, f, &info);
-    double z = s.bod.pos[2];
+    double z = s.model.bod.pos[2];
     dem_sim_free(&s);
     return z;
 }
@@ -181,12 +181,12 @@ static void test_impulse_consistent(void **state)
     dem_coupled_info info;
     double dt = 2e-3;
     for (int k = 0; k < 5; k++) {
-        double v0 = s.bod.vel[2];
+        double v0 = s.model.bod.vel[2];
         assert_int_equal(dem_sim_begin_step(&s, &err), 0);
         disp[5] -= 0.0005; /* the middle node moves down during the steps */
         assert_int_equal(dem_sim_solve_coupled(&s, dt, disp, vel, f, &info, &err), 0);
-        double m = s.bod.mass[0];
-        double lhs = m * (s.bod.vel[2] - v0);
+        double m = s.model.bod.mass[0];
+        double lhs = m * (s.model.bod.vel[2] - v0);
         double rhs = (-m * 9.81 - (f[2] + f[5] + f[8])) * dt;
         assert_true(fabs(lhs - rhs) <= 1e-9 * (fabs(lhs) + m * 9.81 * dt));
     }
@@ -220,15 +220,15 @@ static void test_free_flight_far_from_net(void **state)
             if (info.substeps == 1) flights++;
             else substepped++;
             if (c == 0 && k == 0) { /* exact: z = 1 - ½ g t² */
-                assert_true(fabs(s.bod.pos[2] - (1.0 - 0.5 * 9.81 * 1e-4)) < 1e-12);
+                assert_true(fabs(s.model.bod.pos[2] - (1.0 - 0.5 * 9.81 * 1e-4)) < 1e-12);
                 assert_int_equal(info.substeps, 1);
             }
         }
         print_message("free_flight %s: %ld ballistic steps, %ld sub-stepped, z = %.6f m\n",
-                      c == 0 ? "on" : "off", flights, substepped, s.bod.pos[2]);
+                      c == 0 ? "on" : "off", flights, substepped, s.model.bod.pos[2]);
         if (c == 0) assert_true(flights > 10 && substepped >= 3); /* the bounce is sub-stepped */
         else assert_int_equal(flights, 0);
-        z_end[c] = s.bod.pos[2];
+        z_end[c] = s.model.bod.pos[2];
         dem_sim_free(&s);
     }
     /* same landing: the sub-stepped symplectic Euler differs from the exact flight by O(dt) */
@@ -298,8 +298,8 @@ static void test_net_does_not_pass_through_resting_sphere(void **state)
         assert_int_equal(dem_sim_begin_step(&s, &err), 0);
         assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, disp, vel, f, &info, &err), 0);
     }
-    print_message("sphere centre z = %.4f m, cable at z = 0.15 m, vz = %.3f m/s\n", s.bod.pos[2], s.bod.vel[2]);
-    assert_true(s.bod.pos[2] > 0.15); /* still on top of the cable */
+    print_message("sphere centre z = %.4f m, cable at z = 0.15 m, vz = %.3f m/s\n", s.model.bod.pos[2], s.model.bod.vel[2]);
+    assert_true(s.model.bod.pos[2] > 0.15); /* still on top of the cable */
     dem_sim_free(&s);
 }
 
