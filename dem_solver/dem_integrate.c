@@ -107,14 +107,14 @@ void dem_integrate_bodies(dem_sim *s, double dt)
             bt[2] = T2;
             double *v = b->vel + 3 * k, *w = b->omega + 3 * k;
             double im = b->inv_mass[k], ii = b->inv_inertia_iso[k];
-            v[0] += dt * (F0 * im + g[0]); /* (16), velocity first */
+            v[0] += dt * (F0 * im + g[0]); /* eq. (16), velocity first */
             v[1] += dt * (F1 * im + g[1]);
             v[2] += dt * (F2 * im + g[2]);
             double x0 = x[0] + dt * v[0], x1 = x[1] + dt * v[1], x2 = x[2] + dt * v[2];
             x[0] = xs[0] = x0;
             x[1] = xs[1] = x1;
             x[2] = xs[2] = x2;
-            w[0] += dt * T0 * ii; /* (17) */
+            w[0] += dt * T0 * ii; /* eq. (17) */
             w[1] += dt * T1 * ii;
             w[2] += dt * T2 * ii;
             vs[0] = v[0];
@@ -145,12 +145,12 @@ void dem_integrate_bodies(dem_sim *s, double dt)
         double *v = b->vel + 3 * k, *w = b->omega + 3 * k;
         double im = b->inv_mass[k];
         for (int d = 0; d < 3; d++) {
-            v[d] += dt * (F[d] * im + g[d]); /* (16), velocity first */
+            v[d] += dt * (F[d] * im + g[d]); /* eq. (16), velocity first */
             x[d] += dt * v[d];
         }
         if (!b->is_cluster[k]) {
             double ii = b->inv_inertia_body[9 * k]; /* isotropic sphere */
-            for (int d = 0; d < 3; d++) w[d] += dt * T[d] * ii; /* (17) */
+            for (int d = 0; d < 3; d++) w[d] += dt * T[d] * ii; /* eq. (17) */
         } else {
             double *L = b->angmom + 3 * k, *q = b->quat + 4 * k;
             const double *ib = b->inv_inertia_body + 9 * k;

@@ -1,11 +1,11 @@
-/* dem_integrate — symplectic Euler for rigid bodies (eqs. (16)-(17)): velocity first, then
+/* dem_integrate — symplectic Euler for rigid bodies (eqs. (16), (17)): velocity first, then
  * position; free spheres rotate with a scalar inertia, clusters carry their angular momentum
  * in the world frame and a unit quaternion. Also the rigid-body kinematics of the spheres.
  */
 #ifndef DEM_INTEGRATE_H
 #define DEM_INTEGRATE_H
 
-#include "dem_solver.h"
+#include "dem_sim.h"
 
 /* Advances every body by dt: sums its spheres' contact forces and torques (about the centre
  * of mass) into s->model.bod.force/torque, integrates with gravity, moves its spheres and records

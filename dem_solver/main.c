@@ -14,7 +14,7 @@
 
 #include "dem_config.h"
 #include "dem_output.h"
-#include "dem_solver.h"
+#include "dem_sim.h"
 #include "nc_file.h"
 #include "nc_clock.h"
 #include "nc_signal.h"

@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dem_solver.h"
+#include "dem_sim.h"
 #include "nc_clock.h"
 
 static double uniform(unsigned long long *s)

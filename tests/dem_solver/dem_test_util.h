@@ -4,7 +4,7 @@
 #define DEM_TEST_UTIL_H
 
 #include "dem_config.h"
-#include "dem_solver.h"
+#include "dem_sim.h"
 
 /* dem_sim_init + parse + prepare; fails the test (cmocka) on error. */
 void dem_test_build(dem_sim *s, const char *json);

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -45,7 +46,7 @@ static void build(dem_sim *s, double z, double vz, double gz, const char *force)
     build_wall(s, z, vz, gz, force, "");
 }
 
-/* Hertz normal force (A.5) of a sphere R on the cable at overlap d: 4/3 E* sqrt(R) d^1.5 with
+/* Hertz normal force (eq. (A.5)) of a sphere R on the cable at overlap d: 4/3 E* sqrt(R) d^1.5 with
  * 1/E* = 2 (1 - 0.2²) / 1e7 (sphere and cable of the same material). */
 static double hertz(double d)
 {
@@ -80,11 +81,11 @@ static void test_end_of_step_is_end_state(void **state)
                   overlap, -(f[2] + f[5]), expect, -(fa[2] + fa[5]));
     assert_true(overlap > 0.0);
     /* same trajectory whatever is reported (1e-15 m): the option only changes the reply */
-    assert_true(fabs(s.model.bod.pos[2] - a.model.bod.pos[2]) < 1e-15);
+    assert_near(s.model.bod.pos[2], a.model.bod.pos[2], 1e-15);
     /* force ON the net is downward; round-off only (1e-9 relative) */
-    assert_true(fabs(-(f[2] + f[5]) - expect) < 1e-9 * expect);
-    assert_true(fabs(f[2] - 0.7 * (f[2] + f[5])) < 1e-9 * expect);
-    assert_true(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]) < 1e-9 * expect);
+    assert_near(-(f[2] + f[5]), expect, 1e-9 * expect);
+    assert_near(f[2], 0.7 * (f[2] + f[5]), 1e-9 * expect);
+    assert_below(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]), 1e-9 * expect);
     /* a growing contact: the end force exceeds the step average by far more than round-off */
     assert_true(-(f[2] + f[5]) > 1.2 * -(fa[2] + fa[5]));
     dem_sim_free(&s);
@@ -115,7 +116,7 @@ static void test_rest_both_equal_weight(void **state)
             assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, zero, zero, f, &info, &err), 0);
         }
         print_message("%s: net force %.6f N, weight %.6f N\n", kinds[k], -(f[2] + f[5]), w);
-        assert_true(fabs(-(f[2] + f[5]) - w) < 1e-6 * w);
+        assert_near(-(f[2] + f[5]), w, 1e-6 * w);
         dem_sim_free(&s);
     }
 }
@@ -145,7 +146,7 @@ static void test_wall_position_middle(void **state)
         print_message("wall %s: last sub-step overlap %.6f m, force %.3f N (Hertz %.3f N)\n",
                       positions[k], overlap, -(f[2] + f[5]), expect);
         assert_true(overlap > 0.0);
-        assert_true(fabs(-(f[2] + f[5]) - expect) < 1e-9 * expect);
+        assert_near(-(f[2] + f[5]), expect, 1e-9 * expect);
         z_end[k] = s.model.bod.pos[2];
         dem_sim_free(&s);
     }

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -170,7 +171,7 @@ static void test_mesh_shared_features_once(void **state)
         print_message("sphere at (%.1f, %.1f): %zu contact(s), wall force / weight = %.5f\n",
                       where[c][0], where[c][1], n, ratio);
         assert_int_equal(n, 1);
-        assert_true(fabs(ratio - 1.0) < 1e-3); /* at rest: the weight, counted once (0.1 %) */
+        assert_near(ratio, 1.0, 1e-3); /* at rest: the weight, counted once (0.1 %) */
     }
 }
 

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -55,9 +56,9 @@ static void test_rolling_without_slip(void **state)
     double a = incline(20.0, 0.5, &slip); /* tan 20° = 0.36 < 7/2 · 0.5 */
     double ref = 5.0 / 7.0 * g * sin(th);
     print_message("rolling: a = %.5f m/s² (5/7 g sin θ = %.5f), slip %.2e m/s\n", a, ref, slip);
-    assert_true(fabs(a - ref) <= 0.01 * ref); /* 1 % */
+    assert_near_rel(a, ref, 0.01); /* 1 % */
     /* contact point at rest: slip << v (0.5 % of v: the lever arm is R - δ/2, not R) */
-    assert_true(fabs(slip) < 5e-3 * a * 0.6);
+    assert_near(slip, 0.0, 5e-3 * a * 0.6);
 }
 
 static void test_sliding(void **state)
@@ -67,7 +68,7 @@ static void test_sliding(void **state)
     double a = incline(30.0, mu, &slip); /* tan 30° = 0.58 > 7/2 · 0.1 = 0.35 */
     double ref = g * (sin(th) - mu * cos(th));
     print_message("sliding: a = %.5f m/s² (g (sin θ - μ cos θ) = %.5f), slip %.3f m/s\n", a, ref, slip);
-    assert_true(fabs(a - ref) <= 0.01 * ref); /* 1 % */
+    assert_near_rel(a, ref, 0.01); /* 1 % */
     /* slip grows: ω̇ R = 5/2 μ g cos θ < a */
     assert_true(slip > 0.1);
 }
@@ -106,15 +107,15 @@ static void test_cluster_free_flight(void **state)
                 fabs(s.model.bod.omega[2] - omega0[2]);
     print_message("|ΔL|/|L| = %.2e, energy %.6f -> %.6f, ω changed by %.3f (precession)\n",
                   sqrt(dL / L1n), e0, e1, dw);
-    assert_true(sqrt(dL / L1n) < 1e-12); /* no torque: L exactly constant */
-    assert_true(fabs(e1 - e0) <= 1e-3 * fabs(e0)); /* quaternion integration, 0.1 % */
+    assert_below(sqrt(dL / L1n), 1e-12); /* no torque: L exactly constant */
+    assert_near_rel(e1, e0, 1e-3); /* quaternion integration, 0.1 % */
     assert_true(dw > 1e-3); /* an asymmetric body precesses: ω is not constant */
     /* ballistic centre of mass: x0 + v t + ½ g t² (1e-6 m, O(dt) of symplectic Euler) */
     double t = s.time_s;
-    assert_true(fabs(s.model.bod.pos[0] - (x0[0] + 1.0 * t)) < 1e-6);
-    assert_true(fabs(s.model.bod.pos[2] - (x0[2] + 2.0 * t - 0.5 * 9.81 * t * t)) < 1e-3 * 0.5 * 9.81 * t * t + 1e-4);
+    assert_near(s.model.bod.pos[0], x0[0] + 1.0 * t, 1e-6);
+    assert_near(s.model.bod.pos[2], x0[2] + 2.0 * t - 0.5 * 9.81 * t * t, 1e-3 * 0.5 * 9.81 * t * t + 1e-4);
     double d1 = hypot(hypot(s.model.sph.pos[3] - s.model.sph.pos[0], s.model.sph.pos[4] - s.model.sph.pos[1]), s.model.sph.pos[5] - s.model.sph.pos[2]);
-    assert_true(fabs(d1 - d0) < 1e-12);
+    assert_near(d1, d0, 1e-12);
     dem_sim_free(&s);
 }
 
@@ -131,11 +132,13 @@ static void test_cluster_mass_properties(void **state)
     dem_test_build(&s, json);
     double m = 4.0 / 3.0 * M_PI * 1e-3 * 1000, R = 0.1, a = 0.1;
     const double *I = s.model.bod.inertia_body;
-    assert_true(fabs(s.model.bod.mass[0] - 2 * m) < 1e-12);
-    assert_true(fabs(s.model.bod.pos[0] - 1.0) < 1e-12 && fabs(s.model.bod.pos[1] - 2.0) < 1e-12);
-    assert_true(fabs(I[0] - 2 * 0.4 * m * R * R) < 1e-12);
-    assert_true(fabs(I[4] - 2 * (0.4 * m * R * R + m * a * a)) < 1e-12);
-    assert_true(fabs(I[8] - I[4]) < 1e-12 && fabs(I[1]) < 1e-15);
+    assert_near(s.model.bod.mass[0], 2 * m, 1e-12);
+    assert_near(s.model.bod.pos[0], 1.0, 1e-12);
+    assert_near(s.model.bod.pos[1], 2.0, 1e-12);
+    assert_near(I[0], 2 * 0.4 * m * R * R, 1e-12);
+    assert_near(I[4], 2 * (0.4 * m * R * R + m * a * a), 1e-12);
+    assert_near(I[8], I[4], 1e-12);
+    assert_near(I[1], 0.0, 1e-15);
     dem_sim_free(&s);
 }
 
@@ -171,7 +174,7 @@ static void test_conveyor_moving_walls(void **state)
         for (int k = 0; k < 25000; k++) assert_int_equal(dem_sim_step(&s, 2e-5, &err), 0); /* 0.5 s */
         print_message("%s moving at 1 m/s: sphere v = %.5f m/s (2/7 = %.5f), ω R = %.5f\n",
                       c == 0 ? "plane" : "mesh", s.model.bod.vel[0], 2.0 / 7.0, -s.model.bod.omega[1] * 0.1);
-        assert_true(fabs(s.model.bod.vel[0] - 2.0 / 7.0) < 0.01 * 2.0 / 7.0); /* 1 % */
+        assert_near_rel(s.model.bod.vel[0], 2.0 / 7.0, 0.01); /* 1 % */
         dem_sim_free(&s);
     }
 }

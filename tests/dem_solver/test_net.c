@@ -1,4 +1,4 @@
-/* test_net — the coupled net wall (eqs. (13)-(15), consistent nodal loads): a sphere resting on
+/* test_net — the coupled net wall (eqs. (13)–(15), consistent nodal loads): a sphere resting on
  * an edge loads both nodes with the lever rule and in total its weight; a shared vertex is one
  * contact; the rebound on an edge returns the requested restitution; a small sphere passes
  * between two edges and a large one does not; nodal forces are impulse-consistent. */
@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -72,12 +73,13 @@ static void test_rest_on_edge_lever_rule(void **state)
                   W, info.contacts, info.substeps);
     assert_int_equal(info.contacts, 1);
     assert_int_equal(info.substeps, 100);
-    assert_true(info.near_interface == 1 && info.min_gap_m < 0.0);
+    assert_int_equal(info.near_interface, 1);
+    assert_below(info.min_gap_m, 0.0);
     /* the sum is the weight (0.1 %: residual vibration), the split the lever rule 0.7 / 0.3 */
-    assert_true(fabs(-(f[2] + f[5]) - W) <= 1e-3 * W);
-    assert_true(fabs(-f[2] - 0.7 * W) <= 1e-3 * W);
-    assert_true(fabs(-f[5] - 0.3 * W) <= 1e-3 * W);
-    assert_true(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]) < 1e-6 * W);
+    assert_near_rel(-(f[2] + f[5]), W, 1e-3);
+    assert_near(-f[2], 0.7 * W, 1e-3 * W);
+    assert_near(-f[5], 0.3 * W, 1e-3 * W);
+    assert_below(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]), 1e-6 * W);
     dem_sim_free(&s);
 }
 
@@ -99,11 +101,11 @@ static void test_shared_vertex_counted_once(void **state)
         print_message("x = %.4f: nodes %.5f %.5f %.5f N (weight %.5f), contacts %ld\n", x, f[2],
                       f[5], f[8], W, info.contacts);
         assert_int_equal(info.contacts, 1); /* one contact, not one per edge */
-        assert_true(fabs(-(f[2] + f[5] + f[8]) - W) <= 1e-3 * W);
+        assert_near_rel(-(f[2] + f[5] + f[8]), W, 1e-3);
         /* lever rule on the edge holding the contact point (node 1 -> 2 for x > 0) */
-        assert_true(fabs(-f[5] - (1.0 - x) * W) <= 1e-3 * W);
-        assert_true(fabs(-f[8] - x * W) <= 1e-3 * W);
-        assert_true(fabs(f[2]) <= 1e-9 * W);
+        assert_near(-f[5], (1.0 - x) * W, 1e-3 * W);
+        assert_near(-f[8], x * W, 1e-3 * W);
+        assert_near(f[2], 0.0, 1e-9 * W);
         dem_sim_free(&s);
     }
 }
@@ -134,8 +136,8 @@ static void test_rebound_on_edge(void **state)
         double h = edge_bounce("hertz_mindlin", eps[k]);
         double l = edge_bounce("linear", eps[k]);
         print_message("edge rebound: requested %.2f, hertz+fit %.4f, linear+a7 %.4f\n", eps[k], h, l);
-        assert_true(fabs(h - eps[k]) <= 0.03 * eps[k]); /* 3 % */
-        assert_true(fabs(l - eps[k]) <= 0.01 * eps[k]); /* 1 % */
+        assert_near_rel(h, eps[k], 0.03); /* 3 % */
+        assert_near_rel(l, eps[k], 0.01); /* 1 % */
     }
 }
 
@@ -161,9 +163,9 @@ static void test_pass_between_edges(void **state)
     (void)state;
     double z_small = drop_between(0.1), z_big = drop_between(0.2);
     print_message("after 0.8 s: small sphere z = %.3f m, large sphere z = %.3f m\n", z_small, z_big);
-    assert_true(z_small < -1.0); /* fell through freely: 0.3 - ½ g t² ≈ -2.8 m */
+    assert_below(z_small, -1.0); /* fell through freely: 0.3 - ½ g t² ≈ -2.8 m */
     /* caught: rests with its centre sqrt(0.2² - 0.15²) = 0.132 m above the cables */
-    assert_true(fabs(z_big - sqrt(0.2 * 0.2 - 0.15 * 0.15)) < 0.005);
+    assert_near(z_big, sqrt(0.2 * 0.2 - 0.15 * 0.15), 0.005);
 }
 
 /* Over one coupling step: m Δv = (m g - Σ nodal forces) Δt, so the returned time-averaged
@@ -188,7 +190,7 @@ static void test_impulse_consistent(void **state)
         double m = s.model.bod.mass[0];
         double lhs = m * (s.model.bod.vel[2] - v0);
         double rhs = (-m * 9.81 - (f[2] + f[5] + f[8])) * dt;
-        assert_true(fabs(lhs - rhs) <= 1e-9 * (fabs(lhs) + m * 9.81 * dt));
+        assert_near(lhs, rhs, 1e-9 * (fabs(lhs) + m * 9.81 * dt));
     }
     dem_sim_free(&s);
 }
@@ -220,7 +222,7 @@ static void test_free_flight_far_from_net(void **state)
             if (info.substeps == 1) flights++;
             else substepped++;
             if (c == 0 && k == 0) { /* exact: z = 1 - ½ g t² */
-                assert_true(fabs(s.model.bod.pos[2] - (1.0 - 0.5 * 9.81 * 1e-4)) < 1e-12);
+                assert_near(s.model.bod.pos[2], 1.0 - 0.5 * 9.81 * 1e-4, 1e-12);
                 assert_int_equal(info.substeps, 1);
             }
         }
@@ -232,7 +234,7 @@ static void test_free_flight_far_from_net(void **state)
         dem_sim_free(&s);
     }
     /* same landing: the sub-stepped symplectic Euler differs from the exact flight by O(dt) */
-    assert_true(fabs(z_end[0] - z_end[1]) < 1e-3);
+    assert_near(z_end[0], z_end[1], 1e-3);
 }
 
 /* Bad interface data and commands in the wrong order are errors naming the problem. */
