@@ -1,4 +1,4 @@
-/* dem_detect — the out-of-line helpers shared by the detectors (dem_detect.h): appending to a
+/* dem_detect — the out-of-line functions shared by the detectors (dem_detect.h): appending to a
  * spill list and emitting one wall contact. */
 #include "dem_detect.h"
 

@@ -9,7 +9,7 @@
  * touches more than DEM_MAX_FEATURES features of one mesh or of the net. Each detector lives in
  * its own file (dem_detect_<kind>.c) and exports one dem_detector; the table in
  * dem_contact_pass.c lists them in the order their contacts appear for a sphere.
- * The record and force helpers are inline (always_inline): they run once per contact and step.
+ * The record and force functions are inline (always_inline): they run once per contact and step.
  * The pass calls a detector once per sphere, so a detector keeps its common case (no contact)
  * a lean loop and handles the contacts out of line.
  */

@@ -18,7 +18,7 @@ void dem_free_flight(dem_sim *s, double dt, long rot_substeps);
 /* Sphere centres and velocities from their bodies. */
 void dem_update_spheres(dem_sim *s);
 
-/* Quaternion helpers (w, x, y, z). */
+/* Quaternion functions (w, x, y, z). */
 void dem_quat_rotate(const double q[4], const double v[3], double out[3]);
 void dem_quat_to_matrix(const double q[4], double r[9]);
 /* ω = R I⁻¹ Rᵀ L for a cluster. */

@@ -1,4 +1,4 @@
-/* dem_test_util — helpers shared by the dem_solver tests: building a prepared simulation from
+/* dem_test_util — code shared by the dem_solver tests: building a prepared simulation from
  * JSON text, and a one-line rigid net wall. */
 #ifndef DEM_TEST_UTIL_H
 #define DEM_TEST_UTIL_H

@@ -72,7 +72,7 @@ static void test_restitution_linear_a7(void **state)
     for (int k = 0; k < 3; k++) {
         double got = bounce("linear", "a7", eps[k], NULL, NULL);
         print_message("linear a7: requested %.2f got %.4f\n", eps[k], got);
-        assert_near_rel(got, eps[k], 0.01); /* issue: linear law within 1 % */
+        assert_near_rel(got, eps[k], 0.01); /* required: linear law within 1 % */
     }
 }
 
@@ -83,7 +83,7 @@ static void test_restitution_hertz_fit(void **state)
     for (int k = 0; k < 3; k++) {
         double got = bounce("hertz_mindlin", "fit", eps[k], NULL, NULL);
         print_message("hertz fit: requested %.2f got %.4f\n", eps[k], got);
-        assert_near_rel(got, eps[k], 0.03); /* issue: Hertz + fit within 3 % */
+        assert_near_rel(got, eps[k], 0.03); /* required: Hertz + fit within 3 % */
     }
 }
 
