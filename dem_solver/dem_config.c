@@ -21,8 +21,8 @@ static int find_material(const dem_sim *s, const cJSON *obj, const char *where, 
         *index = 0;
         return 0;
     }
-    for (size_t k = 0; k < s->n_materials; k++)
-        if (strcmp(s->materials[k].name, name) == 0) {
+    for (size_t k = 0; k < s->model.n_materials; k++)
+        if (strcmp(s->model.materials[k].name, name) == 0) {
             *index = (int)k;
             return 0;
         }
@@ -57,8 +57,8 @@ static int parse_materials(dem_sim *s, const cJSON *root, const char *file, nc_e
         if (strlen(name) == 0 || strlen(name) >= sizeof mat.name)
             return nc_error_set(err, 1, "%s.name: expected 1 to %zu characters", where,
                                 sizeof mat.name - 1);
-        for (size_t q = 0; q < s->n_materials; q++)
-            if (strcmp(s->materials[q].name, name) == 0)
+        for (size_t q = 0; q < s->model.n_materials; q++)
+            if (strcmp(s->model.materials[q].name, name) == 0)
                 return nc_error_set(err, 1, "%s.name: material \"%s\" defined twice", where, name);
         snprintf(mat.name, sizeof mat.name, "%s", name);
         if (dem_sim_add_material(s, &mat, err) < 0) return -1;
@@ -332,16 +332,16 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
     int count;
     if (nc_json_array_opt(root, file, "meshes", &arr, &count, err)) return -1;
     if (count == 0) return 0;
-    s->meshes = calloc((size_t)count, sizeof *s->meshes);
-    if (!s->meshes) return nc_error_set(err, 1, "dem: out of memory");
+    s->model.meshes = calloc((size_t)count, sizeof *s->model.meshes);
+    if (!s->model.meshes) return nc_error_set(err, 1, "dem: out of memory");
     for (int k = 0; k < count; k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "meshes", k);
         const cJSON *m = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(m)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(m, where, keys, err)) return -1;
-        dem_mesh *mesh = &s->meshes[k];
-        s->n_meshes = (size_t)k + 1;
+        dem_mesh *mesh = &s->model.meshes[k];
+        s->model.n_meshes = (size_t)k + 1;
         const char *path;
         int mat;
         if (nc_json_string(m, where, "file", &path, err) ||
@@ -368,7 +368,7 @@ static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_er
     if (!w) return 0;
     char where[600];
     nc_json_path(where, sizeof where, file, "net_wall");
-    dem_net *n = &s->net;
+    dem_net *n = &s->model.net;
     if (nc_json_check_keys(w, where, keys, err) ||
         nc_json_positive(w, where, "youngs_modulus_pa", &n->youngs_modulus_pa, err) ||
         nc_json_number_range(w, where, "poisson_ratio", -0.999, 0.5, &n->poisson_ratio, err) ||
@@ -393,9 +393,9 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
     static const char *const laws[] = {"hertz_mindlin", "linear", NULL};
     static const char *const dampings[] = {"fit", "a7", NULL};
     static const double g0[3] = {0, 0, -9.81};
-    snprintf(s->source, sizeof s->source, "%s", file);
+    snprintf(s->model.source, sizeof s->model.source, "%s", file);
     if (nc_json_check_keys(root, file, keys, err)) return -1;
-    dem_params *p = &s->prm;
+    dem_params *p = &s->model.prm;
     int law;
     if (nc_json_vec3_opt(root, file, "gravity", g0, p->gravity, err) ||
         nc_json_choice_opt(root, file, "contact_law", laws, 0, &law, err))
@@ -420,7 +420,7 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
         nc_json_number_range_opt(root, file, "output_interval_s", p->end_time_s / 100.0, 0.0,
                                  INFINITY, &p->output_interval_s, err) ||
         nc_json_int_opt(root, file, "threads", 0, 0, DEM_MAX_BUFFERS, &threads, err) ||
-        nc_json_number_range_opt(root, file, "neighbor_skin_m", 0.0, 0.0, INFINITY, &s->skin_m, err) ||
+        nc_json_number_range_opt(root, file, "neighbor_skin_m", 0.0, 0.0, INFINITY, &s->nlist.skin_m, err) ||
         nc_json_bool_opt(root, file, "free_flight", 0, &p->free_flight, err))
         return -1;
     p->threads = (int)threads;
@@ -452,9 +452,9 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
 static int build_mesh_grids(dem_sim *s, nc_error *err)
 {
     double rmax = 0.0;
-    for (size_t i = 0; i < s->sph.n; i++) rmax = fmax(rmax, s->sph.radius[i]);
-    for (size_t m = 0; m < s->n_meshes; m++) {
-        dem_mesh *mesh = &s->meshes[m];
+    for (size_t i = 0; i < s->model.sph.n; i++) rmax = fmax(rmax, s->model.sph.radius[i]);
+    for (size_t m = 0; m < s->model.n_meshes; m++) {
+        dem_mesh *mesh = &s->model.meshes[m];
         size_t nt = mesh->n_triangles;
         double *lo = malloc(3 * nt * sizeof *lo), *hi = malloc(3 * nt * sizeof *hi);
         mesh->grid = calloc(1, sizeof *mesh->grid);

@@ -9,7 +9,7 @@
 #ifndef DEM_CONFIG_H
 #define DEM_CONFIG_H
 
-#include "dem_solver.h"
+#include "dem_sim.h"
 
 int dem_config_load(dem_sim *s, const char *path, nc_error *err);
 /* Same from JSON text; `where` names the source in messages, `base_dir` resolves STL paths. */

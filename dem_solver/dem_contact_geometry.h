@@ -1,4 +1,4 @@
-/* dem_contact_geometry — closest points for the contact tests (13)-(15): sphere against a
+/* dem_contact_geometry — closest points for the contact tests of eqs. (13)–(15): sphere against a
  * segment (net edge) and against a triangle, telling which feature (face, edge, vertex) holds
  * the closest point so that shared features can be counted once.
  */

@@ -1,11 +1,11 @@
 /* dem_contact_hertz — the contact force law of one contact (Appendix A, eq. (A.5), Table 3).
  *
  * Hertz–Mindlin: Fn = 4/3 E* sqrt(R*) δ^1.5 + cn δ̇, cn = 2 ζ sqrt(m* kn') with the tangent
- * stiffness kn' = 2 E* sqrt(R* δ) (the stiffness the fit (A.8)-(A.10) was made for), clamped to
+ * stiffness kn' = 2 E* sqrt(R* δ) (the stiffness the fit eqs. (A.8)–(A.10) was made for), clamped to
  * Fn >= 0 (no tension). Tangential: incremental spring kt = 8 G* sqrt(R* δ) with history,
  * rescaled by kt/kt_prev while unloading, dashpot ct = 2 ζ sqrt(m* kt), Coulomb cap μ Fn.
- * Linear: Fn = kn δ + 2 ζ sqrt(m* kn) δ̇ (the classic spring–dashpot for which (A.7) is exact;
- * the dashpot may pull slightly at the end of the contact, as (A.7) assumes), kt = ratio kn.
+ * Linear: Fn = kn δ + 2 ζ sqrt(m* kn) δ̇ (the classic spring–dashpot for which eq. (A.7) is exact;
+ * the dashpot may pull slightly at the end of the contact, as eq. (A.7) assumes), kt = ratio kn.
  */
 #ifndef DEM_CONTACT_HERTZ_H
 #define DEM_CONTACT_HERTZ_H
@@ -30,7 +30,7 @@ double dem_effective_modulus(double e1, double nu1, double e2, double nu2);
 double dem_effective_shear(double g1, double nu1, double g2, double nu2);
 
 /* Force on sphere i for overlap δ > 0 along the unit normal n (from i towards the other body),
- * vc = velocity of the other body's contact point minus sphere i's (A.2), time step dt.
+ * vc = velocity of the other body's contact point minus sphere i's (eq. (A.2)), time step dt.
  * ft (3, elastic tangential force on i), kt_prev, fn_prev are the contact's history, updated.
  * Writes the total force on i to f_i and returns the normal force magnitude.
  * Always inlined: it runs once per contact and step, and a call would pass the small vectors
@@ -41,7 +41,7 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
                                        double *fn_prev, double f_i[3])
 {
     double vn = vc[0] * n[0] + vc[1] * n[1] + vc[2] * n[2];
-    double overlap_rate = -vn; /* > 0 while approaching (A.3) */
+    double overlap_rate = -vn; /* > 0 while approaching (eq. (A.3)) */
     double fn, kt, cn_root; /* cn_root = sqrt(m* kn') */
     if (prm->law == DEM_LAW_HERTZ_MINDLIN) {
         double root = sqrt(pair->r_star * overlap);
@@ -71,13 +71,13 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
         ft2 -= fdn * n[2];
         double new2 = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
         double s = new2 > 0.0 ? sqrt(old2 / new2) : 0.0;
-        /* (A.5): unloading scales the stored force with the stiffness ratio */
+        /* eq. (A.5): unloading scales the stored force with the stiffness ratio */
         if (fn < *fn_prev && *kt_prev > 0.0) s *= kt / *kt_prev;
         ft0 *= s;
         ft1 *= s;
         ft2 *= s;
     }
-    /* (A.4): Δs = v_t dt */
+    /* eq. (A.4): Δs = v_t dt */
     ft0 += kt * vt0 * dt;
     ft1 += kt * vt1 * dt;
     ft2 += kt * vt2 * dt;

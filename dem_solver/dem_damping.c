@@ -1,4 +1,4 @@
-/* dem_damping — ζ from ε by eq. (A.7) and by the Hertz fit (A.8)-(A.10). */
+/* dem_damping — ζ from ε by eq. (A.7) and by the Hertz fit eqs. (A.8)–(A.10). */
 #include "dem_damping.h"
 
 #include <math.h>
@@ -27,7 +27,7 @@ double dem_zeta_fit(double restitution)
     /* eq. (A.10), nested Horner form: Λ = ε (h1 + ε (h2 + ... + ε h10)) */
     double lambda = 0.0;
     for (int k = 9; k >= 0; k--) lambda = e * (h[k] + lambda);
-    double denom = 1.0 - (1.0 + e) * (1.0 + e) * exp(lambda); /* eqs. (A.8)-(A.9) */
+    double denom = 1.0 - (1.0 + e) * (1.0 + e) * exp(lambda); /* eqs. (A.8)–(A.9) */
     if (denom <= 0.0) return 0.0;
     double z2 = 1.0 / denom - 1.0;
     return z2 > 0.0 ? sqrt(z2) : 0.0;

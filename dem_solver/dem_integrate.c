@@ -50,11 +50,11 @@ static void quat_advance(double q[4], const double w[3], double h)
 
 static inline void place_spheres(dem_sim *s, long k)
 {
-    const dem_bodies *b = &s->bod;
+    const dem_bodies *b = &s->model.bod;
     int32_t first = b->first_sphere[k], count = b->n_spheres[k];
     const double *xb = b->pos + 3 * k, *vb = b->vel + 3 * k, *w = b->omega + 3 * k;
     if (!b->is_cluster[k]) {
-        double *x = s->sph.pos + 3 * (size_t)first, *v = s->sph.vel + 3 * (size_t)first;
+        double *x = s->model.sph.pos + 3 * (size_t)first, *v = s->model.sph.vel + 3 * (size_t)first;
         x[0] = xb[0];
         x[1] = xb[1];
         x[2] = xb[2];
@@ -66,10 +66,10 @@ static inline void place_spheres(dem_sim *s, long k)
     double r[9];
     dem_quat_to_matrix(b->quat + 4 * k, r);
     for (int32_t q = first; q < first + count; q++) {
-        const double *o = s->sph.offset + 3 * (size_t)q;
+        const double *o = s->model.sph.offset + 3 * (size_t)q;
         double d[3];
         for (int a = 0; a < 3; a++) d[a] = r[3 * a] * o[0] + r[3 * a + 1] * o[1] + r[3 * a + 2] * o[2];
-        double *x = s->sph.pos + 3 * (size_t)q, *v = s->sph.vel + 3 * (size_t)q;
+        double *x = s->model.sph.pos + 3 * (size_t)q, *v = s->model.sph.vel + 3 * (size_t)q;
         x[0] = xb[0] + d[0];
         x[1] = xb[1] + d[1];
         x[2] = xb[2] + d[2];
@@ -81,18 +81,18 @@ static inline void place_spheres(dem_sim *s, long k)
 
 void dem_integrate_bodies(dem_sim *s, double dt)
 {
-    dem_bodies *b = &s->bod;
-    const double *g = s->prm.gravity;
+    dem_bodies *b = &s->model.bod;
+    const double *g = s->model.prm.gravity;
     long n = (long)b->n;
-    double worst = s->max_disp2;
-#pragma omp parallel for schedule(static) reduction(max : worst) num_threads(s->n_buffers) if (n >= DEM_PARALLEL_MIN)
+    double worst = s->nlist.max_disp2;
+#pragma omp parallel for schedule(static) reduction(max : worst) num_threads(s->work.n_buffers) if (n >= DEM_PARALLEL_MIN)
     for (long k = 0; k < n; k++) {
         int32_t first = b->first_sphere[k], count = b->n_spheres[k];
         double *x = b->pos + 3 * k;
         if (!b->is_cluster[k]) { /* free sphere: the same arithmetic, fewer memory streams */
             size_t q = (size_t)first;
-            const double *f = s->sph.force + 3 * q, *ts = s->sph.torque + 3 * q;
-            double *xs = s->sph.pos + 3 * q, *vs = s->sph.vel + 3 * q;
+            const double *f = s->model.sph.force + 3 * q, *ts = s->model.sph.torque + 3 * q;
+            double *xs = s->model.sph.pos + 3 * q, *vs = s->model.sph.vel + 3 * q;
             double r0 = xs[0] - x[0], r1 = xs[1] - x[1], r2 = xs[2] - x[2];
             double F0 = 0.0 + f[0], F1 = 0.0 + f[1], F2 = 0.0 + f[2];
             double T0 = 0.0 + (ts[0] + r1 * f[2] - r2 * f[1]);
@@ -107,20 +107,20 @@ void dem_integrate_bodies(dem_sim *s, double dt)
             bt[2] = T2;
             double *v = b->vel + 3 * k, *w = b->omega + 3 * k;
             double im = b->inv_mass[k], ii = b->inv_inertia_iso[k];
-            v[0] += dt * (F0 * im + g[0]); /* (16), velocity first */
+            v[0] += dt * (F0 * im + g[0]); /* eq. (16), velocity first */
             v[1] += dt * (F1 * im + g[1]);
             v[2] += dt * (F2 * im + g[2]);
             double x0 = x[0] + dt * v[0], x1 = x[1] + dt * v[1], x2 = x[2] + dt * v[2];
             x[0] = xs[0] = x0;
             x[1] = xs[1] = x1;
             x[2] = xs[2] = x2;
-            w[0] += dt * T0 * ii; /* (17) */
+            w[0] += dt * T0 * ii; /* eq. (17) */
             w[1] += dt * T1 * ii;
             w[2] += dt * T2 * ii;
             vs[0] = v[0];
             vs[1] = v[1];
             vs[2] = v[2];
-            const double *p0 = s->pos_at_build + 3 * q;
+            const double *p0 = s->nlist.pos_at_build + 3 * q;
             double d0 = x0 - p0[0], d1 = x1 - p0[1], d2c = x2 - p0[2];
             double d2 = d0 * d0 + d1 * d1 + d2c * d2c;
             if (!(d2 <= worst)) worst = d2; /* NaN propagates and forces a rebuild */
@@ -129,8 +129,8 @@ void dem_integrate_bodies(dem_sim *s, double dt)
         /* spheres -> body, in sphere order (deterministic) */
         double F[3] = {0, 0, 0}, T[3] = {0, 0, 0};
         for (int32_t q = first; q < first + count; q++) {
-            const double *f = s->sph.force + 3 * (size_t)q, *xs = s->sph.pos + 3 * (size_t)q;
-            const double *ts = s->sph.torque + 3 * (size_t)q;
+            const double *f = s->model.sph.force + 3 * (size_t)q, *xs = s->model.sph.pos + 3 * (size_t)q;
+            const double *ts = s->model.sph.torque + 3 * (size_t)q;
             double r[3] = {xs[0] - x[0], xs[1] - x[1], xs[2] - x[2]};
             F[0] += f[0];
             F[1] += f[1];
@@ -145,12 +145,12 @@ void dem_integrate_bodies(dem_sim *s, double dt)
         double *v = b->vel + 3 * k, *w = b->omega + 3 * k;
         double im = b->inv_mass[k];
         for (int d = 0; d < 3; d++) {
-            v[d] += dt * (F[d] * im + g[d]); /* (16), velocity first */
+            v[d] += dt * (F[d] * im + g[d]); /* eq. (16), velocity first */
             x[d] += dt * v[d];
         }
         if (!b->is_cluster[k]) {
             double ii = b->inv_inertia_body[9 * k]; /* isotropic sphere */
-            for (int d = 0; d < 3; d++) w[d] += dt * T[d] * ii; /* (17) */
+            for (int d = 0; d < 3; d++) w[d] += dt * T[d] * ii; /* eq. (17) */
         } else {
             double *L = b->angmom + 3 * k, *q = b->quat + 4 * k;
             const double *ib = b->inv_inertia_body + 9 * k;
@@ -161,19 +161,19 @@ void dem_integrate_bodies(dem_sim *s, double dt)
         }
         place_spheres(s, k);
         for (int32_t q = first; q < first + count; q++) {
-            const double *p = s->sph.pos + 3 * (size_t)q, *p0 = s->pos_at_build + 3 * (size_t)q;
+            const double *p = s->model.sph.pos + 3 * (size_t)q, *p0 = s->nlist.pos_at_build + 3 * (size_t)q;
             double d[3] = {p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]};
             double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             if (!(d2 <= worst)) worst = d2; /* NaN propagates and forces a rebuild */
         }
     }
-    s->max_disp2 = worst;
+    s->nlist.max_disp2 = worst;
 }
 
 void dem_free_flight(dem_sim *s, double dt, long rot_substeps)
 {
-    dem_bodies *b = &s->bod;
-    const double *g = s->prm.gravity;
+    dem_bodies *b = &s->model.bod;
+    const double *g = s->model.prm.gravity;
     double h = dt / (double)(rot_substeps > 0 ? rot_substeps : 1);
     for (size_t k = 0; k < b->n; k++) {
         double *x = b->pos + 3 * k, *v = b->vel + 3 * k, *w = b->omega + 3 * k;
@@ -191,12 +191,12 @@ void dem_free_flight(dem_sim *s, double dt, long rot_substeps)
         dem_cluster_omega(q, ib, L, w);
     }
     dem_update_spheres(s);
-    s->rebuild = 1;
+    s->nlist.rebuild = 1;
 }
 
 void dem_update_spheres(dem_sim *s)
 {
-    long n = (long)s->bod.n;
-#pragma omp parallel for schedule(static) num_threads(s->n_buffers) if (n >= DEM_PARALLEL_MIN)
+    long n = (long)s->model.bod.n;
+#pragma omp parallel for schedule(static) num_threads(s->work.n_buffers) if (n >= DEM_PARALLEL_MIN)
     for (long k = 0; k < n; k++) place_spheres(s, k);
 }

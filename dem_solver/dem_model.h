@@ -1,7 +1,8 @@
-/* dem_model — the data of a DEM simulation: materials, spheres, rigid bodies, walls, contacts.
+/* dem_model — the model of a DEM simulation: parameters, materials, spheres, rigid bodies and
+ * walls (planes, STL meshes, the coupled net), and the storage functions of that data.
  *
- * Everything is flat structure-of-arrays storage owned by one dem_sim (see dem_solver.h for the
- * functions that operate on it). Every sphere belongs to exactly one rigid body: a free sphere is
+ * Everything is flat structure-of-arrays storage in one dem_model, part of a dem_sim (dem_sim.h
+ * has the functions that build and step it). Every sphere belongs to exactly one rigid body: a free sphere is
  * a body with one sphere at offset 0, a cluster is a body with several spheres whose body-frame
  * offsets are fixed. Vectors are stored as 3 consecutive doubles (x[3*i+0..2]).
  * Units: SI everywhere (m, s, kg, N, Pa).
@@ -12,10 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Loops over fewer items than this run on one thread (a parallel region costs more). */
-#define DEM_PARALLEL_MIN 512
-/* Most OpenMP threads (contact buffers) a simulation uses. */
-#define DEM_MAX_BUFFERS 256
+#include "nc_error.h"
 
 typedef enum { DEM_LAW_HERTZ_MINDLIN = 0, DEM_LAW_LINEAR = 1 } dem_law;
 typedef enum { DEM_DAMPING_FIT = 0, DEM_DAMPING_A7 = 1 } dem_damping_formula;
@@ -25,10 +23,10 @@ typedef struct dem_material {
     double youngs_modulus_pa;
     double poisson_ratio;
     double density_kg_m3;
-    double restitution;   /* coefficient of restitution ε (A.6) */
+    double restitution;   /* coefficient of restitution ε (eq. (A.6)) */
     double friction;      /* Coulomb friction coefficient μ */
     double shear_modulus_pa; /* G = E / (2 (1 + ν)) */
-    double zeta;             /* damping ratio from ε by (A.7) or (A.8)-(A.10) */
+    double zeta;             /* damping ratio from ε by eq. (A.7) or eqs. (A.8)–(A.10) */
     double pair_e_star;      /* E* and G* of a contact between two spheres of this material */
     double pair_g_star;
     double pair_kt_kn_root;  /* sqrt(kt / kn') of such a contact */
@@ -136,46 +134,31 @@ typedef struct dem_net {
     struct dem_item_grid *grid;
 } dem_net;
 
-/* Contact kinds (the key of a contact is (sphere i, kind, j)). */
-enum {
-    DEM_CONTACT_SPHERE = 0, /* j: other sphere (j > i) */
-    DEM_CONTACT_PLANE = 1,  /* j: plane index */
-    DEM_CONTACT_MESH = 2,   /* j: global mesh feature id (face, edge or vertex) */
-    DEM_CONTACT_NET_EDGE = 3, /* j: net edge (interior point) */
-    DEM_CONTACT_NET_NODE = 4  /* j: net node (vertex) */
-};
+/* The model: what dem_config_load() or the dem_sim_add_* builders fill in, completed by
+ * dem_sim_prepare() (material shear moduli and damping ratios, body masses, r_max/r_min). */
+typedef struct dem_model {
+    char source[512];              /* input file name, for messages */
+    dem_params prm;
+    size_t n_materials;
+    dem_material *materials;
+    dem_spheres sph;
+    dem_bodies bod;
+    size_t n_planes;
+    dem_plane *planes;
+    size_t n_meshes;
+    dem_mesh *meshes;
+    dem_net net;
+    double r_max, r_min;           /* largest and smallest sphere radius (m), from prepare */
+} dem_model;
 
-/* A list of contacts, ordered by sphere i (then by discovery order, which is deterministic).
- * History (ft, kt_prev, fn_prev) survives from one step to the next through the key. The
- * contact forces themselves are summed onto spheres and walls while the list is built (see
- * dem_contacts.h) and not stored. */
-typedef struct dem_contacts {
-    size_t n, cap;
-    int32_t *i, *kind, *j;
-    int32_t *aux;          /* mesh index for mesh contacts */
-    double *ft;            /* 3n: elastic tangential force on i (history) */
-    double *kt_prev;       /* tangential stiffness of the previous step */
-    double *fn_prev;       /* normal force of the previous step */
-    double *overlap;       /* m */
-    double *normal;        /* 3n: unit normal from sphere i towards the other body */
-} dem_contacts;
-
-/* A contact force contribution summed after the parallel contact pass, in a fixed order:
- * forces on walls and net nodes, and forces on the spheres that receive contributions from
- * more than one thread's range of spheres (so that every sum runs in the same order whatever
- * the thread count). */
-typedef struct dem_spill {
-    int32_t kind;          /* DEM_CONTACT_SPHERE (force and torque on sphere `index`), _PLANE,
-                              _MESH (wall `index`), _NET_EDGE (edge `index`, weight), _NET_NODE */
-    int32_t index;
-    double weight;         /* net edge parameter t */
-    double f[3];           /* force to add */
-    double t[3];           /* torque to add (spheres) */
-} dem_spill;
-
-typedef struct dem_spills {
-    size_t n, cap;
-    dem_spill *r;
-} dem_spills;
+/* Default parameters and wall material (everything else zero). */
+void dem_model_init(dem_model *m);
+/* Frees everything the model owns and zeroes it. */
+void dem_model_free(dem_model *m);
+/* Grows the sphere / body arrays to hold at least `need` entries. */
+int dem_model_reserve_spheres(dem_model *m, size_t need, nc_error *err);
+int dem_model_reserve_bodies(dem_model *m, size_t need, nc_error *err);
+/* Frees the net's arrays and grid and marks it inactive (the wall material stays). */
+void dem_net_free(dem_net *n);
 
 #endif

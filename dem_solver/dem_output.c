@@ -16,14 +16,14 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
     char path[1100];
     snprintf(path, sizeof path, "%s/dem.h5", dir);
     if (nc_h5_create(&o->h5, path, err)) return -1;
-    hsize_t n = s->sph.n;
+    hsize_t n = s->model.sph.n;
     if (n > 0) {
         int32_t *mat = malloc(n * sizeof *mat);
         if (!mat) return nc_error_set(err, 1, "dem: out of memory");
-        for (size_t i = 0; i < n; i++) mat[i] = s->sph.material[i];
-        int rc = nc_h5_write(&o->h5, "/particles/id", NC_H5_I32, 1, &n, s->sph.id, err) ||
-                 nc_h5_write(&o->h5, "/particles/radius", NC_H5_F64, 1, &n, s->sph.radius, err) ||
-                 nc_h5_write(&o->h5, "/particles/body", NC_H5_I32, 1, &n, s->sph.body, err) ||
+        for (size_t i = 0; i < n; i++) mat[i] = s->model.sph.material[i];
+        int rc = nc_h5_write(&o->h5, "/particles/id", NC_H5_I32, 1, &n, s->model.sph.id, err) ||
+                 nc_h5_write(&o->h5, "/particles/radius", NC_H5_F64, 1, &n, s->model.sph.radius, err) ||
+                 nc_h5_write(&o->h5, "/particles/body", NC_H5_I32, 1, &n, s->model.sph.body, err) ||
                  nc_h5_write(&o->h5, "/particles/material", NC_H5_I32, 1, &n, mat, err);
         free(mat);
         if (rc) return -1;
@@ -36,15 +36,15 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
     char names[4096] = "";
     for (size_t w = 0; w < s->n_walls; w++) {
         size_t used = strlen(names);
-        if (w < s->n_planes) snprintf(names + used, sizeof names - used, "%splane%zu", w ? "," : "", w);
-        else if (w < s->n_planes + s->n_meshes)
-            snprintf(names + used, sizeof names - used, "%smesh%zu", w ? "," : "", w - s->n_planes);
+        if (w < s->model.n_planes) snprintf(names + used, sizeof names - used, "%splane%zu", w ? "," : "", w);
+        else if (w < s->model.n_planes + s->model.n_meshes)
+            snprintf(names + used, sizeof names - used, "%smesh%zu", w ? "," : "", w - s->model.n_planes);
         else snprintf(names + used, sizeof names - used, "%snet", w ? "," : "");
     }
     if (nc_h5_attr_string(&o->h5, "/walls/force", "walls", names, err) ||
         nc_h5_attr_string(&o->h5, "/", "program", "netcouple dem_solver", err))
         return -1;
-    o->scratch = malloc((4 * s->bod.n + 4) * sizeof *o->scratch);
+    o->scratch = malloc((4 * s->model.bod.n + 4) * sizeof *o->scratch);
     if (!o->scratch) return nc_error_set(err, 1, "dem: out of memory");
     return nc_h5_flush(&o->h5, err);
 }
@@ -85,7 +85,7 @@ static int data_item(dem_text *t, nc_error *err, const char *dims, const char *t
 /* Formats the grids of output step k (particles, and the net when written). */
 static int format_step(dem_output *o, const dem_sim *s, long k, nc_error *err)
 {
-    size_t n = s->sph.n;
+    size_t n = s->model.sph.n;
     char nd[64], n3[64], group[64], p[128];
     snprintf(nd, sizeof nd, "%zu", n);
     snprintf(n3, sizeof n3, "%zu 3", n);
@@ -177,54 +177,54 @@ int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, n
     long k = o->n_out;
     char group[64], p[128];
     snprintf(group, sizeof group, "/steps/%06ld", k);
-    size_t n = s->sph.n;
+    size_t n = s->model.sph.n;
     if (n > 0) {
         hsize_t d[2] = {n, 3};
         snprintf(p, sizeof p, "%s/position", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->sph.pos, err)) return -1;
+        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.sph.pos, err)) return -1;
         snprintf(p, sizeof p, "%s/velocity", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->sph.vel, err)) return -1;
+        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.sph.vel, err)) return -1;
         /* angular velocity of each sphere = that of its body */
         double *w = malloc(3 * n * sizeof *w);
         if (!w) return nc_error_set(err, 1, "dem: out of memory");
         for (size_t i = 0; i < n; i++)
-            memcpy(w + 3 * i, s->bod.omega + 3 * (size_t)s->sph.body[i], 3 * sizeof *w);
+            memcpy(w + 3 * i, s->model.bod.omega + 3 * (size_t)s->model.sph.body[i], 3 * sizeof *w);
         snprintf(p, sizeof p, "%s/angular_velocity", group);
         int rc = nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, w, err);
         free(w);
         if (rc) return -1;
     }
     size_t nc = 0;
-    for (size_t b = 0; b < s->bod.n; b++) nc += s->bod.is_cluster[b] != 0;
+    for (size_t b = 0; b < s->model.bod.n; b++) nc += s->model.bod.is_cluster[b] != 0;
     if (nc > 0) {
         size_t c = 0;
-        for (size_t b = 0; b < s->bod.n; b++)
-            if (s->bod.is_cluster[b]) memcpy(o->scratch + 4 * c++, s->bod.quat + 4 * b, 4 * sizeof(double));
+        for (size_t b = 0; b < s->model.bod.n; b++)
+            if (s->model.bod.is_cluster[b]) memcpy(o->scratch + 4 * c++, s->model.bod.quat + 4 * b, 4 * sizeof(double));
         hsize_t d4[2] = {nc, 4}, d3[2] = {nc, 3};
         snprintf(p, sizeof p, "%s/cluster_orientation", group);
         if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d4, o->scratch, err)) return -1;
         c = 0;
-        for (size_t b = 0; b < s->bod.n; b++)
-            if (s->bod.is_cluster[b]) memcpy(o->scratch + 3 * c++, s->bod.pos + 3 * b, 3 * sizeof(double));
+        for (size_t b = 0; b < s->model.bod.n; b++)
+            if (s->model.bod.is_cluster[b]) memcpy(o->scratch + 3 * c++, s->model.bod.pos + 3 * b, 3 * sizeof(double));
         snprintf(p, sizeof p, "%s/cluster_position", group);
         if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d3, o->scratch, err)) return -1;
     }
     o->has_net[k] = 0;
-    if (s->net.active) {
+    if (s->model.net.active) {
         if (!o->net_written) {
-            hsize_t de[2] = {s->net.n_edges, 2}, dn = s->net.n_nodes;
-            if (nc_h5_write(&o->h5, "/net/edges", NC_H5_I32, 2, de, s->net.edges, err) ||
-                nc_h5_write(&o->h5, "/net/node_ids", NC_H5_I32, 1, &dn, s->net.node_ids, err))
+            hsize_t de[2] = {s->model.net.n_edges, 2}, dn = s->model.net.n_nodes;
+            if (nc_h5_write(&o->h5, "/net/edges", NC_H5_I32, 2, de, s->model.net.edges, err) ||
+                nc_h5_write(&o->h5, "/net/node_ids", NC_H5_I32, 1, &dn, s->model.net.node_ids, err))
                 return -1;
             o->net_written = 1;
-            o->net_nodes = s->net.n_nodes;
-            o->net_edges = s->net.n_edges;
+            o->net_nodes = s->model.net.n_nodes;
+            o->net_edges = s->model.net.n_edges;
         }
-        hsize_t d[2] = {s->net.n_nodes, 3};
+        hsize_t d[2] = {s->model.net.n_nodes, 3};
         snprintf(p, sizeof p, "%s/net_position", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->net.cur, err)) return -1;
+        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.net.cur, err)) return -1;
         snprintf(p, sizeof p, "%s/net_force", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, net_force ? net_force : s->net.force, err))
+        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, net_force ? net_force : s->model.net.force, err))
             return -1;
         o->has_net[k] = 1;
     }

@@ -11,7 +11,7 @@
 #ifndef DEM_OUTPUT_H
 #define DEM_OUTPUT_H
 
-#include "dem_solver.h"
+#include "dem_sim.h"
 #include "nc_h5.h"
 
 typedef struct dem_text {

@@ -59,8 +59,8 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
 {
     participant *c = ctx;
     dem_sim *s = c->s;
-    if (!s->net.active) return nc_error_set(err, 1, "dem: SOLVE before INTERFACE");
-    size_t n = s->net.n_nodes;
+    if (!s->model.net.active) return nc_error_set(err, 1, "dem: SOLVE before INTERFACE");
+    size_t n = s->model.net.n_nodes;
     const double *disp, *vel;
     if (proto_message_get_f64(cmd, "displacement", n, 3, &disp, NULL, err) ||
         proto_message_get_f64(cmd, "velocity", n, 3, &vel, NULL, err))
@@ -84,7 +84,7 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     dem_sim *s = c->s;
     if (s->time_s < c->next_out_s - 1e-12) return 0;
     int rc = dem_output_write(c->out, s, c->force, err);
-    double interval = s->prm.output_interval_s;
+    double interval = s->model.prm.output_interval_s;
     if (interval > 0.0)
         while (c->next_out_s <= s->time_s + 1e-12) c->next_out_s += interval;
     else c->next_out_s = s->time_s;
@@ -100,10 +100,10 @@ static void on_report(void *ctx, const char *message)
 int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
                         const volatile sig_atomic_t *stop, nc_error *err)
 {
-    if (!(s->net.youngs_modulus_pa > 0.0))
+    if (!(s->model.net.youngs_modulus_pa > 0.0))
         return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
                                     "material: youngs_modulus_pa, poisson_ratio, friction)",
-                            s->source);
+                            s->model.source);
     proto_options popt;
     proto_options_default(&popt);
     popt.idle_timeout_ms = opt->idle_timeout_ms;
@@ -115,11 +115,11 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
         return -1;
     }
     if (opt->progress) {
-        fprintf(opt->progress, "dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->sph.n,
-                s->prm.dt_s, proto_participant_endpoint(p));
+        fprintf(opt->progress, "dem_solver: %zu spheres, dt = %.3e s, serving %s\n", s->model.sph.n,
+                s->model.prm.dt_s, proto_participant_endpoint(p));
         fflush(opt->progress);
     }
-    participant c = {.s = s, .out = out, .opt = opt, .next_out_s = s->prm.output_interval_s};
+    participant c = {.s = s, .out = out, .opt = opt, .next_out_s = s->model.prm.output_interval_s};
     const proto_serve_handlers handlers = {
         .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
         .solve = on_solve, .accept_step = on_accept, .report = on_report};

@@ -11,7 +11,7 @@
 #include <signal.h>
 #include <stdio.h>
 #include "dem_output.h"
-#include "dem_solver.h"
+#include "dem_sim.h"
 
 typedef struct dem_participant_options {
     const char *endpoint;       /* e.g. tcp://127.0.0.1:* */

@@ -15,7 +15,7 @@
 #include "dem_config.h"
 #include "dem_output.h"
 #include "dem_participant.h"
-#include "dem_solver.h"
+#include "dem_sim.h"
 #include "nc_file.h"
 #include "nc_clock.h"
 #include "nc_signal.h"
@@ -81,10 +81,10 @@ static int parse_args(int argc, char **argv, options *o)
 static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic_t *stop,
                           nc_error *err)
 {
-    double dt = s->prm.dt_s, end = s->prm.end_time_s, interval = s->prm.output_interval_s;
+    double dt = s->model.prm.dt_s, end = s->model.prm.end_time_s, interval = s->model.prm.output_interval_s;
     long steps = (long)ceil(end / dt - 1e-9);
     printf("dem_solver: %zu spheres in %zu bodies, dt = %.3e s (critical %.3e s), %ld steps\n",
-           s->sph.n, s->bod.n, dt, dem_sim_critical_dt(s), steps);
+           s->model.sph.n, s->model.bod.n, dt, dem_sim_critical_dt(s), steps);
     if (dem_output_write(out, s, NULL, err)) return -1;
     double next_out = interval;
     double t0 = nc_clock_now_s();
@@ -103,8 +103,8 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
     }
     double wall = nc_clock_now_s() - t0;
     printf("dem_solver: done, t = %g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
-           s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->sph.n / wall : 0.0,
-           s->contacts.n);
+           s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->model.sph.n / wall : 0.0,
+           s->contact.list.n);
     return 0;
 }
 

@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dem_solver.h"
+#include "dem_sim.h"
 #include "nc_clock.h"
 
 static double uniform(unsigned long long *s)
@@ -48,10 +48,10 @@ int main(int argc, char **argv)
     nc_error err;
     dem_sim s;
     dem_sim_init(&s);
-    snprintf(s.source, sizeof s.source, "dem_bench");
-    s.prm.threads = threads;
-    s.prm.dt_auto = 0;
-    s.prm.dt_s = 5e-5;
+    snprintf(s.model.source, sizeof s.model.source, "dem_bench");
+    s.model.prm.threads = threads;
+    s.model.prm.dt_auto = 0;
+    s.model.prm.dt_s = 5e-5;
     dem_material m;
     memset(&m, 0, sizeof m);
     snprintf(m.name, sizeof m.name, "gravel");
@@ -111,12 +111,12 @@ int main(int argc, char **argv)
     free(vel);
     double t0 = nc_clock_now_s();
     for (long k = 0; k < steps; k++)
-        if (dem_sim_step(&s, s.prm.dt_s, &err)) goto fail;
+        if (dem_sim_step(&s, s.model.prm.dt_s, &err)) goto fail;
     double wall = nc_clock_now_s() - t0;
     printf("dem_solver: %ld spheres, %ld steps, %d thread(s): %.3f s, %.3e particle-steps/s, "
            "%.2f contacts/sphere, kinetic energy %.4g J, %ld neighbour-list builds\n", n, steps,
-           s.n_buffers, wall, (double)n * (double)steps / wall, (double)s.contacts.n / (double)n,
-           dem_sim_kinetic_energy(&s), s.n_builds);
+           s.work.n_buffers, wall, (double)n * (double)steps / wall, (double)s.contact.list.n / (double)n,
+           dem_sim_kinetic_energy(&s), s.nlist.n_builds);
     dem_sim_free(&s);
     return 0;
 fail:

@@ -1,4 +1,4 @@
-/* dem_test_util — helpers shared by the dem_solver tests. */
+/* dem_test_util — code shared by the dem_solver tests. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>

@@ -1,10 +1,10 @@
-/* dem_test_util — helpers shared by the dem_solver tests: building a prepared simulation from
+/* dem_test_util — code shared by the dem_solver tests: building a prepared simulation from
  * JSON text, and a one-line rigid net wall. */
 #ifndef DEM_TEST_UTIL_H
 #define DEM_TEST_UTIL_H
 
 #include "dem_config.h"
-#include "dem_solver.h"
+#include "dem_sim.h"
 
 /* dem_sim_init + parse + prepare; fails the test (cmocka) on error. */
 void dem_test_build(dem_sim *s, const char *json);

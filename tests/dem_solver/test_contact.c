@@ -6,21 +6,21 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "dem_contacts.h"
 #include "dem_damping.h"
 #include "dem_test_util.h"
 
 static void test_damping_check_values(void **state)
 {
     (void)state;
-    /* equations.md: ε = 0.5 -> ζ ≈ 0.233 (fit), 0.215 (A.7); ε > 0.999 -> 0 */
-    assert_true(fabs(dem_zeta_fit(0.5) - 0.233) < 1e-3);
-    assert_true(fabs(dem_zeta_a7(0.5) - 0.2155) < 1e-3);
+    /* docs/equations.md: ε = 0.5 -> ζ ≈ 0.233 (fit), 0.215 (eq. (A.7)); ε > 0.999 -> 0 */
+    assert_near(dem_zeta_fit(0.5), 0.233, 1e-3);
+    assert_near(dem_zeta_a7(0.5), 0.2155, 1e-3);
     assert_true(dem_zeta_fit(1.0) == 0.0);
     assert_true(dem_zeta_a7(1.0) == 0.0);
     /* ζ decreases with ε (more damping for less restitution) */
@@ -47,18 +47,18 @@ static double bounce(const char *law, const char *damping, double e, double *dur
     nc_error err;
     double t_start = -1, t_end = -1, fmax = 0;
     for (int k = 0; k < 200000; k++) {
-        assert_int_equal(dem_sim_step(&s, s.prm.dt_s, &err), 0);
-        int touching = s.contacts.n > 0;
+        assert_int_equal(dem_sim_step(&s, s.model.prm.dt_s, &err), 0);
+        int touching = s.contact.list.n > 0;
         double f = s.wall_force[2] < 0 ? -s.wall_force[2] : 0;
         if (f > fmax) fmax = f;
-        if (touching && t_start < 0) t_start = s.time_s - s.prm.dt_s;
+        if (touching && t_start < 0) t_start = s.time_s - s.model.prm.dt_s;
         if (!touching && t_start >= 0) {
-            t_end = s.time_s - s.prm.dt_s;
+            t_end = s.time_s - s.model.prm.dt_s;
             break;
         }
     }
     assert_true(t_end > 0);
-    double v = s.bod.vel[2];
+    double v = s.model.bod.vel[2];
     if (duration) *duration = t_end - t_start;
     if (peak) *peak = fmax;
     dem_sim_free(&s);
@@ -72,7 +72,7 @@ static void test_restitution_linear_a7(void **state)
     for (int k = 0; k < 3; k++) {
         double got = bounce("linear", "a7", eps[k], NULL, NULL);
         print_message("linear a7: requested %.2f got %.4f\n", eps[k], got);
-        assert_true(fabs(got - eps[k]) <= 0.01 * eps[k]); /* issue: linear law within 1 % */
+        assert_near_rel(got, eps[k], 0.01); /* required: linear law within 1 % */
     }
 }
 
@@ -83,7 +83,7 @@ static void test_restitution_hertz_fit(void **state)
     for (int k = 0; k < 3; k++) {
         double got = bounce("hertz_mindlin", "fit", eps[k], NULL, NULL);
         print_message("hertz fit: requested %.2f got %.4f\n", eps[k], got);
-        assert_true(fabs(got - eps[k]) <= 0.03 * eps[k]); /* issue: Hertz + fit within 3 % */
+        assert_near_rel(got, eps[k], 0.03); /* required: Hertz + fit within 3 % */
     }
 }
 
@@ -101,9 +101,9 @@ static void test_hertz_duration_and_peak(void **state)
     double fmax_ref = 4.0 / 3.0 * es * sqrt(R) * pow(dmax, 1.5);
     print_message("t_c %.6e (ref %.6e), F_max %.4f (ref %.4f), e %.5f\n", tc, tc_ref, peak, fmax_ref, e);
     /* 2.87 is the rounded coefficient (2.868): 1 %; peak force from the step samples: 0.5 % */
-    assert_true(fabs(tc - tc_ref) <= 0.01 * tc_ref);
-    assert_true(fabs(peak - fmax_ref) <= 0.005 * fmax_ref);
-    assert_true(fabs(e - 1.0) < 1e-3); /* elastic: no loss */
+    assert_near_rel(tc, tc_ref, 0.01);
+    assert_near_rel(peak, fmax_ref, 0.005);
+    assert_near(e, 1.0, 1e-3); /* elastic: no loss */
 }
 
 /* ε = 1, μ = 0: spheres bouncing in a box under gravity keep their total energy. */
@@ -126,17 +126,17 @@ static void test_energy_conservation(void **state)
     double worst = 0.0;
     long collisions = 0;
     for (int k = 0; k < 100000; k++) { /* 0.5 s: every sphere hits the floor */
-        assert_int_equal(dem_sim_step(&s, s.prm.dt_s, &err), 0);
-        collisions += (long)s.contacts.n;
+        assert_int_equal(dem_sim_step(&s, s.model.prm.dt_s, &err), 0);
+        collisions += (long)s.contact.list.n;
         double e = dem_sim_kinetic_energy(&s) + dem_sim_potential_energy(&s) +
-                   dem_contacts_elastic_energy(&s);
+                   dem_sim_contact_energy(&s);
         if (fabs(e - e0) > worst) worst = fabs(e - e0);
     }
     /* kinetic + potential + energy in the contact springs: symplectic Euler keeps it within
      * O(dt) of the start at every step; 0.1 % */
     print_message("energy %.6f J, worst deviation %.3e J (%ld contact-steps)\n", e0, worst, collisions);
     assert_true(collisions > 1000);
-    assert_true(worst <= 1e-3 * fabs(e0));
+    assert_near(worst, 0.0, 1e-3 * fabs(e0));
     dem_sim_free(&s);
 }
 

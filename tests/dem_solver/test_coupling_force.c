@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -45,7 +46,7 @@ static void build(dem_sim *s, double z, double vz, double gz, const char *force)
     build_wall(s, z, vz, gz, force, "");
 }
 
-/* Hertz normal force (A.5) of a sphere R on the cable at overlap d: 4/3 E* sqrt(R) d^1.5 with
+/* Hertz normal force (eq. (A.5)) of a sphere R on the cable at overlap d: 4/3 E* sqrt(R) d^1.5 with
  * 1/E* = 2 (1 - 0.2²) / 1e7 (sphere and cable of the same material). */
 static double hertz(double d)
 {
@@ -74,17 +75,17 @@ static void test_end_of_step_is_end_state(void **state)
     assert_int_equal(dem_sim_solve_coupled(&a, dt, disp, vel, fa, &info, &err), 0);
     double h = dt / (double)info.substeps;
     assert_int_equal(info.substeps, 50);
-    double overlap = 0.1 - ((s.bod.pos[2] - h * s.bod.vel[2]) - (-0.002));
+    double overlap = 0.1 - ((s.model.bod.pos[2] - h * s.model.bod.vel[2]) - (-0.002));
     double expect = hertz(overlap);
     print_message("end overlap %.6f m: end force %.3f N (Hertz %.3f N), average %.3f N\n",
                   overlap, -(f[2] + f[5]), expect, -(fa[2] + fa[5]));
     assert_true(overlap > 0.0);
     /* same trajectory whatever is reported (1e-15 m): the option only changes the reply */
-    assert_true(fabs(s.bod.pos[2] - a.bod.pos[2]) < 1e-15);
+    assert_near(s.model.bod.pos[2], a.model.bod.pos[2], 1e-15);
     /* force ON the net is downward; round-off only (1e-9 relative) */
-    assert_true(fabs(-(f[2] + f[5]) - expect) < 1e-9 * expect);
-    assert_true(fabs(f[2] - 0.7 * (f[2] + f[5])) < 1e-9 * expect);
-    assert_true(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]) < 1e-9 * expect);
+    assert_near(-(f[2] + f[5]), expect, 1e-9 * expect);
+    assert_near(f[2], 0.7 * (f[2] + f[5]), 1e-9 * expect);
+    assert_below(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]), 1e-9 * expect);
     /* a growing contact: the end force exceeds the step average by far more than round-off */
     assert_true(-(f[2] + f[5]) > 1.2 * -(fa[2] + fa[5]));
     dem_sim_free(&s);
@@ -101,7 +102,7 @@ static void test_rest_both_equal_weight(void **state)
     for (int k = 0; k < 2; k++) {
         dem_sim s;
         build(&s, 0.1, 0.0, -9.81, kinds[k]);
-        double m = s.bod.mass[0], w = m * 9.81;
+        double m = s.model.bod.mass[0], w = m * 9.81;
         /* static overlap: hertz(d) = w */
         double e_star = 1.0 / (2.0 * (1.0 - 0.04) / 1e7);
         double d = pow(w / (4.0 / 3.0 * e_star * sqrt(0.1)), 2.0 / 3.0);
@@ -115,7 +116,7 @@ static void test_rest_both_equal_weight(void **state)
             assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, zero, zero, f, &info, &err), 0);
         }
         print_message("%s: net force %.6f N, weight %.6f N\n", kinds[k], -(f[2] + f[5]), w);
-        assert_true(fabs(-(f[2] + f[5]) - w) < 1e-6 * w);
+        assert_near(-(f[2] + f[5]), w, 1e-6 * w);
         dem_sim_free(&s);
     }
 }
@@ -140,13 +141,13 @@ static void test_wall_position_middle(void **state)
         assert_int_equal(dem_sim_solve_coupled(&s, dt, disp, vel, f, &info, &err), 0);
         assert_int_equal(info.substeps, 50);
         double h = dt / (double)info.substeps;
-        double overlap = 0.1 - ((s.bod.pos[2] - h * s.bod.vel[2]) - frac[k] * -0.002);
+        double overlap = 0.1 - ((s.model.bod.pos[2] - h * s.model.bod.vel[2]) - frac[k] * -0.002);
         double expect = hertz(overlap);
         print_message("wall %s: last sub-step overlap %.6f m, force %.3f N (Hertz %.3f N)\n",
                       positions[k], overlap, -(f[2] + f[5]), expect);
         assert_true(overlap > 0.0);
-        assert_true(fabs(-(f[2] + f[5]) - expect) < 1e-9 * expect);
-        z_end[k] = s.bod.pos[2];
+        assert_near(-(f[2] + f[5]), expect, 1e-9 * expect);
+        z_end[k] = s.model.bod.pos[2];
         dem_sim_free(&s);
     }
     /* the middle wall is half a sub-step behind on its way down, higher under the sphere coming

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -36,14 +37,14 @@ static double incline(double theta_deg, double mu, double *slip)
     for (int k = 1; k <= steps; k++) {
         assert_int_equal(dem_sim_step(&s, 2e-5, &err), 0);
         if (k == steps / 3) {
-            v1 = s.bod.vel[0] * down[0] + s.bod.vel[2] * down[2];
+            v1 = s.model.bod.vel[0] * down[0] + s.model.bod.vel[2] * down[2];
             t1 = s.time_s;
         }
     }
-    double v2 = s.bod.vel[0] * down[0] + s.bod.vel[2] * down[2];
+    double v2 = s.model.bod.vel[0] * down[0] + s.model.bod.vel[2] * down[2];
     double a = (v2 - v1) / (s.time_s - t1);
     /* rolling towards +x about +y: the contact point is at rest when v = ω_y R */
-    *slip = v2 - s.bod.omega[1] * R;
+    *slip = v2 - s.model.bod.omega[1] * R;
     dem_sim_free(&s);
     return a;
 }
@@ -55,9 +56,9 @@ static void test_rolling_without_slip(void **state)
     double a = incline(20.0, 0.5, &slip); /* tan 20° = 0.36 < 7/2 · 0.5 */
     double ref = 5.0 / 7.0 * g * sin(th);
     print_message("rolling: a = %.5f m/s² (5/7 g sin θ = %.5f), slip %.2e m/s\n", a, ref, slip);
-    assert_true(fabs(a - ref) <= 0.01 * ref); /* 1 % */
+    assert_near_rel(a, ref, 0.01); /* 1 % */
     /* contact point at rest: slip << v (0.5 % of v: the lever arm is R - δ/2, not R) */
-    assert_true(fabs(slip) < 5e-3 * a * 0.6);
+    assert_near(slip, 0.0, 5e-3 * a * 0.6);
 }
 
 static void test_sliding(void **state)
@@ -67,7 +68,7 @@ static void test_sliding(void **state)
     double a = incline(30.0, mu, &slip); /* tan 30° = 0.58 > 7/2 · 0.1 = 0.35 */
     double ref = g * (sin(th) - mu * cos(th));
     print_message("sliding: a = %.5f m/s² (g (sin θ - μ cos θ) = %.5f), slip %.3f m/s\n", a, ref, slip);
-    assert_true(fabs(a - ref) <= 0.01 * ref); /* 1 % */
+    assert_near_rel(a, ref, 0.01); /* 1 % */
     /* slip grows: ω̇ R = 5/2 μ g cos θ < a */
     assert_true(slip > 0.1);
 }
@@ -85,36 +86,36 @@ static void test_cluster_free_flight(void **state)
     (void)state;
     dem_sim s;
     dem_test_build(&s, cluster_json);
-    assert_int_equal(s.bod.n, 1);
-    assert_int_equal(s.sph.n, 3);
+    assert_int_equal(s.model.bod.n, 1);
+    assert_int_equal(s.model.sph.n, 3);
     nc_error err;
-    double L0[3] = {s.bod.angmom[0], s.bod.angmom[1], s.bod.angmom[2]};
+    double L0[3] = {s.model.bod.angmom[0], s.model.bod.angmom[1], s.model.bod.angmom[2]};
     double e0 = dem_sim_kinetic_energy(&s) + dem_sim_potential_energy(&s);
-    double x0[3] = {s.bod.pos[0], s.bod.pos[1], s.bod.pos[2]};
+    double x0[3] = {s.model.bod.pos[0], s.model.bod.pos[1], s.model.bod.pos[2]};
     /* the body-frame distance between two spheres of the rigid body must not change */
-    double d0 = hypot(hypot(s.sph.pos[3] - s.sph.pos[0], s.sph.pos[4] - s.sph.pos[1]), s.sph.pos[5] - s.sph.pos[2]);
-    double omega0[3] = {s.bod.omega[0], s.bod.omega[1], s.bod.omega[2]};
+    double d0 = hypot(hypot(s.model.sph.pos[3] - s.model.sph.pos[0], s.model.sph.pos[4] - s.model.sph.pos[1]), s.model.sph.pos[5] - s.model.sph.pos[2]);
+    double omega0[3] = {s.model.bod.omega[0], s.model.bod.omega[1], s.model.bod.omega[2]};
     for (int k = 0; k < 100000; k++) assert_int_equal(dem_sim_step(&s, 1e-5, &err), 0); /* 1 s */
     double e1 = dem_sim_kinetic_energy(&s) + dem_sim_potential_energy(&s);
     double L1n = 0, dL = 0;
     for (int d = 0; d < 3; d++) {
-        dL += (s.bod.angmom[d] - L0[d]) * (s.bod.angmom[d] - L0[d]);
+        dL += (s.model.bod.angmom[d] - L0[d]) * (s.model.bod.angmom[d] - L0[d]);
         L1n += L0[d] * L0[d];
     }
     /* angular velocity recomputed from the orientation: R I⁻¹ Rᵀ L, its L back must match */
-    double dw = fabs(s.bod.omega[0] - omega0[0]) + fabs(s.bod.omega[1] - omega0[1]) +
-                fabs(s.bod.omega[2] - omega0[2]);
+    double dw = fabs(s.model.bod.omega[0] - omega0[0]) + fabs(s.model.bod.omega[1] - omega0[1]) +
+                fabs(s.model.bod.omega[2] - omega0[2]);
     print_message("|ΔL|/|L| = %.2e, energy %.6f -> %.6f, ω changed by %.3f (precession)\n",
                   sqrt(dL / L1n), e0, e1, dw);
-    assert_true(sqrt(dL / L1n) < 1e-12); /* no torque: L exactly constant */
-    assert_true(fabs(e1 - e0) <= 1e-3 * fabs(e0)); /* quaternion integration, 0.1 % */
+    assert_below(sqrt(dL / L1n), 1e-12); /* no torque: L exactly constant */
+    assert_near_rel(e1, e0, 1e-3); /* quaternion integration, 0.1 % */
     assert_true(dw > 1e-3); /* an asymmetric body precesses: ω is not constant */
     /* ballistic centre of mass: x0 + v t + ½ g t² (1e-6 m, O(dt) of symplectic Euler) */
     double t = s.time_s;
-    assert_true(fabs(s.bod.pos[0] - (x0[0] + 1.0 * t)) < 1e-6);
-    assert_true(fabs(s.bod.pos[2] - (x0[2] + 2.0 * t - 0.5 * 9.81 * t * t)) < 1e-3 * 0.5 * 9.81 * t * t + 1e-4);
-    double d1 = hypot(hypot(s.sph.pos[3] - s.sph.pos[0], s.sph.pos[4] - s.sph.pos[1]), s.sph.pos[5] - s.sph.pos[2]);
-    assert_true(fabs(d1 - d0) < 1e-12);
+    assert_near(s.model.bod.pos[0], x0[0] + 1.0 * t, 1e-6);
+    assert_near(s.model.bod.pos[2], x0[2] + 2.0 * t - 0.5 * 9.81 * t * t, 1e-3 * 0.5 * 9.81 * t * t + 1e-4);
+    double d1 = hypot(hypot(s.model.sph.pos[3] - s.model.sph.pos[0], s.model.sph.pos[4] - s.model.sph.pos[1]), s.model.sph.pos[5] - s.model.sph.pos[2]);
+    assert_near(d1, d0, 1e-12);
     dem_sim_free(&s);
 }
 
@@ -130,12 +131,14 @@ static void test_cluster_mass_properties(void **state)
     dem_sim s;
     dem_test_build(&s, json);
     double m = 4.0 / 3.0 * M_PI * 1e-3 * 1000, R = 0.1, a = 0.1;
-    const double *I = s.bod.inertia_body;
-    assert_true(fabs(s.bod.mass[0] - 2 * m) < 1e-12);
-    assert_true(fabs(s.bod.pos[0] - 1.0) < 1e-12 && fabs(s.bod.pos[1] - 2.0) < 1e-12);
-    assert_true(fabs(I[0] - 2 * 0.4 * m * R * R) < 1e-12);
-    assert_true(fabs(I[4] - 2 * (0.4 * m * R * R + m * a * a)) < 1e-12);
-    assert_true(fabs(I[8] - I[4]) < 1e-12 && fabs(I[1]) < 1e-15);
+    const double *I = s.model.bod.inertia_body;
+    assert_near(s.model.bod.mass[0], 2 * m, 1e-12);
+    assert_near(s.model.bod.pos[0], 1.0, 1e-12);
+    assert_near(s.model.bod.pos[1], 2.0, 1e-12);
+    assert_near(I[0], 2 * 0.4 * m * R * R, 1e-12);
+    assert_near(I[4], 2 * (0.4 * m * R * R + m * a * a), 1e-12);
+    assert_near(I[8], I[4], 1e-12);
+    assert_near(I[1], 0.0, 1e-15);
     dem_sim_free(&s);
 }
 
@@ -170,8 +173,8 @@ static void test_conveyor_moving_walls(void **state)
         nc_error err;
         for (int k = 0; k < 25000; k++) assert_int_equal(dem_sim_step(&s, 2e-5, &err), 0); /* 0.5 s */
         print_message("%s moving at 1 m/s: sphere v = %.5f m/s (2/7 = %.5f), ω R = %.5f\n",
-                      c == 0 ? "plane" : "mesh", s.bod.vel[0], 2.0 / 7.0, -s.bod.omega[1] * 0.1);
-        assert_true(fabs(s.bod.vel[0] - 2.0 / 7.0) < 0.01 * 2.0 / 7.0); /* 1 % */
+                      c == 0 ? "plane" : "mesh", s.model.bod.vel[0], 2.0 / 7.0, -s.model.bod.omega[1] * 0.1);
+        assert_near_rel(s.model.bod.vel[0], 2.0 / 7.0, 0.01); /* 1 % */
         dem_sim_free(&s);
     }
 }

@@ -1,4 +1,4 @@
-/* test_net — the coupled net wall (eqs. (13)-(15), consistent nodal loads): a sphere resting on
+/* test_net — the coupled net wall (eqs. (13)–(15), consistent nodal loads): a sphere resting on
  * an edge loads both nodes with the lever rule and in total its weight; a shared vertex is one
  * contact; the rebound on an edge returns the requested restitution; a small sphere passes
  * between two edges and a large one does not; nodal forces are impulse-consistent. */
@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -55,7 +56,7 @@ static void run_fixed(dem_sim *s, int steps, double dt, double *force, dem_coupl
 
 static double weight(const dem_sim *s)
 {
-    return s->bod.mass[0] * 9.81;
+    return s->model.bod.mass[0] * 9.81;
 }
 
 static void test_rest_on_edge_lever_rule(void **state)
@@ -72,12 +73,13 @@ static void test_rest_on_edge_lever_rule(void **state)
                   W, info.contacts, info.substeps);
     assert_int_equal(info.contacts, 1);
     assert_int_equal(info.substeps, 100);
-    assert_true(info.near_interface == 1 && info.min_gap_m < 0.0);
+    assert_int_equal(info.near_interface, 1);
+    assert_below(info.min_gap_m, 0.0);
     /* the sum is the weight (0.1 %: residual vibration), the split the lever rule 0.7 / 0.3 */
-    assert_true(fabs(-(f[2] + f[5]) - W) <= 1e-3 * W);
-    assert_true(fabs(-f[2] - 0.7 * W) <= 1e-3 * W);
-    assert_true(fabs(-f[5] - 0.3 * W) <= 1e-3 * W);
-    assert_true(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]) < 1e-6 * W);
+    assert_near_rel(-(f[2] + f[5]), W, 1e-3);
+    assert_near(-f[2], 0.7 * W, 1e-3 * W);
+    assert_near(-f[5], 0.3 * W, 1e-3 * W);
+    assert_below(fabs(f[0]) + fabs(f[1]) + fabs(f[3]) + fabs(f[4]), 1e-6 * W);
     dem_sim_free(&s);
 }
 
@@ -95,15 +97,15 @@ static void test_shared_vertex_counted_once(void **state)
         double f[9];
         dem_coupled_info info;
         run_fixed(&s, 1000, 1e-3, f, &info);
-        double W = weight(&s), x = s.bod.pos[0];
+        double W = weight(&s), x = s.model.bod.pos[0];
         print_message("x = %.4f: nodes %.5f %.5f %.5f N (weight %.5f), contacts %ld\n", x, f[2],
                       f[5], f[8], W, info.contacts);
         assert_int_equal(info.contacts, 1); /* one contact, not one per edge */
-        assert_true(fabs(-(f[2] + f[5] + f[8]) - W) <= 1e-3 * W);
+        assert_near_rel(-(f[2] + f[5] + f[8]), W, 1e-3);
         /* lever rule on the edge holding the contact point (node 1 -> 2 for x > 0) */
-        assert_true(fabs(-f[5] - (1.0 - x) * W) <= 1e-3 * W);
-        assert_true(fabs(-f[8] - x * W) <= 1e-3 * W);
-        assert_true(fabs(f[2]) <= 1e-9 * W);
+        assert_near(-f[5], (1.0 - x) * W, 1e-3 * W);
+        assert_near(-f[8], x * W, 1e-3 * W);
+        assert_near(f[2], 0.0, 1e-9 * W);
         dem_sim_free(&s);
     }
 }
@@ -119,9 +121,9 @@ static double edge_bounce(const char *law, double e)
     for (int k = 0; k < 200; k++) {
         run_fixed(&s, 1, 1e-3, f, &info);
         if (info.contacts) was = 1;
-        if (was && !info.contacts && s.bod.vel[2] > 0) break;
+        if (was && !info.contacts && s.model.bod.vel[2] > 0) break;
     }
-    double v = s.bod.vel[2];
+    double v = s.model.bod.vel[2];
     dem_sim_free(&s);
     return v;
 }
@@ -134,8 +136,8 @@ static void test_rebound_on_edge(void **state)
         double h = edge_bounce("hertz_mindlin", eps[k]);
         double l = edge_bounce("linear", eps[k]);
         print_message("edge rebound: requested %.2f, hertz+fit %.4f, linear+a7 %.4f\n", eps[k], h, l);
-        assert_true(fabs(h - eps[k]) <= 0.03 * eps[k]); /* 3 % */
-        assert_true(fabs(l - eps[k]) <= 0.01 * eps[k]); /* 1 % */
+        assert_near_rel(h, eps[k], 0.03); /* 3 % */
+        assert_near_rel(l, eps[k], 0.01); /* 1 % */
     }
 }
 
@@ -151,7 +153,7 @@ static double drop_between(double r)
     double f[18];
     dem_coupled_info info;
     run_fixed(&s, 800, 1e-3, f, &info);
-    double z = s.bod.pos[2];
+    double z = s.model.bod.pos[2];
     dem_sim_free(&s);
     return z;
 }
@@ -161,9 +163,9 @@ static void test_pass_between_edges(void **state)
     (void)state;
     double z_small = drop_between(0.1), z_big = drop_between(0.2);
     print_message("after 0.8 s: small sphere z = %.3f m, large sphere z = %.3f m\n", z_small, z_big);
-    assert_true(z_small < -1.0); /* fell through freely: 0.3 - ½ g t² ≈ -2.8 m */
+    assert_below(z_small, -1.0); /* fell through freely: 0.3 - ½ g t² ≈ -2.8 m */
     /* caught: rests with its centre sqrt(0.2² - 0.15²) = 0.132 m above the cables */
-    assert_true(fabs(z_big - sqrt(0.2 * 0.2 - 0.15 * 0.15)) < 0.005);
+    assert_near(z_big, sqrt(0.2 * 0.2 - 0.15 * 0.15), 0.005);
 }
 
 /* Over one coupling step: m Δv = (m g - Σ nodal forces) Δt, so the returned time-averaged
@@ -181,14 +183,14 @@ static void test_impulse_consistent(void **state)
     dem_coupled_info info;
     double dt = 2e-3;
     for (int k = 0; k < 5; k++) {
-        double v0 = s.bod.vel[2];
+        double v0 = s.model.bod.vel[2];
         assert_int_equal(dem_sim_begin_step(&s, &err), 0);
         disp[5] -= 0.0005; /* the middle node moves down during the steps */
         assert_int_equal(dem_sim_solve_coupled(&s, dt, disp, vel, f, &info, &err), 0);
-        double m = s.bod.mass[0];
-        double lhs = m * (s.bod.vel[2] - v0);
+        double m = s.model.bod.mass[0];
+        double lhs = m * (s.model.bod.vel[2] - v0);
         double rhs = (-m * 9.81 - (f[2] + f[5] + f[8])) * dt;
-        assert_true(fabs(lhs - rhs) <= 1e-9 * (fabs(lhs) + m * 9.81 * dt));
+        assert_near(lhs, rhs, 1e-9 * (fabs(lhs) + m * 9.81 * dt));
     }
     dem_sim_free(&s);
 }
@@ -220,19 +222,19 @@ static void test_free_flight_far_from_net(void **state)
             if (info.substeps == 1) flights++;
             else substepped++;
             if (c == 0 && k == 0) { /* exact: z = 1 - ½ g t² */
-                assert_true(fabs(s.bod.pos[2] - (1.0 - 0.5 * 9.81 * 1e-4)) < 1e-12);
+                assert_near(s.model.bod.pos[2], 1.0 - 0.5 * 9.81 * 1e-4, 1e-12);
                 assert_int_equal(info.substeps, 1);
             }
         }
         print_message("free_flight %s: %ld ballistic steps, %ld sub-stepped, z = %.6f m\n",
-                      c == 0 ? "on" : "off", flights, substepped, s.bod.pos[2]);
+                      c == 0 ? "on" : "off", flights, substepped, s.model.bod.pos[2]);
         if (c == 0) assert_true(flights > 10 && substepped >= 3); /* the bounce is sub-stepped */
         else assert_int_equal(flights, 0);
-        z_end[c] = s.bod.pos[2];
+        z_end[c] = s.model.bod.pos[2];
         dem_sim_free(&s);
     }
     /* same landing: the sub-stepped symplectic Euler differs from the exact flight by O(dt) */
-    assert_true(fabs(z_end[0] - z_end[1]) < 1e-3);
+    assert_near(z_end[0], z_end[1], 1e-3);
 }
 
 /* Bad interface data and commands in the wrong order are errors naming the problem. */
@@ -298,8 +300,8 @@ static void test_net_does_not_pass_through_resting_sphere(void **state)
         assert_int_equal(dem_sim_begin_step(&s, &err), 0);
         assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, disp, vel, f, &info, &err), 0);
     }
-    print_message("sphere centre z = %.4f m, cable at z = 0.15 m, vz = %.3f m/s\n", s.bod.pos[2], s.bod.vel[2]);
-    assert_true(s.bod.pos[2] > 0.15); /* still on top of the cable */
+    print_message("sphere centre z = %.4f m, cable at z = 0.15 m, vz = %.3f m/s\n", s.model.bod.pos[2], s.model.bod.vel[2]);
+    assert_true(s.model.bod.pos[2] > 0.15); /* still on top of the cable */
     dem_sim_free(&s);
 }
 

@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <signal.h>
@@ -18,6 +19,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "nc_error.h"
+#include "nc_file.h"
 #include "proto.h"
 
 static void test_coupled_drop_on_two_edges(void **state)
@@ -32,7 +35,11 @@ static void test_coupled_drop_on_two_edges(void **state)
     if (!tmp || !tmp[0]) tmp = "/tmp";
     char dir[512], input[600], epfile[600], outdir[600], exe[600], h5[700];
     snprintf(dir, sizeof dir, "%s/dem_protocol.%ld", tmp, (long)getpid());
-    mkdir(dir, 0777);
+    nc_error err;
+    if (nc_file_make_dirs(dir, &err)) {
+        print_error("%s\n", err.message);
+        fail();
+    }
     snprintf(input, sizeof input, "%s/dem.json", dir);
     snprintf(epfile, sizeof epfile, "%s/endpoint", dir);
     snprintf(outdir, sizeof outdir, "%s/out", dir);
@@ -65,7 +72,6 @@ static void test_coupled_drop_on_two_edges(void **state)
     }
     assert_true(endpoint[0] != '\0');
 
-    nc_error err;
     proto_options opt;
     proto_options_default(&opt);
     opt.timeout_ms = 60000;
@@ -125,9 +131,9 @@ static void test_coupled_drop_on_two_edges(void **state)
     print_message("at rest: nodal forces z %.4f %.4f %.4f N, sum %.4f N, weight %.4f N, near %g, "
                   "contacts %g, substeps %g\n", force[2], force[5], force[8], sum, W, near,
                   contacts, substeps);
-    assert_true(fabs(-sum - W) < 1e-3 * W);             /* 0.1 % */
-    assert_true(fabs(-force[2] - 0.4 * W) < 2e-3 * W);   /* lever rule: x = 0.3 on [0, 0.5] */
-    assert_true(fabs(-force[5] - 0.6 * W) < 2e-3 * W);
+    assert_near(-sum, W, 1e-3 * W);             /* 0.1 % */
+    assert_near(-force[2], 0.4 * W, 2e-3 * W);   /* lever rule: x = 0.3 on [0, 0.5] */
+    assert_near(-force[5], 0.6 * W, 2e-3 * W);
     assert_true(near == 1.0 && contacts == 1.0 && substeps == 50.0);
 
     /* a SOLVE with a wrong shape gets an error reply; the solver keeps serving */

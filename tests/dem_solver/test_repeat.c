@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <setjmp.h>
 #include <cmocka.h>
+#include "../nc_test_assert.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -39,19 +40,19 @@ static void build_pile(dem_sim *s, int threads)
 static void run(dem_sim *s, int steps)
 {
     nc_error err;
-    for (int k = 0; k < steps; k++) assert_int_equal(dem_sim_step(s, s->prm.dt_s, &err), 0);
+    for (int k = 0; k < steps; k++) assert_int_equal(dem_sim_step(s, s->model.prm.dt_s, &err), 0);
 }
 
 static void assert_same_state(const dem_sim *a, const dem_sim *b)
 {
-    assert_int_equal(a->sph.n, b->sph.n);
-    assert_memory_equal(a->sph.pos, b->sph.pos, 3 * a->sph.n * sizeof(double));
-    assert_memory_equal(a->bod.vel, b->bod.vel, 3 * a->bod.n * sizeof(double));
-    assert_memory_equal(a->bod.omega, b->bod.omega, 3 * a->bod.n * sizeof(double));
-    assert_memory_equal(a->bod.quat, b->bod.quat, 4 * a->bod.n * sizeof(double));
-    assert_int_equal(a->contacts.n, b->contacts.n);
-    assert_memory_equal(a->contacts.ft, b->contacts.ft, 3 * a->contacts.n * sizeof(double));
-    assert_memory_equal(a->contacts.j, b->contacts.j, a->contacts.n * sizeof(int32_t));
+    assert_int_equal(a->model.sph.n, b->model.sph.n);
+    assert_memory_equal(a->model.sph.pos, b->model.sph.pos, 3 * a->model.sph.n * sizeof(double));
+    assert_memory_equal(a->model.bod.vel, b->model.bod.vel, 3 * a->model.bod.n * sizeof(double));
+    assert_memory_equal(a->model.bod.omega, b->model.bod.omega, 3 * a->model.bod.n * sizeof(double));
+    assert_memory_equal(a->model.bod.quat, b->model.bod.quat, 4 * a->model.bod.n * sizeof(double));
+    assert_int_equal(a->contact.list.n, b->contact.list.n);
+    assert_memory_equal(a->contact.list.ft, b->contact.list.ft, 3 * a->contact.list.n * sizeof(double));
+    assert_memory_equal(a->contact.list.j, b->contact.list.j, a->contact.list.n * sizeof(int32_t));
 }
 
 static void test_save_restore_bit_identical(void **state)
@@ -60,22 +61,22 @@ static void test_save_restore_bit_identical(void **state)
     dem_sim s;
     build_pile(&s, 0);
     run(&s, 8000); /* the pile has landed: contacts carry tangential history */
-    print_message("%zu contacts\n", s.contacts.n);
-    assert_true(s.contacts.n > 200);
+    print_message("%zu contacts\n", s.contact.list.n);
+    assert_true(s.contact.list.n > 200);
     nc_error err;
     assert_int_equal(dem_sim_begin_step(&s, &err), 0);
     run(&s, 300);
-    size_t n = s.sph.n, nc = s.contacts.n;
+    size_t n = s.model.sph.n, nc = s.contact.list.n;
     double *pos = malloc(3 * n * sizeof *pos), *ft = malloc(3 * nc * sizeof *ft);
-    memcpy(pos, s.sph.pos, 3 * n * sizeof *pos);
-    memcpy(ft, s.contacts.ft, 3 * nc * sizeof *ft);
+    memcpy(pos, s.model.sph.pos, 3 * n * sizeof *pos);
+    memcpy(ft, s.contact.list.ft, 3 * nc * sizeof *ft);
     double t = s.time_s;
     assert_int_equal(dem_sim_restore(&s, &err), 0);
     run(&s, 300);
     assert_true(s.time_s == t);
-    assert_int_equal(s.contacts.n, nc);
-    assert_memory_equal(s.sph.pos, pos, 3 * n * sizeof *pos);
-    assert_memory_equal(s.contacts.ft, ft, 3 * nc * sizeof *ft);
+    assert_int_equal(s.contact.list.n, nc);
+    assert_memory_equal(s.model.sph.pos, pos, 3 * n * sizeof *pos);
+    assert_memory_equal(s.contact.list.ft, ft, 3 * nc * sizeof *ft);
     free(pos);
     free(ft);
     dem_sim_free(&s);
@@ -88,10 +89,10 @@ static void test_threads_do_not_change_results(void **state)
     build_pile(&a, 1);
     build_pile(&b, 2);
     build_pile(&c, 3); /* 3 ranges: spheres summed across range boundaries (random order) */
-    assert_true(a.sph.n >= DEM_PARALLEL_MIN); /* large enough to run in parallel */
-    assert_int_equal(a.n_buffers, 1);
-    assert_int_equal(b.n_buffers, 2);
-    assert_int_equal(c.n_buffers, 3);
+    assert_true(a.model.sph.n >= DEM_PARALLEL_MIN); /* large enough to run in parallel */
+    assert_int_equal(a.work.n_buffers, 1);
+    assert_int_equal(b.work.n_buffers, 2);
+    assert_int_equal(c.work.n_buffers, 3);
     run(&a, 2000);
     run(&b, 2000);
     run(&c, 2000);
@@ -129,18 +130,18 @@ static void test_coupled_restore_identical_forces(void **state)
         assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, disp, vel, f1, &info, &err), 0);
     }
     assert_true(info.contacts > 0);
-    assert_true(f1[5] < 0.0);
+    assert_below(f1[5], 0.0);
     /* iteration 1, then restore and iteration 2 with the same input: identical */
     assert_int_equal(dem_sim_begin_step(&s, &err), 0);
     disp[5] -= 1e-5;
     assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, disp, vel, f1, &info, &err), 0);
     double p1[6];
-    memcpy(p1, s.sph.pos, sizeof p1);
+    memcpy(p1, s.model.sph.pos, sizeof p1);
     assert_int_equal(dem_sim_restore(&s, &err), 0);
     assert_int_equal(dem_sim_solve_coupled(&s, 1e-3, disp, vel, f2, &info, &err), 0);
     print_message("forces z: %g %g %g, contacts %ld\n", f1[2], f1[5], f1[8], info.contacts);
     assert_memory_equal(f1, f2, sizeof f1);
-    assert_memory_equal(p1, s.sph.pos, sizeof p1);
+    assert_memory_equal(p1, s.model.sph.pos, sizeof p1);
     /* a different interface position gives a different answer (the test can fail) */
     assert_int_equal(dem_sim_restore(&s, &err), 0);
     disp[5] -= 2e-5;

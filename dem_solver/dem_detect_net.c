@@ -1,0 +1,81 @@
+/* dem_detect_net — contacts of a sphere with the coupled net (eqs. (14), (15)): the closest
+ * point of every nearby cable edge at its current position, an interior point as an edge
+ * contact (its reaction split onto the two nodes), an end as a node contact (each node once, and
+ * not when an edge at that node is touched in its interior). */
+#include "dem_detect.h"
+
+#include <string.h>
+
+#include "dem_contact_geometry.h"
+
+static int present(const dem_sim *s)
+{
+    return s->model.net.active;
+}
+
+static int detect(const dem_sim *s, dem_emit_ctx *out, size_t i, double dt, int *overflow)
+{
+    const dem_net *net = &s->model.net;
+    const double *p = s->model.sph.pos + 3 * i;
+    double reach = s->model.sph.radius[i] + net->cable_radius_m;
+    const int32_t *items;
+    size_t count = dem_item_grid_query(net->grid, p, &items);
+    dem_feature f[DEM_MAX_FEATURES];
+    int nf = 0;
+    for (size_t c = 0; c < count; c++) {
+        int32_t e = items[c];
+        int32_t a = net->edges[2 * (size_t)e], b = net->edges[2 * (size_t)e + 1];
+        dem_feature x;
+        x.d2 = dem_closest_on_segment(p, net->cur + 3 * (size_t)a, net->cur + 3 * (size_t)b, x.q, &x.t);
+        if (x.d2 >= reach * reach || x.d2 == 0.0) continue; /* eqs. (14), (15) */
+        x.owner = e;
+        if (x.t <= 0.0) {
+            x.type = 2;
+            x.id = a;
+        } else if (x.t >= 1.0) {
+            x.type = 2;
+            x.id = b;
+        } else {
+            x.type = 1;
+            x.id = e;
+        }
+        dem_add_feature(f, &nf, &x, overflow);
+    }
+    for (int a = 0; a < nf; a++) {
+        if (f[a].type == 2) { /* a node of an edge touched in its interior is the same contact */
+            int drop = 0;
+            for (int b = 0; b < nf && !drop; b++) {
+                if (f[b].type != 1) continue;
+                const int32_t *e = net->edges + 2 * (size_t)f[b].id;
+                drop = e[0] == f[a].id || e[1] == f[a].id;
+            }
+            if (drop) continue;
+        }
+        double dist = sqrt(f[a].d2);
+        dem_contact_in in;
+        in.aux = 0;
+        in.reach = reach;
+        in.overlap = reach - dist;
+        for (int k = 0; k < 3; k++) in.n[k] = (f[a].q[k] - p[k]) / dist;
+        in.lever_i = s->model.sph.radius[i] - 0.5 * in.overlap;
+        in.lever_j = 0.0;
+        if (f[a].type == 1) {
+            in.kind = DEM_CONTACT_NET_EDGE;
+            in.j = f[a].id;
+            in.weight = f[a].t;
+            const int32_t *e = net->edges + 2 * (size_t)f[a].id;
+            const double *va = net->vel + 3 * (size_t)e[0], *vb = net->vel + 3 * (size_t)e[1];
+            for (int k = 0; k < 3; k++) in.v_other[k] = (1.0 - in.weight) * va[k] + in.weight * vb[k];
+        } else {
+            in.kind = DEM_CONTACT_NET_NODE;
+            in.j = f[a].id;
+            in.weight = 0.0;
+            memcpy(in.v_other, net->vel + 3 * (size_t)f[a].id, sizeof in.v_other);
+        }
+        dem_net_wall_pair(&s->model, i, &in.pair);
+        if (dem_emit_wall_contact(s, out, i, &in, dt)) return -1;
+    }
+    return 0;
+}
+
+const dem_detector dem_detect_net = {"net", present, detect};

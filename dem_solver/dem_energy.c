@@ -1,0 +1,71 @@
+/* dem_energy — energies for balances and tests: kinetic (translation and rotation), gravity
+ * potential and the elastic energy stored in the contact springs of the current list. Read
+ * only; no effect on the motion. */
+#include "dem_sim.h"
+
+#include <math.h>
+
+double dem_sim_kinetic_energy(const dem_sim *s)
+{
+    double e = 0.0;
+    for (size_t b = 0; b < s->model.bod.n; b++) {
+        const double *v = s->model.bod.vel + 3 * b, *w = s->model.bod.omega + 3 * b;
+        e += 0.5 * s->model.bod.mass[b] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (s->model.bod.is_cluster[b]) {
+            const double *L = s->model.bod.angmom + 3 * b;
+            e += 0.5 * (w[0] * L[0] + w[1] * L[1] + w[2] * L[2]);
+        } else {
+            e += 0.5 * s->model.bod.inertia_body[9 * b] * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        }
+    }
+    return e;
+}
+
+double dem_sim_potential_energy(const dem_sim *s)
+{
+    double e = 0.0;
+    const double *g = s->model.prm.gravity;
+    for (size_t b = 0; b < s->model.bod.n; b++) {
+        const double *x = s->model.bod.pos + 3 * b;
+        e -= s->model.bod.mass[b] * (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]);
+    }
+    return e;
+}
+
+double dem_sim_contact_energy(const dem_sim *s)
+{
+    const dem_contacts *c = &s->contact.list;
+    double e = 0.0;
+    for (size_t k = 0; k < c->n; k++) {
+        size_t i = (size_t)c->i[k];
+        dem_pair p;
+        switch (c->kind[k]) {
+        case DEM_CONTACT_SPHERE: {
+            size_t j = (size_t)c->j[k];
+            const dem_material *mi = &s->model.materials[s->model.sph.material[i]];
+            const dem_material *mj = &s->model.materials[s->model.sph.material[j]];
+            p.e_star = dem_effective_modulus(mi->youngs_modulus_pa, mi->poisson_ratio,
+                                             mj->youngs_modulus_pa, mj->poisson_ratio);
+            p.r_star = s->model.sph.radius[i] * s->model.sph.radius[j] / (s->model.sph.radius[i] + s->model.sph.radius[j]);
+            break;
+        }
+        case DEM_CONTACT_PLANE:
+            dem_material_wall_pair(&s->contact, &s->model, i, s->model.planes[c->j[k]].material, &p);
+            break;
+        case DEM_CONTACT_MESH:
+            dem_material_wall_pair(&s->contact, &s->model, i, s->model.meshes[c->aux[k]].material, &p);
+            break;
+        default:
+            dem_net_wall_pair(&s->model, i, &p);
+            break;
+        }
+        double d = c->overlap[k];
+        if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN)
+            e += 8.0 / 15.0 * p.e_star * sqrt(p.r_star) * pow(d, 2.5); /* ∫ 4/3 E* sqrt(R*) δ^1.5 dδ */
+        else
+            e += 0.5 * s->model.prm.linear_kn_n_per_m * d * d;
+        const double *ft = c->ft + 3 * k;
+        if (c->kt_prev[k] > 0.0) e += 0.5 * (ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]) / c->kt_prev[k];
+    }
+    return e;
+}

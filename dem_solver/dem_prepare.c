@@ -1,0 +1,229 @@
+/* dem_prepare — completing a built model and allocating the step storage: material
+ * properties and damping ratios, body mass properties, the overlap check at the start, the
+ * critical time step (Rayleigh wave or linear spring) and the Hertz contact time that limit an
+ * automatic dt. */
+#include "dem_sim.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "dem_contact_hertz.h"
+#include "dem_damping.h"
+#include "dem_integrate.h"
+
+static int invert3(const double a[9], double inv[9])
+{
+    double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8], c02 = a[3] * a[7] - a[4] * a[6];
+    double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+    if (!(fabs(det) > 0.0)) return -1;
+    double id = 1.0 / det;
+    inv[0] = c00 * id; inv[1] = (a[2] * a[7] - a[1] * a[8]) * id; inv[2] = (a[1] * a[5] - a[2] * a[4]) * id;
+    inv[3] = c01 * id; inv[4] = (a[0] * a[8] - a[2] * a[6]) * id; inv[5] = (a[2] * a[3] - a[0] * a[5]) * id;
+    inv[6] = c02 * id; inv[7] = (a[1] * a[6] - a[0] * a[7]) * id; inv[8] = (a[0] * a[4] - a[1] * a[3]) * id;
+    return 0;
+}
+
+static void body_mass_properties(dem_sim *s, size_t b)
+{
+    dem_bodies *B = &s->model.bod;
+    int32_t first = B->first_sphere[b], count = B->n_spheres[b];
+    double M = 0.0, com[3] = {0, 0, 0};
+    for (int32_t q = first; q < first + count; q++) {
+        double r = s->model.sph.radius[q];
+        double m = 4.0 / 3.0 * M_PI * r * r * r * s->model.materials[s->model.sph.material[q]].density_kg_m3;
+        M += m;
+        for (int k = 0; k < 3; k++) com[k] += m * s->model.sph.pos[3 * (size_t)q + k];
+    }
+    for (int k = 0; k < 3; k++) com[k] /= M;
+    double I[9] = {0};
+    for (int32_t q = first; q < first + count; q++) {
+        double r = s->model.sph.radius[q];
+        double m = 4.0 / 3.0 * M_PI * r * r * r * s->model.materials[s->model.sph.material[q]].density_kg_m3;
+        double d[3];
+        for (int k = 0; k < 3; k++) d[k] = s->model.sph.pos[3 * (size_t)q + k] - com[k];
+        double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        for (int a = 0; a < 3; a++)
+            for (int c = 0; c < 3; c++)
+                I[3 * a + c] += (a == c ? 0.4 * m * r * r + m * d2 : 0.0) - m * d[a] * d[c];
+        if (B->is_cluster[b]) memcpy(s->model.sph.offset + 3 * (size_t)q, d, sizeof d);
+    }
+    B->mass[b] = M;
+    B->inv_mass[b] = 1.0 / M;
+    memcpy(B->inertia_body + 9 * b, I, sizeof I);
+    if (B->is_cluster[b]) {
+        memcpy(B->pos + 3 * b, com, sizeof com);
+        invert3(I, B->inv_inertia_body + 9 * b); /* each sphere adds 2/5 m r² 1: invertible */
+        B->inv_inertia_iso[b] = 0.0;
+        const double *w = B->omega + 3 * b;
+        for (int a = 0; a < 3; a++)
+            B->angmom[3 * b + a] = I[3 * a] * w[0] + I[3 * a + 1] * w[1] + I[3 * a + 2] * w[2];
+    } else {
+        double *inv = B->inv_inertia_body + 9 * b;
+        memset(inv, 0, 9 * sizeof *inv);
+        inv[0] = inv[4] = inv[8] = 1.0 / I[0];
+        B->inv_inertia_iso[b] = inv[0];
+    }
+}
+
+double dem_sim_critical_dt(const dem_sim *s)
+{
+    double crit = INFINITY;
+    if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN) {
+        /* Rayleigh wave time step: π R sqrt(ρ/G) / (0.1631 ν + 0.8766) */
+        for (size_t i = 0; i < s->model.sph.n; i++) {
+            const dem_material *m = &s->model.materials[s->model.sph.material[i]];
+            double t = M_PI * s->model.sph.radius[i] * sqrt(m->density_kg_m3 / m->shear_modulus_pa) /
+                       (0.1631 * m->poisson_ratio + 0.8766);
+            if (t < crit) crit = t;
+        }
+    } else {
+        /* stability of the spring between the two lightest bodies: 2 sqrt(m_star / k) */
+        for (size_t b = 0; b < s->model.bod.n; b++) {
+            double t = 2.0 * sqrt(0.5 * s->model.bod.mass[b] / s->model.prm.linear_kn_n_per_m);
+            if (t < crit) crit = t;
+        }
+    }
+    return crit;
+}
+
+/* Hertz contact duration t_c = 2.87 (m*² / (R* E*² v))^(1/5) for the lightest, smallest
+ * sphere against the stiffest partner at the impact speed v. */
+static double hertz_contact_time(const dem_sim *s, double v)
+{
+    double tc = INFINITY;
+    for (size_t i = 0; i < s->model.sph.n; i++) {
+        const dem_material *m = &s->model.materials[s->model.sph.material[i]];
+        double e_max = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
+                                             m->youngs_modulus_pa, m->poisson_ratio);
+        for (size_t k = 0; k < s->model.n_materials; k++) {
+            const dem_material *w = &s->model.materials[k];
+            double e = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
+                                             w->youngs_modulus_pa, w->poisson_ratio);
+            if (e > e_max) e_max = e;
+        }
+        if (s->model.net.youngs_modulus_pa > 0.0) {
+            double e = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
+                                             s->model.net.youngs_modulus_pa, s->model.net.poisson_ratio);
+            if (e > e_max) e_max = e;
+        }
+        double mstar = 0.5 * s->model.bod.mass[s->model.sph.body[i]], r = 0.5 * s->model.sph.radius[i];
+        double t = 2.87 * pow(mstar * mstar / (r * e_max * e_max * v), 0.2);
+        if (t < tc) tc = t;
+    }
+    return tc;
+}
+
+static int check_overlaps(dem_sim *s, nc_error *err)
+{
+    if (s->model.sph.n < 2) return 0;
+    if (dem_cell_grid_build(&s->nlist.grid, s->model.sph.n, s->model.sph.pos, 2.0 * s->model.r_max, err)) return -1;
+    const dem_cell_grid *g = &s->nlist.grid;
+    for (size_t i = 0; i < s->model.sph.n; i++) {
+        int c[3];
+        dem_cell_grid_coords(g, s->model.sph.pos + 3 * i, c);
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+                    if (x < 0 || y < 0 || z < 0 || x >= g->dims[0] || y >= g->dims[1] || z >= g->dims[2]) continue;
+                    size_t cell = ((size_t)z * (size_t)g->dims[1] + (size_t)y) * (size_t)g->dims[0] + (size_t)x;
+                    for (int32_t q = g->cell_start[cell]; q < g->cell_start[cell + 1]; q++) {
+                        size_t j = (size_t)g->cell_items[q];
+                        if (j <= i || s->model.sph.body[j] == s->model.sph.body[i]) continue;
+                        double d2 = 0.0;
+                        for (int k = 0; k < 3; k++) {
+                            double d = s->model.sph.pos[3 * j + k] - s->model.sph.pos[3 * i + k];
+                            d2 += d * d;
+                        }
+                        double rs = s->model.sph.radius[i] + s->model.sph.radius[j];
+                        /* a tiny tolerance lets lattices touch exactly */
+                        if (d2 < rs * rs * (1.0 - 1e-9))
+                            return nc_error_set(err, 1, "%s: particles %d and %d overlap at the "
+                                                "start (distance %g m < sum of radii %g m)",
+                                                s->model.source[0] ? s->model.source : "dem", s->model.sph.id[i],
+                                                s->model.sph.id[j], sqrt(d2), rs);
+                    }
+                }
+    }
+    return 0;
+}
+
+int dem_sim_prepare(dem_sim *s, nc_error *err)
+{
+    if (s->model.n_materials == 0) return nc_error_set(err, 1, "%s: no materials", s->model.source);
+    /* arrays exist even without particles (memcpy/memset never see NULL) */
+    if (dem_model_reserve_spheres(&s->model, 1, err) || dem_model_reserve_bodies(&s->model, 1, err)) return -1;
+    if (s->model.prm.law == DEM_LAW_LINEAR && !(s->model.prm.linear_kn_n_per_m > 0.0))
+        return nc_error_set(err, 1, "%s: the linear contact law needs "
+                                    "linear.normal_stiffness_n_per_m > 0", s->model.source);
+    for (size_t k = 0; k < s->model.n_materials; k++) {
+        dem_material *m = &s->model.materials[k];
+        m->shear_modulus_pa = m->youngs_modulus_pa / (2.0 * (1.0 + m->poisson_ratio));
+        m->zeta = s->model.prm.damping == DEM_DAMPING_FIT ? dem_zeta_fit(m->restitution)
+                                                    : dem_zeta_a7(m->restitution);
+        m->pair_e_star = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
+                                               m->youngs_modulus_pa, m->poisson_ratio);
+        m->pair_g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio,
+                                             m->shear_modulus_pa, m->poisson_ratio);
+        m->pair_kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN
+                                 ? sqrt(4.0 * m->pair_g_star / m->pair_e_star)
+                                 : sqrt(s->model.prm.linear_kt_ratio);
+    }
+    dem_net *net = &s->model.net;
+    if (net->youngs_modulus_pa > 0.0)
+        net->shear_modulus_pa = net->youngs_modulus_pa / (2.0 * (1.0 + net->poisson_ratio));
+    if (net->restitution >= 0.0)
+        net->zeta = s->model.prm.damping == DEM_DAMPING_FIT ? dem_zeta_fit(net->restitution)
+                                                      : dem_zeta_a7(net->restitution);
+    s->model.r_max = 0.0;
+    s->model.r_min = INFINITY;
+    for (size_t i = 0; i < s->model.sph.n; i++) {
+        if (s->model.sph.radius[i] > s->model.r_max) s->model.r_max = s->model.sph.radius[i];
+        if (s->model.sph.radius[i] < s->model.r_min) s->model.r_min = s->model.sph.radius[i];
+    }
+    if (s->model.sph.n == 0) s->model.r_min = s->model.r_max = 1.0;
+    if (net->near_distance_m < 0.0) net->near_distance_m = s->model.r_max;
+    for (size_t b = 0; b < s->model.bod.n; b++) body_mass_properties(s, b);
+    if (check_overlaps(s, err)) return -1;
+    dem_update_spheres(s);
+
+    if (s->model.prm.dt_auto) {
+        double dt = s->model.prm.dt_safety * dem_sim_critical_dt(s);
+        if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN && s->model.sph.n > 0) {
+            double vmax = 0.0;
+            for (size_t b = 0; b < s->model.bod.n; b++) {
+                const double *v = s->model.bod.vel + 3 * b;
+                double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                if (sp > vmax) vmax = sp;
+            }
+            double vref = fmax(1.0, 2.0 * vmax);
+            double tc = hertz_contact_time(s, vref) / 40.0; /* >= 40 steps per impact */
+            if (tc < dt) dt = tc;
+        }
+        if (!isfinite(dt) || !(dt > 0.0)) dt = 1e-4;
+        s->model.prm.dt_s = dt;
+    }
+
+    /* step storage */
+    int nb = s->model.prm.threads > 0 ? s->model.prm.threads : 1;
+#ifdef _OPENMP
+    if (s->model.prm.threads <= 0) nb = omp_get_max_threads();
+#endif
+    if (nb < 1) nb = 1;
+    if (nb > DEM_MAX_BUFFERS) nb = DEM_MAX_BUFFERS;
+    size_t n = s->model.sph.n;
+    if (dem_thread_work_alloc(&s->work, nb, n, err) ||
+        dem_neighbor_list_alloc(&s->nlist, nb, n, s->model.r_min, err) ||
+        dem_contact_state_prepare(&s->contact, &s->model, err) ||
+        dem_snapshot_alloc(&s->snap, s->model.bod.n, n, err))
+        return -1;
+    s->n_walls = s->model.n_planes + s->model.n_meshes + 1;
+    s->wall_force = calloc(3 * s->n_walls, sizeof *s->wall_force);
+    if (!s->wall_force) return nc_error_set(err, 1, "dem: out of memory for %zu spheres", n);
+    s->prepared = 1;
+    return 0;
+}
