@@ -102,7 +102,9 @@ void fem_ijac_clear(fem_ijac *j)
 void fem_ijac_force(fem_ijac *j, const double *u, const double *v)
 {
     double *df = j->df;
-    memset(df, 0, (size_t)j->ndof * sizeof *df);
+    /* only block rows are ever written (fem_ijac_set zeroes the rest) */
+    for (int b = 0; b < j->n_blocks; b++)
+        for (int r = 0; r < 3; r++) df[3 * j->nodes[2 * b] + r] = 0.0;
     for (int b = 0; b < j->n_blocks; b++) {
         const int fi = 3 * j->nodes[2 * b], mj = 3 * j->nodes[2 * b + 1];
         const double *K = j->K + 9 * b, *C = j->C + 9 * b;
