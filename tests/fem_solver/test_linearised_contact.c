@@ -5,8 +5,8 @@
  * coupling load); Newton with the consistent tangent needs no more iterations than without
  * the linearisation (+1) and the solution satisfies F at the final iterate; K = C = 0 is
  * bit-identical to the plain coupling force; the step tangent with edge blocks (a, b)
- * against finite differences of the residual; save/restore bit-identity; rejection of
- * blocks the fixed pattern cannot hold. */
+ * against finite differences of the residual; save/restore bit-identity; an unsymmetric K;
+ * statics; rejection of blocks the fixed pattern cannot hold. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -551,6 +551,58 @@ static void test_restore_bitwise(void **state)
     fem_model_free(&m);
 }
 
+/* ---- an unsymmetric K: the matrix holds its symmetric part, the residual all of it ------ */
+
+static void test_unsymmetric(void **state)
+{
+    (void)state;
+    fem_model m;
+    net_model(&m, FEM_BOSSAK, 0, 0);
+    fem_analysis s, p;
+    nc_error err;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&p, &m, &err), 0);
+    size_t bytes = (size_t)s.ndof * sizeof(double);
+    int nodes[8];
+    double K[36], C[36];
+    const int nb = edge_blocks(NET_CENTRE, NET_EDGE_B, 5e4, 50.0, nodes, K, C);
+    /* a friction-like part k_t t n^T (tangential force from normal motion) on (a, b) only */
+    const double t[3] = {1, 0, 0}, n[3] = {0, 0, 1};
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) K[9 * 1 + 3 * r + c] += 2e4 * t[r] * n[c];
+    double *uref = malloc(bytes), *vref = calloc(1, bytes);
+    for (int i = 0; i < s.ndof; i++) uref[i] = -0.02 * (i % 3 == 2);
+    edge_force(&s, 1500.0);
+    edge_force(&p, 1500.0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&p, &err), 0);
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, nb, nodes, K, C, &err), 0);
+    assert_int_equal(fem_analysis_step(&s, NET_DT, &err), 0);
+    /* the plain step under F(u, v) of the linearised solution reproduces it */
+    memcpy(p.f_coupling, s.cur.fc, bytes);
+    assert_int_equal(fem_analysis_step(&p, NET_DT, &err), 0);
+    double umax = 0;
+    for (int i = 0; i < s.ndof; i++) umax = fmax(umax, fabs(s.cur.u[i]));
+    for (int i = 0; i < s.ndof; i++)
+        /* two Newton solutions of one equation (default tolerances) */
+        assert_near(p.cur.u[i], s.cur.u[i], 1e-9 * umax + 1e-9);
+    /* and the unsymmetric part did act: x force on the centre from the edge's z motion */
+    double fx = s.cur.fc[3 * NET_CENTRE] - s.f_coupling[3 * NET_CENTRE];
+    double expect = 0;
+    for (int b = 0; b < nb; b++)
+        if (nodes[2 * b] == NET_CENTRE)
+            for (int c = 0; c < 3; c++) {
+                int j = 3 * nodes[2 * b + 1] + c;
+                expect -= K[9 * b + c] * (s.cur.u[j] - uref[j]) + C[9 * b + c] * s.cur.v[j];
+            }
+    assert_near(fx, expect, 1e-12 * (fabs(expect) + 1.0));
+    assert_below(1.0, fabs(expect));
+    free(uref); free(vref);
+    fem_analysis_free(&s);
+    fem_analysis_free(&p);
+    fem_model_free(&m);
+}
+
 /* ---- statics and rejected blocks ----------------------------------------------------- */
 
 /* statics: F = F^k - K (u - u^k); the solution is the plain static solution under F(u) */
@@ -629,6 +681,7 @@ int main(void)
         cmocka_unit_test(test_zero_jacobian_is_plain),
         cmocka_unit_test(test_edge_tangent),
         cmocka_unit_test(test_restore_bitwise),
+        cmocka_unit_test(test_unsymmetric),
         cmocka_unit_test(test_static),
         cmocka_unit_test(test_rejects_unconnected_blocks),
     };
