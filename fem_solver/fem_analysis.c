@@ -12,7 +12,10 @@
  * current tangent K_T(u) (eq. (12)) and its derivative with respect to u is left out of the
  * Newton matrix (exact for a linear system; kappa = 0 in all paper cases). F_ext is taken
  * at the end of the step for every method (model loads at the ramp value of t_{n+1};
- * coupling forces are constant over the step anyway).
+ * coupling forces are constant over the step anyway). An interface linearisation adds
+ * dF = -K (u - u^k) - C (v - v^k) to the coupling force at the same end-of-step point with
+ * the same full weight, so its tangent is l_k K + l_c C with l_k = 1, l_c = gamma/(beta dt)
+ * (statics: 1, 0).
  */
 #include "fem_analysis.h"
 #include "fem_element_cable.h"
@@ -134,6 +137,7 @@ void fem_analysis_free(fem_analysis *s)
 {
     if (!s) return;
     fem_sparse_free(&s->K);
+    fem_ijac_free(&s->lin);
     state_free(&s->cur); state_free(&s->start); state_free(&s->saved);
     free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->f_model); free(s->f_coupling);
     free(s->r); free(s->w); free(s->rhs); free(s->du); free(s->u0);
@@ -150,11 +154,14 @@ double fem_analysis_load_factor(const fem_analysis *s, double time_s)
 }
 
 /* Residual r (all dofs; meaningful on free ones) and, with matrix != 0, the tangent
- * c_m M + c_k K_T into the fixed pattern. w is the mass-term vector, v the velocity used
- * by the kappa term, wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial.
- * Returns the force scale used by the relative tolerance. */
-static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, const double *w,
-                       const double *v, double wf, const double *fd_n, int matrix)
+ * c_m M + c_k K_T (+ l_k K + l_c C of a linearisation) into the fixed pattern. w is the
+ * mass-term vector, v the velocity used by the kappa term and the linearisation's C term
+ * (NULL: none), wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial, and
+ * lin.df when a linearisation is set. Returns the force scale used by the relative
+ * tolerance. */
+static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, double l_k,
+                       double l_c, const double *w, const double *v, double wf,
+                       const double *fd_n, int matrix)
 {
     const fem_model *m = s->m;
     double t0 = nc_clock_now_s();
@@ -165,9 +172,19 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, c
     if (matrix) memset(x, 0, (size_t)s->K.nnz * sizeof *x);
     memset(fd, 0, (size_t)s->ndof * sizeof *fd);
     double scale2 = 0, fext2 = 0;
-    for (int i = 0; i < s->ndof; i++) {
-        s->r[i] = lambda * s->f_model[i] + s->f_coupling[i];
-        fext2 += s->r[i] * s->r[i];
+    if (s->lin.active) {
+        fem_ijac_force(&s->lin, u, v);
+        const double *df = s->lin.df;
+        for (int i = 0; i < s->ndof; i++) {
+            s->r[i] = lambda * s->f_model[i] + s->f_coupling[i] + df[i];
+            fext2 += s->r[i] * s->r[i];
+        }
+        if (matrix && (l_k != 0.0 || l_c != 0.0)) fem_ijac_scatter(&s->lin, l_k, l_c, x);
+    } else {
+        for (int i = 0; i < s->ndof; i++) {
+            s->r[i] = lambda * s->f_model[i] + s->f_coupling[i];
+            fext2 += s->r[i] * s->r[i];
+        }
     }
     int slack_count = 0;
     for (int e = 0; e < m->n_elements; e++) {
@@ -341,8 +358,8 @@ typedef struct newton_setup {
 
 /* Kinematics, residual and tangent at the current iterate; returns the residual norm and
  * sets *tol from the force scale. */
-static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, double c_k, double wf,
-                       double *tol)
+static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, double c_k, double l_k,
+                       double l_c, double wf, double *tol)
 {
     const fem_model *m = s->m;
     const double *w = NULL, *vk = NULL;
@@ -356,7 +373,7 @@ static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, doub
         w = s->w;
         vk = s->cur.v;
     }
-    double scale = assemble(s, ns->lambda, c_m, c_k, w, vk, wf,
+    double scale = assemble(s, ns->lambda, c_m, c_k, l_k, l_c, w, vk, wf,
                             ns->dynamic && ns->alpha_f != 0.0 ? s->start.fd : NULL, 1);
     *tol = fmax(m->settings.residual_tol_n, m->settings.relative_tol * scale);
     return residual_norm(s);
@@ -365,6 +382,20 @@ static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, doub
 static void set_free_u(fem_analysis *s, double alpha)
 {
     for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = s->u0[q] + alpha * s->du[q];
+}
+
+/* Tangent weights of the step equation (see the top of this file). */
+static void newton_weights(const fem_model *m, const newton_setup *ns, double *c_m, double *c_k,
+                           double *l_k, double *l_c, double *wf)
+{
+    *c_m = 0; *c_k = 1; *wf = 1; *l_k = 1; *l_c = 0;
+    if (ns->dynamic) {
+        double bdt = ns->beta * ns->dt;
+        *c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
+        *c_k = (1.0 - ns->alpha_f) * (1.0 + m->kappa_s * ns->gamma / bdt);
+        *wf = 1.0 - ns->alpha_f;
+        *l_c = ns->gamma / bdt;
+    }
 }
 
 /* Newton iterations for the current step; cur holds the predictor on entry.
@@ -378,15 +409,10 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
 {
     const fem_model *m = s->m;
     const fem_settings *set = &m->settings;
-    double c_m = 0, c_k = 1, wf = 1;
-    if (ns->dynamic) {
-        double bdt = ns->beta * ns->dt;
-        c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
-        c_k = (1.0 - ns->alpha_f) * (1.0 + m->kappa_s * ns->gamma / bdt);
-        wf = 1.0 - ns->alpha_f;
-    }
+    double c_m, c_k, l_k, l_c, wf;
+    newton_weights(m, ns, &c_m, &c_k, &l_k, &l_c, &wf);
     double tol, dunorm = 0;
-    double rnorm = evaluate(s, ns, c_m, c_k, wf, &tol);
+    double rnorm = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &tol);
     /* a factorisation of the same matrix form kept from an earlier step (modified Newton) */
     int factorized = set->modified_newton && s->K.have_factor && s->factor_cm == c_m &&
                      s->factor_ck == c_k;
@@ -411,7 +437,11 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
         int mode;
         if (!factorized) mode = 0;
         else if (rnorm <= tol) mode = 1;
-        else if (set->modified_newton && !refresh) mode = s->K.use_lu ? 1 : 2;
+        /* CG iterates on the current tangent (a linearisation included), so a kept factor
+         * is only its preconditioner; a kept LU is used directly, so it is refreshed when
+         * the linearisation changed since it was made */
+        else if (set->modified_newton && !refresh)
+            mode = !s->K.use_lu ? 2 : s->factor_lin == s->lin_serial ? 1 : 0;
         else mode = 0;
         int cg_slow = 0;
         if (mode == 2) {
@@ -425,6 +455,7 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
         if (mode == 0) {
             s->factor_cm = c_m;
             s->factor_ck = c_k;
+            s->factor_lin = s->lin_serial;
         }
         factorized = 1;
         double r_before = rnorm;
@@ -437,14 +468,14 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
         double alpha = 1.0, best_alpha = 1.0, best = INFINITY, trial_tol = tol;
         for (int ls = 0; ls <= 4; ls++) {
             set_free_u(s, alpha);
-            double r = evaluate(s, ns, c_m, c_k, wf, &trial_tol);
+            double r = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &trial_tol);
             if (r < best) { best = r; best_alpha = alpha; }
             if (r < rnorm || r <= trial_tol) break;
             alpha *= 0.5;
         }
         if (best_alpha != alpha) {   /* the last trial was not the best one: go back to it */
             set_free_u(s, best_alpha);
-            best = evaluate(s, ns, c_m, c_k, wf, &trial_tol);
+            best = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &trial_tol);
         }
         s->stats.line_search_cuts += best_alpha < 1.0;
         /* refresh when the kept factorisation stops contracting fast, after a line-search cut,
@@ -510,6 +541,15 @@ static void method_weights(const fem_settings *set, double *beta, double *gamma,
     }
 }
 
+/* cur.fc = the coupling force of the last evaluation (at the solution) */
+static void store_coupling_force(fem_analysis *s)
+{
+    if (s->lin.active)
+        for (int i = 0; i < s->ndof; i++) s->cur.fc[i] = s->f_coupling[i] + s->lin.df[i];
+    else
+        memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));
+}
+
 int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
 {
     const fem_model *m = s->m;
@@ -518,13 +558,14 @@ int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
     /* matrix = M (c_m = 1, c_k = 0); residual without inertia */
     s->factor_cm = 1.0;
     s->factor_ck = 0.0;
+    s->factor_lin = s->lin_serial;
     double tau = m->tau_per_s;
     for (int i = 0; i < s->ndof; i++) s->w[i] = tau * s->cur.v[i];
-    assemble(s, lambda, 1.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1);
+    assemble(s, lambda, 1.0, 0.0, 0.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1);
     if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
     for (int q = 0; q < s->neq; q++) s->cur.a[s->dof_of_eq[q]] = s->du[q];
-    memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));
+    store_coupling_force(s);
     return 0;
 }
 
@@ -616,8 +657,53 @@ int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
     }
     s->cur.time_s = t1;
     s->cur.step = s->start.step + 1;
-    memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));
+    store_coupling_force(s);
     return 0;
+}
+
+int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end, double *r,
+                               nc_error *err)
+{
+    const fem_settings *set = &s->m->settings;
+    state_copy(&s->start, &s->cur, s->ndof);
+    int shifted = set->coupling_load_constant;
+    if (shifted) {
+        memcpy(s->a_unshifted, s->start.a, (size_t)s->ndof * sizeof(double));
+        if (shift_start_acceleration(s, err)) {
+            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+            return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
+        }
+    }
+    newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
+    method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
+    ns.lambda = fem_analysis_load_factor(s, s->cur.time_s + dt_s);
+    for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_end[s->dof_of_eq[q]];
+    apply_supports(s, ns.lambda);
+    double c_m, c_k, l_k, l_c, wf, tol;
+    newton_weights(s->m, &ns, &c_m, &c_k, &l_k, &l_c, &wf);
+    evaluate(s, &ns, c_m, c_k, l_k, l_c, wf, &tol);
+    memcpy(r, s->r, (size_t)s->ndof * sizeof(double));
+    if (shifted) memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+    state_copy(&s->cur, &s->start, s->ndof);
+    fem_analysis_update_axial(s);
+    return 0;
+}
+
+int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const double *v_ref,
+                                   int n_blocks, const int *block_nodes, const double *K_blocks,
+                                   const double *C_blocks, nc_error *err)
+{
+    s->lin_serial++;
+    if (fem_ijac_set(&s->lin, s->ndof, s->eq, &s->K, u_ref, v_ref, n_blocks, block_nodes,
+                     K_blocks, C_blocks, err))
+        return nc_error_prefix(err, "%s", s->m->source);
+    return 0;
+}
+
+void fem_analysis_clear_linearisation(fem_analysis *s)
+{
+    if (s->lin.active) s->lin_serial++;
+    fem_ijac_clear(&s->lin);
 }
 
 int fem_analysis_save(fem_analysis *s, nc_error *err)
@@ -626,6 +712,7 @@ int fem_analysis_save(fem_analysis *s, nc_error *err)
     s->has_saved = 1;
     s->saved_factor_cm = s->factor_cm;
     s->saved_factor_ck = s->factor_ck;
+    s->saved_factor_lin = s->factor_lin;
     return fem_sparse_save_factor(&s->K, err);
 }
 
@@ -636,6 +723,7 @@ int fem_analysis_restore(fem_analysis *s, nc_error *err)
     fem_analysis_update_axial(s);
     s->factor_cm = s->saved_factor_cm;
     s->factor_ck = s->saved_factor_ck;
+    s->factor_lin = s->saved_factor_lin;
     return fem_sparse_restore_factor(&s->K, err);
 }
 

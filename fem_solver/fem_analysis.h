@@ -11,10 +11,14 @@
  * step: the start-of-step acceleration is shifted by M^-1 (f_coupling - the force it was
  * computed with), so the step transfers exactly f_coupling dt of momentum to the structure,
  * the impulse the DEM gave its particles over the same step.
+ * An interface linearisation (fem_analysis_set_linearisation) makes the coupling force a
+ * function of the solution, F(u, v) = f_coupling - K (u - u^k) - C (v - v^k), solved
+ * implicitly; without one everything is as described above.
  */
 #ifndef FEM_ANALYSIS_H
 #define FEM_ANALYSIS_H
 
+#include "fem_interface_jacobian.h"
 #include "fem_model.h"
 #include "fem_sparse.h"
 
@@ -23,7 +27,8 @@ typedef struct fem_state {
     long step;
     double *u, *v, *a;  /* [ndof] displacement (m), velocity (m/s), acceleration (m/s^2) */
     double *fd;         /* [ndof] F_int(u) + kappa K_T(u) v at this state (alpha methods) */
-    double *fc;         /* [ndof] coupling force the acceleration a was computed with (N) */
+    double *fc;         /* [ndof] coupling force the acceleration a was computed with (N);
+                           with a linearisation, F(u, v) at this state */
 } fem_state;
 
 typedef struct fem_stats {
@@ -59,6 +64,9 @@ typedef struct fem_analysis {
     double *a_unshifted;   /* [ndof] start-of-step acceleration before the load shift */
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
+    fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
+    long lin_serial;       /* counts set/clear calls: which linearisation a factor holds */
+    long factor_lin, saved_factor_lin;
     fem_stats stats;
 } fem_analysis;
 
@@ -79,6 +87,37 @@ double fem_analysis_load_factor(const fem_analysis *s, double time_s);
  * a step solved again after a restore repeats the same operations bit for bit. */
 int fem_analysis_save(fem_analysis *s, nc_error *err);
 int fem_analysis_restore(fem_analysis *s, nc_error *err);
+
+/* Interface linearisation (interface-Jacobian coupling) for the following solves, until
+ * cleared or set again: the coupling force becomes
+ *   F(u, v) = F^k - K (u - u^k) - C (v - v^k),   F^k = f_coupling (filled as without it),
+ * u_ref = u^k, v_ref = v^k: [ndof] full dof vectors (only the dofs of block columns are
+ * read); blocks: n_blocks 3x3 blocks, block b couples block_nodes[2b] (force node i) to
+ * block_nodes[2b+1] (motion node j), K_blocks/C_blocks [9 n_blocks] row-major (N/m, N s/m;
+ * C_blocks NULL = 0); repeated (i, j) are summed. i and j must be one node or two nodes of
+ * one element (fixed pattern; anything else is rejected with an error naming the block).
+ * Everything is copied. Where F is evaluated:
+ *  - dynamics (Newmark, generalized-alpha, Bossak): at the end-of-step state u_n+1, v_n+1
+ *    and with full weight, exactly where f_coupling acts (F_ext at t_n+1 for every method),
+ *    so the step tangent gains K + gamma/(beta dt) C. With coupling_load "step_constant"
+ *    the start-of-step acceleration is shifted by F^k as before; the correction
+ *    -K (u - u^k) - C (v - v^k) acts as an end-of-step load.
+ *  - statics: F = F^k - K (u - u^k) (no velocity), tangent gains K.
+ *  - initial acceleration: F(u_0, v_0) (the matrix is M).
+ * At u = u^k, v = v^k (a converged coupling iteration) F = F^k, the plain result. The
+ * matrix holds the symmetric part of K, C (the residual is exact). cur.fc holds F at the
+ * solution. Returns 0, or -1 (err says why; the linearisation is then cleared). */
+int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const double *v_ref,
+                                   int n_blocks, const int *block_nodes, const double *K_blocks,
+                                   const double *C_blocks, nc_error *err);
+/* Back to the plain coupling force f_coupling. */
+void fem_analysis_clear_linearisation(fem_analysis *s);
+/* Diagnostic (tangent checks): the residual of a dynamic step of dt_s from the current state
+ * at the end-of-step displacement u_end [ndof] (supported dofs take their prescribed
+ * values) into r [ndof] (meaningful on free dofs), leaving the step tangent (-dr/du on the
+ * free equations) in s->K's values. The state is left as it was. */
+int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end, double *r,
+                               nc_error *err);
 
 /* Recomputes s->axial and stats.slack_elements at the current state. */
 void fem_analysis_update_axial(fem_analysis *s);

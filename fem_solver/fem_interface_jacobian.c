@@ -1,0 +1,137 @@
+/* fem_interface_jacobian — block storage, slot map and evaluation of the coupling-force
+ * linearisation (see fem_interface_jacobian.h). */
+#include "fem_interface_jacobian.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* slot of (row r, column c), r <= c, in the upper-triangle pattern; -1 when not stored */
+static int pattern_slot(const fem_sparse *A, int r, int c)
+{
+    int lo = A->colptr[c], hi = A->colptr[c + 1] - 1;
+    while (lo <= hi) {
+        int mid = (lo + hi) / 2;
+        if (A->rowind[mid] == r) return mid;
+        if (A->rowind[mid] < r) lo = mid + 1; else hi = mid - 1;
+    }
+    return -1;
+}
+
+static int reserve(fem_ijac *j, int ndof, int n_blocks)
+{
+    if (!j->u_ref || j->ndof != ndof) {
+        free(j->u_ref); free(j->v_ref); free(j->df);
+        j->u_ref = malloc((size_t)ndof * sizeof(double));
+        j->v_ref = malloc((size_t)ndof * sizeof(double));
+        j->df = calloc((size_t)ndof, sizeof(double));
+        j->ndof = ndof;
+        if (!j->u_ref || !j->v_ref || !j->df) return -1;
+    }
+    if (n_blocks > j->cap_blocks) {
+        size_t n = (size_t)n_blocks;
+        int *nodes = realloc(j->nodes, 2 * n * sizeof *nodes);
+        if (nodes) j->nodes = nodes;
+        double *K = realloc(j->K, 9 * n * sizeof *K);
+        if (K) j->K = K;
+        double *C = realloc(j->C, 9 * n * sizeof *C);
+        if (C) j->C = C;
+        int *slot = realloc(j->slot, 9 * n * sizeof *slot);
+        if (slot) j->slot = slot;
+        double *weight = realloc(j->weight, 9 * n * sizeof *weight);
+        if (weight) j->weight = weight;
+        if (!nodes || !K || !C || !slot || !weight) return -1;
+        j->cap_blocks = n_blocks;
+    }
+    return 0;
+}
+
+int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, const double *u_ref,
+                 const double *v_ref, int n_blocks, const int *block_nodes,
+                 const double *K_blocks, const double *C_blocks, nc_error *err)
+{
+    fem_ijac_clear(j);
+    if (n_blocks < 0 || (n_blocks > 0 && (!block_nodes || !K_blocks)) || !u_ref || !v_ref)
+        return nc_error_set(err, 1, "interface linearisation: needs u_ref, v_ref, and nodes and K for %d blocks",
+                            n_blocks);
+    if (reserve(j, ndof, n_blocks))
+        return nc_error_set(err, 1, "interface linearisation: out of memory for %d blocks", n_blocks);
+    const int n_nodes = ndof / 3;
+    for (int b = 0; b < n_blocks; b++) {
+        const int ni = block_nodes[2 * b], nj = block_nodes[2 * b + 1];
+        if (ni < 0 || ni >= n_nodes || nj < 0 || nj >= n_nodes)
+            return nc_error_set(err, 1, "interface linearisation: block %d couples nodes (%d, %d), outside 0..%d",
+                                b, ni, nj, n_nodes - 1);
+        for (int e = 0; e < 9; e++) {
+            double k = K_blocks[9 * b + e], c = C_blocks ? C_blocks[9 * b + e] : 0.0;
+            if (!isfinite(k) || !isfinite(c))
+                return nc_error_set(err, 1, "interface linearisation: block %d (nodes %d, %d) entry %d is not finite",
+                                    b, ni, nj, e);
+            int p = eq[3 * ni + e / 3], q = eq[3 * nj + e % 3];
+            int slot = -1;
+            if (p >= 0 && q >= 0) {
+                slot = p <= q ? pattern_slot(A, p, q) : pattern_slot(A, q, p);
+                if (slot < 0)
+                    return nc_error_set(err, 1, "interface linearisation: block %d couples nodes %d and %d, which share no element (the sparse pattern is fixed; contact blocks must couple the nodes of one element)",
+                                        b, ni, nj);
+            }
+            j->slot[9 * b + e] = slot;
+            /* (p, q) and (q, p) share one upper-triangle slot: half of each is the symmetric part */
+            j->weight[9 * b + e] = p == q ? 1.0 : 0.5;
+        }
+        j->nodes[2 * b] = ni;
+        j->nodes[2 * b + 1] = nj;
+    }
+    memcpy(j->K, K_blocks, 9 * (size_t)n_blocks * sizeof(double));
+    if (C_blocks) memcpy(j->C, C_blocks, 9 * (size_t)n_blocks * sizeof(double));
+    else memset(j->C, 0, 9 * (size_t)n_blocks * sizeof(double));
+    memcpy(j->u_ref, u_ref, (size_t)ndof * sizeof(double));
+    memcpy(j->v_ref, v_ref, (size_t)ndof * sizeof(double));
+    memset(j->df, 0, (size_t)ndof * sizeof(double));
+    j->n_blocks = n_blocks;
+    j->active = 1;
+    return 0;
+}
+
+void fem_ijac_clear(fem_ijac *j)
+{
+    j->active = 0;
+    j->n_blocks = 0;
+}
+
+void fem_ijac_force(fem_ijac *j, const double *u, const double *v)
+{
+    double *df = j->df;
+    /* only block rows are ever written (fem_ijac_set zeroes the rest) */
+    for (int b = 0; b < j->n_blocks; b++)
+        for (int r = 0; r < 3; r++) df[3 * j->nodes[2 * b] + r] = 0.0;
+    for (int b = 0; b < j->n_blocks; b++) {
+        const int fi = 3 * j->nodes[2 * b], mj = 3 * j->nodes[2 * b + 1];
+        const double *K = j->K + 9 * b, *C = j->C + 9 * b;
+        for (int r = 0; r < 3; r++) {
+            double sum = 0;
+            for (int c = 0; c < 3; c++) {
+                sum += K[3 * r + c] * (u[mj + c] - j->u_ref[mj + c]);
+                if (v) sum += C[3 * r + c] * (v[mj + c] - j->v_ref[mj + c]);
+            }
+            df[fi + r] -= sum;
+        }
+    }
+}
+
+void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x)
+{
+    const int n = 9 * j->n_blocks;
+    for (int e = 0; e < n; e++) {
+        int slot = j->slot[e];
+        if (slot >= 0) x[slot] += j->weight[e] * (c_k * j->K[e] + c_c * j->C[e]);
+    }
+}
+
+void fem_ijac_free(fem_ijac *j)
+{
+    if (!j) return;
+    free(j->nodes); free(j->K); free(j->C); free(j->slot); free(j->weight);
+    free(j->u_ref); free(j->v_ref); free(j->df);
+    memset(j, 0, sizeof *j);
+}

@@ -1,0 +1,55 @@
+/* fem_interface_jacobian — a linearisation of the coupling force about a reference state,
+ * so the FEM can solve with the contact as an implicit spring-dashpot (interface-Jacobian,
+ * Robin-type partitioned coupling; docs/notes/damped_contact.md says why: the interface map of
+ * a heavy rock on a light cable node has a gain of 25-50, which plain Dirichlet-Neumann
+ * iterations hardly contract).
+ *
+ * Contract: the force on the structure is
+ *   F(u, v) = F^k + dF,   dF = -K (u - u^k) - C (v - v^k),
+ * with K = -dF/du and C = -dF/dv given as 3x3 blocks between model nodes: block (i, j) maps
+ * the displacement/velocity of node j to the force on node i (row-major, row = force
+ * direction of node i, column = motion direction of node j). Repeated (i, j) blocks are
+ * summed, so a contact detector can append one block set per contact. u^k, v^k are full
+ * dof vectors (3 n_nodes). fem_ijac_set() copies everything and maps every block entry to
+ * its value slot in the FEM's fixed pattern once; afterwards fem_ijac_force() and
+ * fem_ijac_scatter() allocate nothing. Entries on supported dofs act in the residual (the
+ * supports' motion is known) but have no matrix entry. A block between two distinct free
+ * nodes that share no element has no slot in the pattern and is rejected: contact blocks of
+ * a sphere on an edge or a vertex always fall on one element's nodes.
+ * The matrix receives the symmetric part (K + K^T)/2 (the pattern is a symmetric upper
+ * triangle): the residual stays exact, so an unsymmetric K only slows Newton down to linear
+ * convergence, it does not change the solution.
+ */
+#ifndef FEM_INTERFACE_JACOBIAN_H
+#define FEM_INTERFACE_JACOBIAN_H
+
+#include "fem_sparse.h"
+
+typedef struct fem_ijac {
+    int active;              /* 1 while a linearisation is set */
+    int ndof;
+    int n_blocks, cap_blocks;
+    int *nodes;              /* [2 n_blocks] (i, j) */
+    double *K, *C;           /* [9 n_blocks] N/m and N s/m */
+    int *slot;               /* [9 n_blocks] value slot of entry (r, c), -1: no matrix entry */
+    double *weight;          /* [9 n_blocks] share of the entry in its slot (1 or 1/2) */
+    double *u_ref, *v_ref;   /* [ndof] reference displacement (m) and velocity (m/s) */
+    double *df;              /* [ndof] dF at the last evaluation (N) */
+} fem_ijac;
+
+/* Sets the linearisation; returns 0, or -1 with err naming the offending block (then the
+ * linearisation is cleared). eq: [ndof] equation of each dof (-1 supported), A: the pattern.
+ * C_blocks may be NULL (no damping term). */
+int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, const double *u_ref,
+                 const double *v_ref, int n_blocks, const int *block_nodes,
+                 const double *K_blocks, const double *C_blocks, nc_error *err);
+/* Back to no linearisation (keeps the memory for the next set). */
+void fem_ijac_clear(fem_ijac *j);
+/* j->df = -K (u - u^k) - C (v - v^k) on all dofs; v == NULL leaves the damping term out
+ * (statics). */
+void fem_ijac_force(fem_ijac *j, const double *u, const double *v);
+/* x[slot] += sym(c_k K + c_c C), the tangent -d(dF)/du with dv/du = c_c. */
+void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x);
+void fem_ijac_free(fem_ijac *j);
+
+#endif
