@@ -1,4 +1,4 @@
-/* Unit tests of cpl_residual (eqs. 27–30) and cpl_interface reductions. */
+/* Unit tests of cpl_residual (eqs. (27)–(30)) and cpl_interface reductions. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
