@@ -373,7 +373,7 @@ static int try_failed(run_ctx *c, try_result *t)
 
 /* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
  * failure that ends the run, else 0 with the outcome in t. */
-static int try_step(run_ctx *c, cpl_call *call, try_result *t)
+static int run_step(run_ctx *c, cpl_call *call, try_result *t)
 {
     cpl_loop *L = c->L;
     const int strong = L->s.scheme == CPL_SCHEME_STRONG;
@@ -487,7 +487,7 @@ static void note_retries(run_ctx *c, int rejected, double dt)
 }
 
 /* One accepted step, after as many rejected tries as the step control allows. */
-static int run_step(run_ctx *c)
+static int advance_step(run_ctx *c)
 {
     cpl_loop *L = c->L;
     const int strong = L->s.scheme == CPL_SCHEME_STRONG;
@@ -498,7 +498,7 @@ static int run_step(run_ctx *c)
     try_result t;
     for (c->attempt = 0;; c->attempt++) {
         call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt};
-        if (try_step(c, &call, &t)) return -1;
+        if (run_step(c, &call, &t)) return -1;
         if (t.outcome == TRY_CONVERGED || (!strong && t.outcome == TRY_UNCONVERGED)) break;
         int level = L->level;
         double next = retry_dt(L, dt, &level);
@@ -596,7 +596,7 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     int rc = 0;
     const double eps = 1e-9 * L->s.dt_s;
     while (L->time_s < L->s.end_time_s - eps && (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
-        if ((rc = run_step(&c)) != 0) break;
+        if ((rc = advance_step(&c)) != 0) break;
     }
     L->timing.total_s += nc_clock_now_s() - t0;
     return rc;
