@@ -1,5 +1,5 @@
 /* cpl_config — coupler.json: scheme, time, tolerances, relaxation, efficiency options,
- * participants, timeouts and output settings. */
+ * step control, participants, timeouts and output settings. */
 #include "cpl_config.h"
 
 #include <math.h>
@@ -76,6 +76,26 @@ static int parse_efficiency(const cJSON *root, const char *where, cpl_loop_setti
                ? -1 : 0;
 }
 
+/* step_control: dt_min (absent: dt / 64, resolved by the loop) and grow_after. */
+static int parse_step_control(const cJSON *root, const char *where, cpl_loop_settings *s,
+                              nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "step_control", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "step_control");
+    static const char *const keys[] = {"dt_min", "grow_after", NULL};
+    long grow = s->grow_after;
+    if (nc_json_check_keys(obj, path, keys, err) ||
+        nc_json_number_range_opt(obj, path, "dt_min", s->dt_min_s, 1e-300, INFINITY,
+                                 &s->dt_min_s, err) ||
+        nc_json_int_opt(obj, path, "grow_after", grow, 1, 1000000000L, &grow, err))
+        return -1;
+    s->grow_after = (int)grow;
+    return 0;
+}
+
 static int parse_timeouts(const cJSON *root, const char *where, cpl_config *c, nc_error *err)
 {
     const cJSON *obj = NULL;
@@ -116,7 +136,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     static const char *const keys[] = {
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
         "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
-        "relaxed_quantity", "predictor", "efficiency", "timeouts", "output", "comment", NULL};
+        "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
+        "timeouts", "output", "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -144,6 +165,9 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         nc_json_choice_opt(root, where, "predictor", predictors, predictor, &predictor, err) ||
         parse_relaxation(root, where, &s->relax, err) ||
         parse_efficiency(root, where, s, err) ||
+        parse_step_control(root, where, s, err) ||
+        nc_json_bool_opt(root, where, "accept_unconverged", c->accept_unconverged,
+                         &c->accept_unconverged, err) ||
         parse_timeouts(root, where, c, err) ||
         parse_output(root, where, c, err))
         return -1;

@@ -25,6 +25,8 @@ typedef struct cpl_config {
     double shutdown_timeout_s;  /* wait for the SHUTDOWN acknowledgement */
     int write_iterations;       /* the /iterations group of coupling.h5 */
     double progress_interval_s; /* plain progress lines when not on a terminal */
+    int accept_unconverged;     /* accepted unconverged steps do not make the exit status
+                                   non-zero (they are still reported as not reliable) */
 } cpl_config;
 
 void cpl_config_default(cpl_config *c);

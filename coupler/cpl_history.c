@@ -30,7 +30,16 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         series(h, &h->s_force, "/steps/contact_force", NC_H5_F64, 3, err) ||
         series(h, &h->s_contact, "/steps/in_contact", NC_H5_I32, 1, err) ||
         series(h, &h->s_near, "/steps/near_interface", NC_H5_I32, 1, err) ||
-        series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, err))
+        series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, err) ||
+        series(h, &h->s_rejected, "/steps/rejected", NC_H5_I32, 1, err) ||
+        series(h, &h->r_step, "/rejections/step", NC_H5_I32, 1, err) ||
+        series(h, &h->r_attempt, "/rejections/attempt", NC_H5_I32, 1, err) ||
+        series(h, &h->r_time, "/rejections/time", NC_H5_F64, 1, err) ||
+        series(h, &h->r_dt, "/rejections/dt", NC_H5_F64, 1, err) ||
+        series(h, &h->r_next_dt, "/rejections/next_dt", NC_H5_F64, 1, err) ||
+        series(h, &h->r_iterations, "/rejections/iterations", NC_H5_I32, 1, err) ||
+        series(h, &h->r_residual, "/rejections/residual", NC_H5_F64, 1, err) ||
+        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, err))
         goto fail;
     if (write_iterations &&
         (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, err) ||
@@ -38,7 +47,9 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
          series(h, &h->i_residual, "/iterations/residual", NC_H5_F64, 1, err) ||
          series(h, &h->i_alpha, "/iterations/alpha", NC_H5_F64, 1, err) ||
          series(h, &h->i_force, "/iterations/contact_force", NC_H5_F64, 3, err) ||
-         series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, err)))
+         series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, err) ||
+         series(h, &h->i_attempt, "/iterations/attempt", NC_H5_I32, 1, err) ||
+         series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
         nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_settings_method(&s->relax), err) ||
@@ -46,6 +57,8 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
                           s->relaxed == CPL_RELAXED_FORCE ? "force" : "displacement_velocity", err) ||
         nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
+        nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
+        nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||
         nc_h5_flush(&h->h5, err))
         goto fail;
     snprintf(path, sizeof path, "%s/iterations.log", dir);
@@ -54,24 +67,27 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         nc_error_set(err, 1, "%s: cannot create the iterations log", path);
         goto fail;
     }
-    fprintf(h->log, "# step time iterations converged residual\n");
+    fprintf(h->log, "# step time iterations converged residual dt rejected\n");
     fflush(h->log);
     return 0;
 fail:
-    cpl_history_close(h, NULL);
+    cpl_history_close(h, NULL, NULL);
     return -1;
 }
 
 int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_error *err)
 {
     if (!h->open || !h->write_iterations) return 0;
-    int32_t step = (int32_t)rec->step, it = rec->iteration, solved = rec->fem_solved;
+    int32_t step = (int32_t)rec->step, it = rec->iteration, solved = rec->fem_solved,
+            attempt = rec->attempt;
     return nc_h5_series_append(&h->i_step, &step, err) ||
            nc_h5_series_append(&h->i_iteration, &it, err) ||
            nc_h5_series_append(&h->i_residual, &rec->residual, err) ||
            nc_h5_series_append(&h->i_alpha, &rec->alpha, err) ||
            nc_h5_series_append(&h->i_force, rec->contact_force, err) ||
-           nc_h5_series_append(&h->i_fem_solved, &solved, err)
+           nc_h5_series_append(&h->i_fem_solved, &solved, err) ||
+           nc_h5_series_append(&h->i_attempt, &attempt, err) ||
+           nc_h5_series_append(&h->i_dt, &rec->dt_s, err)
                ? -1 : 0;
 }
 
@@ -79,7 +95,7 @@ int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err)
 {
     if (!h->open) return 0;
     int32_t its = rec->iterations, conv = rec->converged, contact = rec->in_contact,
-            near = rec->near_interface;
+            near = rec->near_interface, rejected = rec->rejected;
     if (nc_h5_series_append(&h->s_time, &rec->time_s, err) ||
         nc_h5_series_append(&h->s_dt, &rec->dt_s, err) ||
         nc_h5_series_append(&h->s_iterations, &its, err) ||
@@ -89,16 +105,41 @@ int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err)
         nc_h5_series_append(&h->s_contact, &contact, err) ||
         nc_h5_series_append(&h->s_near, &near, err) ||
         nc_h5_series_append(&h->s_gap, &rec->min_gap_m, err) ||
+        nc_h5_series_append(&h->s_rejected, &rejected, err) ||
         nc_h5_flush(&h->h5, err))
         return -1;
-    fprintf(h->log, "%ld %.9g %d %d %.6e\n", rec->step, rec->time_s, rec->iterations,
-            rec->converged, rec->residual);
+    fprintf(h->log, "%ld %.9g %d %d %.6e %.9g %d\n", rec->step, rec->time_s, rec->iterations,
+            rec->converged, rec->residual, rec->dt_s, rec->rejected);
     if (fflush(h->log) != 0)
         return nc_error_set(err, 1, "iterations.log: write failed (disk full?)");
     return 0;
 }
 
-void cpl_history_close(cpl_history *h, const cpl_timing *t)
+int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *err)
+{
+    if (!h->open) return 0;
+    int32_t step = (int32_t)rec->step, attempt = rec->attempt, its = rec->iterations,
+            reason = (int32_t)rec->reason;
+    if (nc_h5_series_append(&h->r_step, &step, err) ||
+        nc_h5_series_append(&h->r_attempt, &attempt, err) ||
+        nc_h5_series_append(&h->r_time, &rec->time_s, err) ||
+        nc_h5_series_append(&h->r_dt, &rec->dt_s, err) ||
+        nc_h5_series_append(&h->r_next_dt, &rec->next_dt_s, err) ||
+        nc_h5_series_append(&h->r_iterations, &its, err) ||
+        nc_h5_series_append(&h->r_residual, &rec->residual, err) ||
+        nc_h5_series_append(&h->r_reason, &reason, err) ||
+        nc_h5_flush(&h->h5, err))
+        return -1;
+    fprintf(h->log, "# rejected step %ld (t = %.9g s, dt = %.9g s, try %d): %s after %d "
+            "iterations, residual %.6e; retried with dt = %.9g s%s%s\n", rec->step, rec->time_s,
+            rec->dt_s, rec->attempt + 1, cpl_reject_reason_text(rec->reason), rec->iterations,
+            rec->residual, rec->next_dt_s, rec->message[0] ? ": " : "", rec->message);
+    if (fflush(h->log) != 0)
+        return nc_error_set(err, 1, "iterations.log: write failed (disk full?)");
+    return 0;
+}
+
+void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_run_status *status)
 {
     if (!h->open) return;
     if (t) {
@@ -113,11 +154,22 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t)
             nc_h5_attr_double(&h->h5, "/timing/total", "steps", (double)t->steps, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "iterations", (double)t->iterations, NULL);
         }
+        nc_h5_attr_double(&h->h5, "/", "unconverged_steps", (double)t->unconverged_steps, NULL);
+        nc_h5_attr_double(&h->h5, "/", "rejected_attempts", (double)t->rejected_attempts, NULL);
+        nc_h5_attr_double(&h->h5, "/", "reduced_steps", (double)t->reduced_steps, NULL);
+        nc_h5_attr_double(&h->h5, "/", "min_dt_used", t->min_dt_s, NULL);
+    }
+    if (status) {
+        nc_h5_attr_double(&h->h5, "/", "finished", status->finished, NULL);
+        nc_h5_attr_double(&h->h5, "/", "reliable", status->reliable, NULL);
+        nc_h5_attr_double(&h->h5, "/", "accept_unconverged", status->accept_unconverged, NULL);
     }
     nc_h5_series *all[] = {&h->s_time, &h->s_dt, &h->s_iterations, &h->s_residual,
                            &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,
-                           &h->i_step, &h->i_iteration, &h->i_residual, &h->i_alpha,
-                           &h->i_force, &h->i_fem_solved};
+                           &h->s_rejected, &h->i_step, &h->i_iteration, &h->i_residual,
+                           &h->i_alpha, &h->i_force, &h->i_fem_solved, &h->i_attempt, &h->i_dt,
+                           &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
+                           &h->r_iterations, &h->r_residual, &h->r_reason};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     nc_h5_flush(&h->h5, NULL);
     nc_h5_close(&h->h5);

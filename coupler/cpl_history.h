@@ -1,10 +1,14 @@
 /* cpl_history — the coupling history a run leaves in its output folder:
  *   DIR/coupling.h5   /steps/{time, dt, iterations, residual, converged, contact_force (×3),
- *                     in_contact, near_interface, min_gap}
+ *                     in_contact, near_interface, min_gap, rejected}
  *                     /iterations/{step, iteration, residual, alpha, contact_force (×3),
- *                     fem_solved}
- *                     root attributes: scheme, relaxation, relaxed_quantity, tolerance, dt
- *   DIR/iterations.log  one row per step: "step time iterations converged residual"
+ *                     fem_solved, attempt, dt}
+ *                     /rejections/{step, attempt, time, dt, next_dt, iterations, residual,
+ *                     reason}
+ *                     root attributes: scheme, relaxation, relaxed_quantity, tolerance, dt,
+ *                     dt_min, grow_after; at the end the run's status (cpl_history_close)
+ *   DIR/iterations.log  one row per step: "step time iterations converged residual dt
+ *                     rejected", and a "# rejected ..." comment line per rejected try
  * Both are flushed after every step, so they stay readable if the coupler is killed.
  */
 #ifndef CPL_HISTORY_H
@@ -17,8 +21,11 @@
 typedef struct cpl_history {
     nc_h5_file h5;
     nc_h5_series s_time, s_dt, s_iterations, s_residual, s_converged, s_force, s_contact,
-        s_near, s_gap;
-    nc_h5_series i_step, i_iteration, i_residual, i_alpha, i_force, i_fem_solved;
+        s_near, s_gap, s_rejected;
+    nc_h5_series i_step, i_iteration, i_residual, i_alpha, i_force, i_fem_solved, i_attempt,
+        i_dt;
+    nc_h5_series r_step, r_attempt, r_time, r_dt, r_next_dt, r_iterations, r_residual,
+        r_reason;
     int write_iterations;
     FILE *log;
     int open;
@@ -29,7 +36,19 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
                      int write_iterations, nc_error *err);
 int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_error *err);
 int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err);
-/* Stores the timing split as attributes of /timing, flushes and closes (safe to repeat). */
-void cpl_history_close(cpl_history *h, const cpl_timing *timing);
+int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *err);
+
+/* How trustworthy a finished run is; written as root attributes by cpl_history_close. */
+typedef struct cpl_run_status {
+    int finished;               /* the run reached its end (no error, not interrupted) */
+    int reliable;               /* finished and no unconverged step accepted */
+    int accept_unconverged;     /* the user opted in to accepting unconverged steps */
+} cpl_run_status;
+
+/* Stores the timing split as attributes of /timing/total and the run's counts and status
+ * (unconverged_steps, rejected_attempts, reduced_steps, min_dt_used, finished, reliable,
+ * accept_unconverged) as root attributes (status may be NULL: counts only), flushes and
+ * closes (safe to repeat). */
+void cpl_history_close(cpl_history *h, const cpl_timing *timing, const cpl_run_status *status);
 
 #endif

@@ -1,7 +1,9 @@
-/* cpl_loop — weak and strong coupling loops (algorithms 1–3 and 5–7 of the paper). */
+/* cpl_loop — weak and strong coupling loops (algorithms 1–3 and 5–7 of the paper) with step
+ * rejection and Δt control (cpl_loop.h). */
 #include "cpl_loop.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -18,6 +20,9 @@ struct cpl_loop {
     double time_s;
     long step;
     int last_near;          /* DEM's near_interface of the last accepted step, -1 unknown */
+    int level;              /* step control: the step is dt_s · 2^-level (0: nominal) */
+    int converged_run;      /* converged steps in a row at the current level */
+    double grid_origin_s;   /* where the level last left 0: reduced steps lie on its grid */
     double *u, *v, *f;      /* accepted state: u, u̇ at the start of the step, last force on
                                the structure */
     double *u_in, *v_in;    /* DEM input of the current iteration */
@@ -47,6 +52,13 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->skip_fem_without_contact = 0;
     s->contact_force_threshold_n = 0.0;
     s->max_steps = 0;
+    s->dt_min_s = 0.0;   /* dt_s / 64 */
+    s->grow_after = 4;
+}
+
+double cpl_loop_settings_dt_min(const cpl_loop_settings *s)
+{
+    return s->dt_min_s > 0.0 ? s->dt_min_s : s->dt_s / CPL_DT_MIN_DIVISOR;
 }
 
 int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_error *err)
@@ -67,6 +79,12 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (s->far_step && !(s->far_step_factor >= 1.0))
         return nc_error_set(err, 1, "%s: far_step_factor must be >= 1, got %g", where,
                             s->far_step_factor);
+    if (s->dt_min_s < 0.0 || !isfinite(s->dt_min_s) || s->dt_min_s > s->dt_s * (1.0 + 1e-12))
+        return nc_error_set(err, 1, "%s: step_control.dt_min must be in (0, dt = %g s], got %g",
+                            where, s->dt_s, s->dt_min_s);
+    if (s->grow_after < 1)
+        return nc_error_set(err, 1, "%s: step_control.grow_after must be >= 1, got %d", where,
+                            s->grow_after);
     char relax_where[512];
     nc_json_path(relax_where, sizeof relax_where, where, "relaxation");
     if (cpl_relax_settings_check(&s->relax, relax_where, err)) return -1;
@@ -105,6 +123,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     }
     L->timing.solver_fem_s = NAN;
     L->timing.solver_dem_s = NAN;
+    L->timing.min_dt_s = INFINITY;
     *out = L;
     return 0;
 oom:
@@ -131,6 +150,16 @@ void cpl_loop_free(cpl_loop *L)
     free(L);
 }
 
+const char *cpl_reject_reason_text(cpl_reject_reason reason)
+{
+    switch (reason) {
+    case CPL_REJECT_NOT_CONVERGED: return "not converged";
+    case CPL_REJECT_DIVERGED: return "diverged";
+    case CPL_REJECT_STEP_FAILED: return "solve failed";
+    }
+    return "?";
+}
+
 const cpl_timing *cpl_loop_timing(const cpl_loop *L) { return &L->timing; }
 const double *cpl_loop_displacement(const cpl_loop *L) { return L->u; }
 const double *cpl_loop_velocity(const cpl_loop *L) { return L->v; }
@@ -146,6 +175,7 @@ typedef struct run_ctx {
     const volatile sig_atomic_t *stop;
     cpl_failure *failure;
     nc_error *err;
+    int attempt;            /* tries of the current step rejected so far */
 } run_ctx;
 
 static int fail(run_ctx *c, const cpl_participant *p, const cpl_call *call, const char *command)
@@ -270,12 +300,31 @@ static void unpack(const cpl_loop *L, const double *x, double *u, double *v)
     for (size_t i = 0; i < L->n3; i++) v[i] = x[L->n3 + i] / L->s.dt_s;
 }
 
-static double choose_dt(const cpl_loop *L)
+/* Δt of a step's first try: the step control's Δt·2^-level, enlarged by efficiency option
+ * (i) at the nominal level, shortened (or stretched by a sliver) to end on end_time.
+ * *ends: the step ends on end_time. */
+static double choose_dt(const cpl_loop *L, int *ends)
 {
-    double dt = L->s.dt_s;
-    if (L->s.far_step && L->last_near == 0) dt *= L->s.far_step_factor;   /* algorithm 1, l. 3–6 */
+    double dt = ldexp(L->s.dt_s, -L->level);
+    if (L->level == 0 && L->s.far_step && L->last_near == 0)
+        dt *= L->s.far_step_factor;   /* algorithm 1, l. 3–6 */
     double remaining = L->s.end_time_s - L->time_s;
-    if (dt > remaining || remaining - dt < 1e-6 * L->s.dt_s) dt = remaining;   /* no sliver */
+    *ends = dt > remaining || remaining - dt < 1e-6 * L->s.dt_s;   /* no sliver */
+    return *ends ? remaining : dt;
+}
+
+/* The Δt a rejected try of size dt_rejected is begun again with: the largest Δt·2^-k
+ * (k >= 0) clearly below it (Δt/2 for a nominal step, Δt for an enlarged far step), or 0
+ * when that is below dt_min. *level gets k. The margin keeps the retry out of the no-sliver
+ * rule of choose_dt, so it is never stretched back to the rejected size. */
+static double retry_dt(const cpl_loop *L, double dt_rejected, int *level)
+{
+    const double nominal = L->s.dt_s, margin = 2e-6 * nominal;
+    int k = 0;
+    while (k < 1000 && ldexp(nominal, -k) > dt_rejected - margin) k++;
+    double dt = ldexp(nominal, -k);
+    if (dt < cpl_loop_settings_dt_min(&L->s) * (1.0 - 1e-9)) return 0.0;
+    *level = k;
     return dt;
 }
 
@@ -285,7 +334,8 @@ static int report_iteration(run_ctx *c, const cpl_call *call, double residual, d
     if (!c->obs || !c->obs->on_iteration) return 0;
     cpl_iteration_record rec = {.step = call->step, .iteration = call->iteration,
                                 .time_s = call->time_s, .dt_s = call->dt_s,
-                                .residual = residual, .alpha = alpha, .fem_solved = fem_solved};
+                                .residual = residual, .alpha = alpha, .fem_solved = fem_solved,
+                                .attempt = c->attempt};
     cpl_total_force(c->L->f_dem, c->L->n3 / 3, rec.contact_force);
     if (c->obs->on_iteration(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
     return 0;
@@ -301,87 +351,191 @@ static double residual_uv(cpl_loop *L, int *converged)
     return fmax(ru, rv);
 }
 
-static int run_step(run_ctx *c)
+/* How one try of a step ended (the step is not accepted yet). */
+typedef enum { TRY_CONVERGED = 0, TRY_UNCONVERGED, TRY_DIVERGED, TRY_FAILED } try_outcome;
+
+typedef struct try_result {
+    try_outcome outcome;    /* weak: CONVERGED / UNCONVERGED is information only */
+    int iterations;
+    double residual;        /* of the last completed iteration, NAN if none */
+    int fem_solved;         /* the FEM was solved (efficiency option (ii) may skip it) */
+    cpl_solve_info dem_info;
+} try_result;
+
+/* A failed request that a smaller step may cure: the participant said so. c->err keeps the
+ * message (with where it happened) for the rejection record. */
+static int try_failed(run_ctx *c, try_result *t)
+{
+    if (c->err->code != CPL_ERR_STEP_FAILED) return -1;
+    t->outcome = TRY_FAILED;
+    return 0;
+}
+
+/* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
+ * failure that ends the run, else 0 with the outcome in t. */
+static int run_step(run_ctx *c, cpl_call *call, try_result *t)
 {
     cpl_loop *L = c->L;
     const int strong = L->s.scheme == CPL_SCHEME_STRONG;
     const int force_mode = strong && L->s.relaxed == CPL_RELAXED_FORCE;
     const size_t n3 = L->n3;
-    cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = choose_dt(L)};
+    t->outcome = TRY_UNCONVERGED;
+    t->iterations = 0;
+    t->residual = NAN;
+    t->fem_solved = 0;
+    t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN};
 
     const int lazy_fem = L->s.skip_fem_without_contact;
-    if ((!lazy_fem && do_begin(c, c->fem, &call)) || do_begin(c, c->dem, &call)) return -1;
+    if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
     if (strong) cpl_relax_begin_step(L->relax);
 
     /* first guess of the end-of-step interface position for the DEM (the DEM moves its wall
      * from where it was to this position during the step): u + Δt u̇ by default; the last
      * accepted u alone makes the wall lag a further half step behind the structure */
     for (size_t i = 0; i < n3; i++) {
-        L->u_in[i] = L->u[i] + (L->s.predictor == CPL_PREDICT_LINEAR ? call.dt_s * L->v[i] : 0.0);
+        L->u_in[i] = L->u[i] + (L->s.predictor == CPL_PREDICT_LINEAR ? call->dt_s * L->v[i] : 0.0);
         L->v_in[i] = L->v[i];
         L->f_in[i] = L->f[i];
     }
     const int max_it = strong ? L->s.max_iterations : 1;
-    int converged = 0, fem_solved = 0, k;
-    double residual = NAN;
-    cpl_solve_info dem_info = {1, INFINITY, 0.0, NAN};
+    int converged = 0, k;
     for (k = 1; k <= max_it; k++) {
-        call.iteration = k;
+        call->iteration = k;
+        t->iterations = k;
+        L->timing.iterations++;
         /* DEM with the current interface position and velocity -> contact forces */
-        if (do_solve(c, c->dem, &call, L->u_in, L->v_in, L->f_dem, NULL, &dem_info)) return -1;
+        if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
+            return try_failed(c, t);
         if (!force_mode) {
             /* weak, or algorithm 2: forces go to the structure unrelaxed, eq. (39) */
-            int solved = fem_solve_or_skip(c, &call, L->f_dem, fem_solved);
-            if (solved < 0) return -1;
-            fem_solved |= solved;
+            int solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved);
+            if (solved < 0) return try_failed(c, t);
+            t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
-            residual = residual_uv(L, &converged);            /* eqs. (28), (29), (35) */
+            t->residual = residual_uv(L, &converged);         /* eqs. (28), (29), (35) */
             if (!strong || converged || k == max_it) {
-                if (report_iteration(c, &call, residual, NAN, solved)) return -1;
+                if (report_iteration(c, call, t->residual, NAN, solved)) return -1;
                 break;
             }
             double alpha;
             pack(L, L->x_in, L->u_in, L->v_in);
             pack(L, L->x_out, L->u_out, L->v_out);
-            if (cpl_relax_update(L->relax, L->x_in, L->x_out, L->x_in, &alpha, c->err))
-                return fail(c, NULL, &call, "relaxation");    /* eqs. (31), (32), (34) */
+            if (cpl_relax_update(L->relax, L->x_in, L->x_out, L->x_in, &alpha, c->err)) {
+                int code = c->err->code;                       /* eqs. (31), (32), (34) */
+                fail(c, NULL, call, "relaxation");
+                if (code != CPL_RELAX_ERR_NOT_FINITE) return -1;
+                t->outcome = TRY_DIVERGED;
+                return 0;
+            }
             unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
-            if (report_iteration(c, &call, residual, alpha, solved)) return -1;
+            if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
         } else {
             /* algorithm 3: residual and relaxation of the forces, then the structure */
-            residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);          /* eqs. (30), (36) */
-            converged = cpl_converged(residual, cpl_scaled_norm(L->f_dem, n3), L->s.tol_abs,
+            t->residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);       /* eqs. (30), (36) */
+            converged = cpl_converged(t->residual, cpl_scaled_norm(L->f_dem, n3), L->s.tol_abs,
                                       L->s.tol_rel);
             double alpha;
-            if (cpl_relax_update(L->relax, L->f_in, L->f_dem, L->f_in, &alpha, c->err))
-                return fail(c, NULL, &call, "relaxation");                 /* eqs. (33), (34) */
+            if (cpl_relax_update(L->relax, L->f_in, L->f_dem, L->f_in, &alpha, c->err)) {
+                int code = c->err->code;                                   /* eqs. (33), (34) */
+                fail(c, NULL, call, "relaxation");
+                if (code != CPL_RELAX_ERR_NOT_FINITE) return -1;
+                t->outcome = TRY_DIVERGED;
+                return 0;
+            }
             /* iteration 1 evaluated the DEM at the predicted position, not at the FEM's
              * answer to the previous relaxed force: no secant information in this pair */
             if (k == 1) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
-            int solved = fem_solve_or_skip(c, &call, L->f_in, fem_solved); /* eq. (42) */
-            if (solved < 0) return -1;
-            fem_solved |= solved;
-            if (report_iteration(c, &call, residual, alpha, solved)) return -1;
+            int solved = fem_solve_or_skip(c, call, L->f_in, t->fem_solved); /* eq. (42) */
+            if (solved < 0) return try_failed(c, t);
+            t->fem_solved |= solved;
+            if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
             if (converged || k == max_it) break;
             memcpy(L->u_in, L->u_out, n3 * sizeof(double));                /* eqs. (37), (38) */
             memcpy(L->v_in, L->v_out, n3 * sizeof(double));
         }
     }
-    if (k > max_it) k = max_it;
-    L->timing.iterations += k;
+    t->outcome = converged ? TRY_CONVERGED : TRY_UNCONVERGED;
+    return 0;
+}
+
+/* Tells the observer that a try was rejected; c->err holds the failure of DIVERGED and
+ * STEP_FAILED tries. */
+static int report_reject(run_ctx *c, const cpl_call *call, const try_result *t, double next_dt)
+{
+    if (!c->obs || !c->obs->on_reject) return 0;
+    char message[NC_ERROR_MESSAGE_MAX] = "";
+    if (t->outcome != TRY_UNCONVERGED) snprintf(message, sizeof message, "%s", c->err->message);
+    cpl_reject_record rec = {
+        .step = call->step, .attempt = c->attempt, .time_s = call->time_s, .dt_s = call->dt_s,
+        .next_dt_s = next_dt, .iterations = t->iterations, .residual = t->residual,
+        .reason = t->outcome == TRY_UNCONVERGED ? CPL_REJECT_NOT_CONVERGED
+                  : t->outcome == TRY_DIVERGED  ? CPL_REJECT_DIVERGED
+                                                : CPL_REJECT_STEP_FAILED,
+        .message = message};
+    nc_error_clear(c->err);
+    if (c->obs->on_reject(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
+    return 0;
+}
+
+/* Appends to a failure message that the step was already retried down to dt_min. */
+static void note_retries(run_ctx *c, int rejected, double dt)
+{
+    if (rejected == 0) return;
+    size_t used = strlen(c->err->message);
+    snprintf(c->err->message + used, sizeof c->err->message - used,
+             " (after %d rejected tries with smaller steps, at dt = %g s = dt_min)", rejected, dt);
+}
+
+/* One accepted step, after as many rejected tries as the step control allows. */
+static int advance_step(run_ctx *c)
+{
+    cpl_loop *L = c->L;
+    const int strong = L->s.scheme == CPL_SCHEME_STRONG;
+    const size_t n3 = L->n3;
+    int ends;
+    double dt = choose_dt(L, &ends);
+    cpl_call call;
+    try_result t;
+    for (c->attempt = 0;; c->attempt++) {
+        call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt};
+        if (run_step(c, &call, &t)) return -1;
+        if (t.outcome == TRY_CONVERGED || (!strong && t.outcome == TRY_UNCONVERGED)) break;
+        int level = L->level;
+        double next = retry_dt(L, dt, &level);
+        if (next == 0.0) break;                         /* at dt_min: decided below */
+        /* rejected: the participants restore on the repeated BEGIN_STEP; the relaxation's
+         * history (of this try, and IQN columns of another Δt) would mislead the retry */
+        if (strong) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_HISTORY);
+        L->timing.rejected_attempts++;
+        if (report_reject(c, &call, &t, next)) return -1;
+        memset(c->failure, 0, sizeof *c->failure);
+        if (L->level == 0 && level > 0) L->grid_origin_s = L->time_s;
+        L->level = level;
+        L->converged_run = 0;
+        dt = next;
+        ends = 0;
+    }
+    const int rejected = c->attempt;
+    if (t.outcome == TRY_FAILED || t.outcome == TRY_DIVERGED) {
+        note_retries(c, rejected, dt);
+        return -1;
+    }
+    const int converged = t.outcome == TRY_CONVERGED;
     if (strong && !converged) {
         L->timing.unconverged_steps++;
         if (L->s.on_max_iterations == CPL_MAXIT_STOP) {
             nc_error_set(c->err, CPL_ERR_NOT_CONVERGED,
                          "interface residual %.3e still above the tolerance %.3e after %d "
-                         "iterations (max_iterations policy \"stop\")", residual, L->s.tol_abs, k);
+                         "iterations (max_iterations policy \"stop\")", t.residual, L->s.tol_abs,
+                         t.iterations);
+            note_retries(c, rejected, dt);
             return fail(c, NULL, &call, "convergence");
         }
     }
     if (strong && !converged) {
         cpl_relax_forget(L->relax, CPL_RELAX_FORGET_HISTORY);   /* do not carry a failed step's model along */
     } else if (strong) {
-        if (force_mode) {
+        if (L->s.relaxed == CPL_RELAXED_FORCE) {
             cpl_relax_end_step(L->relax, NULL, NULL);
         } else {
             pack(L, L->x_in, L->u_in, L->v_in);
@@ -390,23 +544,39 @@ static int run_step(run_ctx *c)
         }
     }
     call.iteration = 0;
-    if (((!lazy_fem || fem_solved) && do_accept(c, c->fem, &call)) || do_accept(c, c->dem, &call))
+    const int lazy_fem = L->s.skip_fem_without_contact;
+    if (((!lazy_fem || t.fem_solved) && do_accept(c, c->fem, &call)) || do_accept(c, c->dem, &call))
         return -1;
 
     /* the structure's end state is the start of the next step */
     memcpy(L->u, L->u_out, n3 * sizeof(double));
     memcpy(L->v, L->v_out, n3 * sizeof(double));
     memcpy(L->f, L->f_in, n3 * sizeof(double));
-    L->time_s += call.dt_s;
+    L->time_s = ends ? L->s.end_time_s : L->time_s + dt;
     L->step++;
-    L->last_near = dem_info.near_interface;
+    L->last_near = t.dem_info.near_interface;
     L->timing.steps++;
+    if (!ends) L->timing.min_dt_s = fmin(L->timing.min_dt_s, dt);
+    if (rejected) L->timing.reduced_steps++;
+
+    /* step control: a reduced Δt doubles after grow_after good steps in a row, once the
+     * time is on the grid of the larger step (counted from where the reduction began) */
+    if (strong && !converged) {
+        L->converged_run = 0;
+    } else if (L->level > 0 && ++L->converged_run >= L->s.grow_after) {
+        double cells = (L->time_s - L->grid_origin_s) / ldexp(L->s.dt_s, 1 - L->level);
+        if (fabs(cells - nearbyint(cells)) < 1e-6) {
+            L->level--;
+            L->converged_run = 0;
+        }
+    }
 
     if (c->obs && c->obs->on_step) {
-        cpl_step_record rec = {.step = call.step, .time_s = L->time_s, .dt_s = call.dt_s,
-                               .iterations = k, .converged = converged, .residual = residual,
-                               .near_interface = dem_info.near_interface,
-                               .min_gap_m = dem_info.min_gap_m};
+        cpl_step_record rec = {.step = call.step, .time_s = L->time_s, .dt_s = dt,
+                               .iterations = t.iterations, .converged = converged,
+                               .residual = t.residual,
+                               .near_interface = t.dem_info.near_interface,
+                               .min_gap_m = t.dem_info.min_gap_m, .rejected = rejected};
         cpl_total_force(L->f_dem, n3 / 3, rec.contact_force);
         rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");
@@ -421,12 +591,12 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     cpl_failure dummy;
     if (!failure) failure = &dummy;
     memset(failure, 0, sizeof *failure);
-    run_ctx c = {L, fem, dem, observer, stop, failure, err};
+    run_ctx c = {L, fem, dem, observer, stop, failure, err, 0};
     double t0 = nc_clock_now_s();
     int rc = 0;
     const double eps = 1e-9 * L->s.dt_s;
     while (L->time_s < L->s.end_time_s - eps && (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
-        if ((rc = run_step(&c)) != 0) break;
+        if ((rc = advance_step(&c)) != 0) break;
     }
     L->timing.total_s += nc_clock_now_s() - t0;
     return rc;

@@ -13,7 +13,16 @@
  * structure is otherwise unloaded and at rest). With that option the FEM's step begins at its
  * first SOLVE of the step: a skipped step sends it nothing (no BEGIN_STEP / ACCEPT_STEP), and
  * its next BEGIN_STEP carries the later time.
- * The loop itself never prints: it reports every iteration and step to an observer.
+ * Step rejection: a strong step that does not converge in max_iterations (or whose iteration
+ * diverges), or in which a participant's solve fails with CPL_ERR_STEP_FAILED, is rejected:
+ * the relaxation history is dropped and the step is begun again at the same start time
+ * (the participants restore their start-of-step state on the repeated BEGIN_STEP) with the
+ * largest Δt·2^-k below the rejected step, as long as that is >= dt_min. After grow_after
+ * converged steps in a row (and on the grid of the larger step) a reduced Δt doubles again,
+ * never above the nominal Δt. At dt_min a step that still does not converge is accepted or
+ * stops the run (on_max_iterations); a failed solve there ends the run.
+ * The loop itself never prints: it reports every iteration, rejection and step to an
+ * observer.
  */
 #ifndef CPL_LOOP_H
 #define CPL_LOOP_H
@@ -75,7 +84,14 @@ typedef struct cpl_loop_settings {
     int skip_fem_without_contact;   /* efficiency option (ii) */
     double contact_force_threshold_n; /* |F| <= this counts as no contact force */
     long max_steps;                 /* stop after this many steps (0 = until end time) */
+    double dt_min_s;                /* step rejection: smallest retry Δt (<= 0: dt_s / 64;
+                                       >= dt_s: no retries) */
+    int grow_after;                 /* converged steps in a row before a reduced Δt doubles */
 } cpl_loop_settings;
+
+/* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */
+#define CPL_DT_MIN_DIVISOR 64.0
+double cpl_loop_settings_dt_min(const cpl_loop_settings *s);
 
 void cpl_loop_settings_default(cpl_loop_settings *s);
 /* Checks ranges and consistency; `where` names the source (e.g. "coupler.json"). */
@@ -89,7 +105,29 @@ typedef struct cpl_iteration_record {
     double alpha;                   /* relaxation factor applied after it (NAN: none/QN) */
     double contact_force[3];        /* total force of the DEM on the net, N */
     int fem_solved;                 /* 0 when skipped by efficiency option (ii) */
+    int attempt;                    /* 0 for a step's first try, n after n rejections */
 } cpl_iteration_record;
+
+typedef enum {
+    CPL_REJECT_NOT_CONVERGED = 0,   /* max_iterations reached above the tolerance */
+    CPL_REJECT_DIVERGED,            /* the relaxation produced a non-finite value */
+    CPL_REJECT_STEP_FAILED          /* a participant's solve failed with CPL_ERR_STEP_FAILED */
+} cpl_reject_reason;
+
+/* A rejected try of a step; the step is begun again with next_dt_s. */
+typedef struct cpl_reject_record {
+    long step;
+    int attempt;                    /* which try was rejected (0 = the first) */
+    double time_s;                  /* start time of the step */
+    double dt_s, next_dt_s;
+    int iterations;
+    double residual;                /* of the last iteration (NAN when none completed) */
+    cpl_reject_reason reason;
+    const char *message;            /* the failure for DIVERGED / STEP_FAILED, else "" */
+} cpl_reject_record;
+
+/* "not converged", "diverged", "solve failed". */
+const char *cpl_reject_reason_text(cpl_reject_reason reason);
 
 typedef struct cpl_step_record {
     long step;
@@ -103,12 +141,15 @@ typedef struct cpl_step_record {
     int in_contact;                 /* any non-zero contact force */
     int near_interface;
     double min_gap_m;
+    int rejected;                   /* tries of this step rejected before this one */
 } cpl_step_record;
 
+/* Every function may be NULL. */
 typedef struct cpl_observer {
     void *ctx;
     int (*on_iteration)(void *ctx, const cpl_iteration_record *rec, nc_error *err);
     int (*on_step)(void *ctx, const cpl_step_record *rec, nc_error *err);
+    int (*on_reject)(void *ctx, const cpl_reject_record *rec, nc_error *err);
 } cpl_observer;
 
 /* Wall-clock split of a run (seconds). wait_* include transport; solver_* are what the
@@ -117,7 +158,12 @@ typedef struct cpl_timing {
     double total_s;
     double wait_fem_s, wait_dem_s;
     double solver_fem_s, solver_dem_s;
-    long fem_solves, dem_solves, steps, iterations, unconverged_steps;
+    long fem_solves, dem_solves, steps, iterations;
+    long unconverged_steps;         /* strong: accepted without converging */
+    long rejected_attempts;         /* tries rejected and begun again with a smaller Δt */
+    long reduced_steps;             /* accepted steps that needed at least one rejection */
+    double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
+                                       step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;
 
 /* Where a failed run stopped. */
@@ -128,7 +174,11 @@ typedef struct cpl_failure {
     const char *command;                  /* "begin_step", "solve", "accept", "relax" */
 } cpl_failure;
 
-enum { CPL_ERR_INTERRUPTED = 40, CPL_ERR_NOT_CONVERGED = 41, CPL_ERR_PARTICIPANT = 42 };
+/* CPL_ERR_STEP_FAILED is for participants: "this step could not be solved (e.g. Newton
+ * failure), it may succeed with a smaller Δt" -- the loop then rejects and retries the step.
+ * Any other error code from a participant ends the run. */
+enum { CPL_ERR_INTERRUPTED = 40, CPL_ERR_NOT_CONVERGED = 41, CPL_ERR_PARTICIPANT = 42,
+       CPL_ERR_STEP_FAILED = 43 };
 
 typedef struct cpl_loop cpl_loop;
 

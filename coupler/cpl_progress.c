@@ -8,7 +8,7 @@
 #include "nc_clock.h"
 
 void cpl_progress_init(cpl_progress *p, FILE *out, int tty, int quiet, double interval_s,
-                       double sim_start, double sim_end)
+                       double sim_start, double sim_end, double dt_nominal_s)
 {
     memset(p, 0, sizeof *p);
     p->out = out;
@@ -18,6 +18,7 @@ void cpl_progress_init(cpl_progress *p, FILE *out, int tty, int quiet, double in
     p->wall_start = p->last_print = nc_clock_now_s();
     p->sim_start = sim_start;
     p->sim_end = sim_end;
+    p->dt_nominal_s = dt_nominal_s;
 }
 
 static void clock_text(char *buf, size_t size, double s)
@@ -37,12 +38,15 @@ static void status_text(const cpl_progress *p, char *buf, size_t size)
     const cpl_step_record *r = &p->last;
     double done = (r->time_s - p->sim_start) / (p->sim_end - p->sim_start);
     double eta = done > 0 ? elapsed * (1.0 - done) / done : NAN;
-    char e[32], rem[32];
+    char e[32], rem[32], dt[48] = "";
     clock_text(e, sizeof e, elapsed);
     clock_text(rem, sizeof rem, eta);
-    snprintf(buf, size, "t = %.6g s (%5.1f%%)  step %ld  iterations %d  residual %.2e  "
+    /* the last step of a run may be shorter only to end on the end time */
+    if (r->dt_s < p->dt_nominal_s * (1.0 - 1e-9) && r->time_s < p->sim_end - 1e-9 * p->dt_nominal_s)
+        snprintf(dt, sizeof dt, "  dt %.3g s (reduced)", r->dt_s);
+    snprintf(buf, size, "t = %.6g s (%5.1f%%)  step %ld  iterations %d  residual %.2e%s  "
              "elapsed %s  remaining %s", r->time_s, 100.0 * done, r->step, r->iterations,
-             r->residual, e, rem);
+             r->residual, dt, e, rem);
 }
 
 static void clear_line(cpl_progress *p)
@@ -73,9 +77,9 @@ void cpl_progress_step(cpl_progress *p, const cpl_step_record *rec, int strong)
         /* every unconverged step up to 20, then every 100th, so a bad run stays readable */
         if (p->warnings <= 20 || p->warnings % 100 == 0)
             cpl_progress_message(p, "warning: step %ld (t = %.6g s) not converged after %d "
-                                 "iterations, residual %.3e accepted (%ld such steps so far)",
-                                 rec->step, rec->time_s, rec->iterations, rec->residual,
-                                 p->warnings);
+                                 "iterations at dt = %.3g s, residual %.3e accepted (%ld such "
+                                 "steps so far)", rec->step, rec->time_s, rec->iterations,
+                                 rec->dt_s, rec->residual, p->warnings);
     }
     if (p->quiet) return;
     double now = nc_clock_now_s();
@@ -91,6 +95,18 @@ void cpl_progress_step(cpl_progress *p, const cpl_step_record *rec, int strong)
         fprintf(p->out, "%s\n", text);
     }
     fflush(p->out);
+}
+
+void cpl_progress_reject(cpl_progress *p, const cpl_reject_record *rec)
+{
+    p->rejections++;
+    if (p->rejections > 20 && p->rejections % 100 != 0) return;
+    cpl_progress_message(p, "warning: step %ld (t = %.6g s, dt = %.3g s) rejected: %s after %d "
+                         "iterations (residual %.3e); retrying with dt = %.3g s (%ld rejected "
+                         "tries so far)%s%s", rec->step, rec->time_s, rec->dt_s,
+                         cpl_reject_reason_text(rec->reason), rec->iterations, rec->residual,
+                         rec->next_dt_s, p->rejections, rec->message[0] ? ": " : "",
+                         rec->message);
 }
 
 void cpl_progress_finish(cpl_progress *p)

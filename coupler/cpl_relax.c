@@ -181,7 +181,8 @@ int cpl_relax_update(cpl_relax *r, const double *x_in, const double *x_out, doub
     double a = r->ops->update(r->state, x_in, x_out, x_next);
     for (size_t i = 0; i < r->n; i++)
         if (!isfinite(x_next[i]))
-            return nc_error_set(err, 1, "%s relaxation produced a non-finite interface value "
+            return nc_error_set(err, CPL_RELAX_ERR_NOT_FINITE,
+                                "%s relaxation produced a non-finite interface value "
                                 "(entry %zu); the coupling iteration diverged",
                                 r->ops->name, i);
     if (alpha) *alpha = a;

@@ -64,9 +64,14 @@ int cpl_relax_create(cpl_relax **out, const cpl_relax_settings *s, size_t n, siz
 void cpl_relax_free(cpl_relax *r);
 
 void cpl_relax_begin_step(cpl_relax *r);
+/* nc_error code of cpl_relax_update when its result is not finite: the coupling iteration
+ * diverged (the loop may retry the step with a smaller Δt). */
+enum { CPL_RELAX_ERR_NOT_FINITE = 44 };
+
 /* x_in: input of this iteration, x_out: produced value; writes the next input into x_next
  * (may alias x_in, not x_out). *alpha gets the α used (block 0), NAN for a quasi-Newton
- * update. Fails when the result is not finite (diverged iteration). */
+ * update. Fails with CPL_RELAX_ERR_NOT_FINITE when the result is not finite (diverged
+ * iteration). */
 int cpl_relax_update(cpl_relax *r, const double *x_in, const double *x_out, double *x_next,
                      double *alpha, nc_error *err);
 

@@ -2,8 +2,10 @@
  *
  *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
  *
- * Exit codes: 0 success, 1 input/participant/coupling failure, 130 interrupted (SIGINT),
- * 143 terminated (SIGTERM). See coupler/README.md.
+ * Exit codes: 0 success, 1 input/participant/coupling failure, 3 finished but with accepted
+ * unconverged steps (results not reliable; 0 instead when coupler.json sets
+ * accept_unconverged), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
+ * coupler/README.md.
  */
 #include <math.h>
 #include <signal.h>
@@ -34,6 +36,9 @@ static void usage(FILE *out)
             "  --quiet             only warnings, errors and the final summary\n");
 }
 
+/* A run that finished with accepted unconverged steps (not opted in). */
+enum { EXIT_UNRELIABLE = 3 };
+
 typedef struct app {
     cpl_config cfg;
     const char *config_path, *output_dir, *fem_ep_arg, *dem_ep_arg;
@@ -59,6 +64,14 @@ static int observe_step(void *ctx, const cpl_step_record *rec, nc_error *err)
     app *a = ctx;
     if (cpl_history_step(&a->history, rec, err)) return -1;
     cpl_progress_step(&a->progress, rec, a->cfg.loop.scheme == CPL_SCHEME_STRONG);
+    return 0;
+}
+
+static int observe_reject(void *ctx, const cpl_reject_record *rec, nc_error *err)
+{
+    app *a = ctx;
+    if (cpl_history_reject(&a->history, rec, err)) return -1;
+    cpl_progress_reject(&a->progress, rec);
     return 0;
 }
 
@@ -173,6 +186,47 @@ static void print_timing(app *a)
     fflush(o);
 }
 
+/* The end of the summary: how far the results can be trusted; the verdict is the last line.
+ * Returns 1 when the results are reliable. */
+static int print_status(app *a)
+{
+    const cpl_timing *t = cpl_loop_timing(a->loop);
+    const cpl_loop_settings *s = &a->cfg.loop;
+    const double dt_min = cpl_loop_settings_dt_min(s);
+    FILE *o = a->progress.out;
+    if (t->rejected_attempts > 0)
+        fprintf(o, "coupler: step control: %ld steps needed a smaller dt (%ld tries rejected and "
+                "repeated), smallest dt %.3g s (nominal %.3g s, dt_min %.3g s)\n",
+                t->reduced_steps, t->rejected_attempts, t->min_dt_s, s->dt_s, dt_min);
+    else
+        fprintf(o, "coupler: step control: no step rejected, no dt reduced (nominal %.3g s, "
+                "dt_min %.3g s)\n", s->dt_s, dt_min);
+    int reliable = 1;
+    if (s->scheme == CPL_SCHEME_WEAK) {
+        fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
+                "residual is not iterated away (it is recorded in /steps/residual)\n");
+    } else if (t->unconverged_steps == 0) {
+        fprintf(o, "coupler: results are reliable: every step converged to the tolerance "
+                "%.3g\n", s->tol_abs);
+    } else {
+        reliable = 0;
+        char why[256];
+        if (dt_min < s->dt_s * (1.0 - 1e-9))
+            snprintf(why, sizeof why, "even at the smallest step dt_min = %.3g s", dt_min);
+        else
+            snprintf(why, sizeof why, "step rejection is off (step_control.dt_min = dt)");
+        fprintf(o, "coupler: results are NOT reliable: %ld of %ld steps were accepted without "
+                "converging (interface residual above the tolerance %.3g after %d iterations, "
+                "%s); %s\n", t->unconverged_steps, t->steps, s->tol_abs, s->max_iterations, why,
+                a->cfg.accept_unconverged
+                    ? "accepted because coupler.json sets accept_unconverged"
+                    : "exit status 3 (coupler.json \"accept_unconverged\": true accepts them "
+                      "with exit status 0)");
+    }
+    fflush(o);
+    return reliable;
+}
+
 int main(int argc, char **argv)
 {
     app a;
@@ -189,8 +243,9 @@ int main(int argc, char **argv)
     double *u0 = NULL, *v0 = NULL;
     cpl_failure failure;
     memset(&failure, 0, sizeof failure);
+    cpl_run_status status = {0, 0, 0};
     cpl_config_default(&a.cfg);
-    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet, 10.0, 0.0, 1.0);
+    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet, 10.0, 0.0, 1.0, 1.0);
     /* endpoints given on the command line are known even if coupler.json is bad */
     if (a.fem_ep_arg) snprintf(a.fem_ep, sizeof a.fem_ep, "%s", a.fem_ep_arg);
     if (a.dem_ep_arg) snprintf(a.dem_ep, sizeof a.dem_ep, "%s", a.dem_ep_arg);
@@ -199,7 +254,8 @@ int main(int argc, char **argv)
         goto fail;
     }
     cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet,
-                      a.cfg.progress_interval_s, a.cfg.loop.start_time_s, a.cfg.loop.end_time_s);
+                      a.cfg.progress_interval_s, a.cfg.loop.start_time_s, a.cfg.loop.end_time_s,
+                      a.cfg.loop.dt_s);
     if (nc_file_make_dirs(a.output_dir, &err)) goto fail;
 
     char *fem_ep = a.fem_ep, *dem_ep = a.dem_ep;
@@ -233,7 +289,7 @@ int main(int argc, char **argv)
     history_open = 1;
 
     cpl_participant fem = cpl_remote_participant(&a.fem), dem = cpl_remote_participant(&a.dem);
-    cpl_observer obs = {&a, observe_iteration, observe_step};
+    cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject};
     if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of
          * that participant, which is not its fault */
@@ -256,6 +312,9 @@ int main(int argc, char **argv)
     cpl_progress_finish(&a.progress);
     rc = shutdown_all(&a, NULL) ? 1 : 0;
     print_timing(&a);
+    status.finished = 1;
+    status.reliable = print_status(&a);
+    if (rc == 0 && !status.reliable && !a.cfg.accept_unconverged) rc = EXIT_UNRELIABLE;
     goto done;
 
 fail:
@@ -266,7 +325,9 @@ fail:
     rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;
 
 done:
-    if (history_open) cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL);
+    status.accept_unconverged = a.cfg.accept_unconverged;
+    if (history_open)
+        cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL, &status);
     if (a.fem_open) cpl_remote_close(&a.fem);
     if (a.dem_open) cpl_remote_close(&a.dem);
     cpl_loop_free(a.loop);

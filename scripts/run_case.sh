@@ -15,8 +15,11 @@
 # parallel runs never collide. Programs come from $NC_BIN if set, else <repo>/bin.
 # --fem-program/--dem-program replace a solver by another participant command taking the same
 # arguments (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py").
-# Exit status: 0 when all three programs succeeded; otherwise non-zero with a message naming
-# the ones that failed. Ctrl-C stops the coupler cleanly (it shuts the solvers down).
+# Exit status: 0 when all three programs succeeded; 3 (the coupler's) when the run finished
+# but accepted unconverged steps (results NOT reliable; 0 with coupler.json
+# "accept_unconverged": true, still reported as not reliable); otherwise non-zero with a
+# message naming the ones that failed. Ctrl-C stops the coupler cleanly (it shuts the
+# solvers down).
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${NC_BIN:-$root/bin}
@@ -36,7 +39,7 @@ while [ $# -gt 0 ]; do
     --fem-program) [ $# -ge 2 ] || die "--fem-program needs a command"; fem_program=$2; shift 2 ;;
     --dem-program) [ $# -ge 2 ] || die "--dem-program needs a command"; dem_program=$2; shift 2 ;;
     --quiet) quiet=1; shift ;;
-    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) [ -z "$case_dir" ] || die "only one CASE_DIR, got '$case_dir' and '$1'"; case_dir=$1; shift ;;
   esac
@@ -185,7 +188,7 @@ done
 # the solvers exit after SHUTDOWN; give them time to close their files
 # (after a coupler failure the healthy ones were told to shut down too; a dead coupler could
 # not, so they get less time)
-grace=600; [ "$cpl_rc" -ne 0 ] && grace=200
+grace=600; [ "$cpl_rc" -ne 0 ] && [ "$cpl_rc" -ne 3 ] && grace=200
 wait_exit() {   # pid -> exit status (killed after the grace time, 30 s or 10 s)
   local i=0
   while kill -0 "$1" 2>/dev/null && [ $i -lt $grace ]; do sleep 0.05; i=$((i + 1)); done
@@ -196,8 +199,9 @@ wait_exit "$fem_pid"; fem_rc=$?
 wait_exit "$dem_pid"; dem_rc=$?
 cpl_pid=""; fem_pid=""; dem_pid=""
 
+# coupler exit 3: it finished, but accepted unconverged steps (not a failure of a program)
 failed=()
-[ "$cpl_rc" -ne 0 ] && failed+=("coupler (exit $cpl_rc, see $out/coupler.log)")
+[ "$cpl_rc" -ne 0 ] && [ "$cpl_rc" -ne 3 ] && failed+=("coupler (exit $cpl_rc, see $out/coupler.log)")
 [ "$fem_rc" -ne 0 ] && failed+=("fem (exit $fem_rc, see $out/fem.log)")
 [ "$dem_rc" -ne 0 ] && failed+=("dem (exit $dem_rc, see $out/dem.log)")
 if [ ${#failed[@]} -gt 0 ]; then
@@ -205,6 +209,13 @@ if [ ${#failed[@]} -gt 0 ]; then
   [ "$cpl_rc" -ne 0 ] && grep -m 3 "error" coupler.log >&2
   [ $interrupted -eq 1 ] && exit 130
   exit 1
+fi
+# the coupler's verdict (the last line of its summary) also when accept_unconverged let it
+# exit 0: such a run is never reported as done
+if [ "$cpl_rc" -eq 3 ] || grep -q "results are NOT reliable" coupler.log; then
+  echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
+  grep "results are NOT reliable" coupler.log >&2
+  exit "$cpl_rc"
 fi
 echo "run_case: done, results in $out"
 exit 0

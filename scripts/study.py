@@ -173,14 +173,15 @@ def study_timestep(out, jobs, end_time):
 RELAXATION_DT = "2.5e-3"
 # COR 1 isolates the relaxation (paper 7.3); 200 iterations per step let alpha = 0.1 converge
 # everywhere; a step that still has not converged is accepted and counted (column "unconverged")
+# at the study's fixed dt (no step rejection: relaxation_variant sets step_control.dt_min = dt)
 RELAXATION_COMMON = ["dem.materials.0.restitution=1.0", "coupler.on_max_iterations=accept",
-                     "coupler.max_iterations=200"]
+                     "coupler.max_iterations=200", "coupler.accept_unconverged=true"]
 
 
 def relaxation_variant(alpha, dt):
     method = (["coupler.relaxation.method=aitken"] if alpha == "aitken" else
               ["coupler.relaxation.method=constant", "coupler.relaxation.alpha=" + alpha])
-    return method + ["coupler.dt=" + dt] + RELAXATION_COMMON
+    return method + ["coupler.dt=" + dt, "coupler.step_control.dt_min=" + dt] + RELAXATION_COMMON
 
 
 def study_relaxation(out, jobs, end_time):

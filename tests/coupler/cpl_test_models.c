@@ -16,6 +16,7 @@ void tm_structure_init(tm_structure *s, size_t n_nodes, double m, double k, doub
     s->K = vec(nd * nd);
     s->u0 = vec(nd); s->v0 = vec(nd); s->u = vec(nd); s->v = vec(nd);
     s->fail_step = -1;
+    s->fail.dt_above_s = INFINITY;
     for (size_t i = 0; i < nd; i++) {
         s->m[i] = m * (1.0 + 0.1 * (double)(i / 3));     /* nodes differ a little */
         s->K[i * nd + i] = k;
@@ -45,6 +46,8 @@ void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, do
     p->mp = vec(nd); p->kc = vec(nd); p->g = vec(nd);
     p->x0 = vec(nd); p->y0 = vec(nd); p->x = vec(nd); p->y = vec(nd);
     p->fail_step = -1;
+    p->fail.dt_above_s = INFINITY;
+    p->stiff_factor = 1.0;
     for (size_t i = 0; i < nd; i++) {
         p->mp[i] = mp * (1.0 + 0.2 * (double)(i % 3));
         p->kc[i] = kc * (1.0 + 0.05 * (double)i);
@@ -85,6 +88,22 @@ int tm_solve_dense(double *A, double *b, size_t n)
     return 0;
 }
 
+int tm_overlaps(double t, double dt, double from, double until)
+{
+    return t < until - 1e-12 && t + dt > from + 1e-12;
+}
+
+/* A retryable failure when the step overlaps the window with too large a Δt. */
+static int window_fails(tm_fail_window *w, const cpl_call *call, const char *who, nc_error *err)
+{
+    if (!(call->dt_s > w->dt_above_s * (1.0 + 1e-12)) ||
+        !tm_overlaps(call->time_s, call->dt_s, w->from_s, w->until_s))
+        return 0;
+    w->failures++;
+    return nc_error_set(err, CPL_ERR_STEP_FAILED, "%s: step too large (test: dt %g > %g)", who,
+                        call->dt_s, w->dt_above_s);
+}
+
 /* ---- structure participant ----------------------------------------------------------- */
 
 static int s_begin(void *ctx, const cpl_call *call, nc_error *err)
@@ -92,6 +111,7 @@ static int s_begin(void *ctx, const cpl_call *call, nc_error *err)
     (void)call; (void)err;
     tm_structure *s = ctx;
     s->begins++;
+    s->open = 1;
     memcpy(s->u, s->u0, s->nd * sizeof(double));
     memcpy(s->v, s->v0, s->nd * sizeof(double));
     return 0;
@@ -120,8 +140,10 @@ static int s_solve(void *ctx, const cpl_call *call, const double *in0, const dou
 {
     (void)in1; (void)info;
     tm_structure *s = ctx;
+    if (!s->open) return nc_error_set(err, 1, "refused: no step begun (test)");
     if (call->step == s->fail_step && call->iteration == s->fail_iteration)
         return nc_error_set(err, 1, "Newton did not converge in 20 iterations (test)");
+    if (window_fails(&s->fail, call, "fem", err)) return -1;
     s->solves++;
     if (call->dt_s > s->dt_seen_max) s->dt_seen_max = call->dt_s;
     structure_solve(s, in0, call->dt_s);   /* restores the start state implicitly */
@@ -134,6 +156,8 @@ static int s_accept(void *ctx, const cpl_call *call, nc_error *err)
 {
     (void)call; (void)err;
     tm_structure *s = ctx;
+    if (!s->open) return nc_error_set(err, 1, "refused: no step begun (test)");
+    s->open = 0;
     s->accepts++;
     memcpy(s->u0, s->u, s->nd * sizeof(double));
     memcpy(s->v0, s->v, s->nd * sizeof(double));
@@ -164,15 +188,19 @@ static int p_solve(void *ctx, const cpl_call *call, const double *in0, const dou
     tm_particles *p = ctx;
     if (call->step == p->fail_step && call->iteration == p->fail_iteration)
         return nc_error_set(err, 1, "particle solver failed (test)");
+    if (window_fails(&p->fail, call, "dem", err)) return -1;
     p->solves++;
     double dt = call->dt_s;
+    double f = tm_overlaps(call->time_s, dt, p->stiff_from_s, p->stiff_until_s)
+                   ? p->stiff_factor : 1.0;
     for (size_t i = 0; i < p->nd; i++) {
+        double kc = f * p->kc[i];
         double x1 = (p->mp[i] * (p->x0[i] + dt * p->y0[i]) +
-                     dt * dt * (p->kc[i] * in0[i] + p->mp[i] * p->g[i])) /
-                    (p->mp[i] + dt * dt * p->kc[i]);
+                     dt * dt * (kc * in0[i] + p->mp[i] * p->g[i])) /
+                    (p->mp[i] + dt * dt * kc);
         p->y[i] = (x1 - p->x0[i]) / dt;
         p->x[i] = x1;
-        out0[i] = p->kc[i] * (x1 - in0[i]);
+        out0[i] = kc * (x1 - in0[i]);
     }
     info->near_interface = call->time_s + call->dt_s < p->far_until_s ? 0 : 1;
     info->contacts = 1;
@@ -194,20 +222,22 @@ cpl_participant tm_particles_participant(tm_particles *p)
     return q;
 }
 
-void tm_monolithic_step(tm_structure *s, tm_particles *p, double dt)
+void tm_monolithic_step(tm_structure *s, tm_particles *p, double t, double dt)
 {
     size_t nd = s->nd, n = 2 * nd;
     double *A = vec(n * n), *b = vec(n);
+    double f = tm_overlaps(t, dt, p->stiff_from_s, p->stiff_until_s) ? p->stiff_factor : 1.0;
     for (size_t i = 0; i < nd; i++) {
+        double kc = f * p->kc[i];
         /* structure rows: (M + dt² K) u − dt² kc (x − u) = M (u0 + dt v0) */
         for (size_t j = 0; j < nd; j++) A[i * n + j] = dt * dt * s->K[i * nd + j];
-        A[i * n + i] += s->m[i] + dt * dt * p->kc[i];
-        A[i * n + nd + i] = -dt * dt * p->kc[i];
+        A[i * n + i] += s->m[i] + dt * dt * kc;
+        A[i * n + nd + i] = -dt * dt * kc;
         b[i] = s->m[i] * (s->u0[i] + dt * s->v0[i]);
         /* particle rows: (mp + dt² kc) x − dt² kc u = mp (x0 + dt y0) + dt² mp g */
         size_t r = nd + i;
-        A[r * n + nd + i] = p->mp[i] + dt * dt * p->kc[i];
-        A[r * n + i] = -dt * dt * p->kc[i];
+        A[r * n + nd + i] = p->mp[i] + dt * dt * kc;
+        A[r * n + i] = -dt * dt * kc;
         b[r] = p->mp[i] * (p->x0[i] + dt * p->y0[i]) + dt * dt * p->mp[i] * p->g[i];
     }
     tm_solve_dense(A, b, n);
@@ -245,14 +275,27 @@ static int r_step(void *ctx, const cpl_step_record *rec, nc_error *err)
         r->time[r->steps] = rec->time_s;
         r->force_z[r->steps] = rec->contact_force[2];
         r->dt[r->steps] = rec->dt_s;
+        r->rejected[r->steps] = rec->rejected;
     }
     r->steps++;
+    return 0;
+}
+
+static int r_reject(void *ctx, const cpl_reject_record *rec, nc_error *err)
+{
+    (void)err;
+    tm_recorder *r = ctx;
+    if (r->rejections < 64) {
+        r->reject[r->rejections] = *rec;
+        r->reject[r->rejections].message = "";
+    }
+    r->rejections++;
     return 0;
 }
 
 cpl_observer tm_recorder_observer(tm_recorder *r)
 {
     memset(r, 0, sizeof *r);
-    cpl_observer o = {r, r_iteration, r_step};
+    cpl_observer o = {r, r_iteration, r_step, r_reject};
     return o;
 }

@@ -5,7 +5,12 @@
  * Particles ("DEM"): one particle per dof, mass mp, bilateral linear contact spring kc to the
  * wall, body acceleration g, backward Euler with the wall at its end-of-step position w:
  *   (mp + Δt² kc) x1 = mp (x0 + Δt y0) + Δt² (kc w + mp g),  force on the wall kc (x1 − w).
- * Both restore their start-of-step state on every solve, like the real solvers.
+ * Both restore their start-of-step state on every solve, like the real solvers. The
+ * structure refuses SOLVE and ACCEPT_STEP outside a begun step, like the serve loop.
+ * Step rejection tests: either can fail a solve with CPL_ERR_STEP_FAILED while its step
+ * [t, t + Δt) overlaps a time window and Δt is above a limit (tm_fail_window), and the
+ * particles' contact can be stiffer inside a window (stiff_*), which makes the unrelaxed
+ * iteration diverge there at a large Δt.
  * The monolithic reference solves both together with the same scheme (2 nd unknowns).
  * Gauss–Seidel fixed-point derivative per dof (K diagonal): J = −Δt² kc mp /
  * ((m + Δt² k)(mp + Δt² kc)); unrelaxed iteration converges iff |J| < 1.
@@ -16,6 +21,12 @@
 #include <stddef.h>
 #include "../../coupler/cpl_loop.h"
 
+/* Solves of a step overlapping [from_s, until_s) with Δt > dt_above_s fail (retryable). */
+typedef struct tm_fail_window {
+    double from_s, until_s, dt_above_s;   /* dt_above_s = INFINITY: never */
+    long failures;
+} tm_fail_window;
+
 typedef struct tm_structure {
     size_t nd;
     double *m, *K;            /* [nd], [nd × nd] row-major */
@@ -24,6 +35,8 @@ typedef struct tm_structure {
     long fail_step;           /* reply an error at this step/iteration (-1: never) */
     int fail_iteration;
     double dt_seen_max;       /* largest Δt received */
+    tm_fail_window fail;
+    int open;                 /* BEGIN_STEP done, ACCEPT_STEP not yet */
 } tm_structure;
 
 typedef struct tm_particles {
@@ -34,6 +47,8 @@ typedef struct tm_particles {
     double far_until_s;       /* report near_interface = 0 while t + Δt < this */
     long fail_step;
     int fail_iteration;
+    tm_fail_window fail;
+    double stiff_from_s, stiff_until_s, stiff_factor;   /* kc × factor in the window */
 } tm_particles;
 
 void tm_structure_init(tm_structure *s, size_t n_nodes, double m, double k, double k_link);
@@ -45,8 +60,12 @@ void tm_particles_free(tm_particles *p);
 cpl_participant tm_structure_participant(tm_structure *s);
 cpl_participant tm_particles_participant(tm_particles *p);
 
-/* One monolithic backward-Euler step of the coupled system (updates both committed states). */
-void tm_monolithic_step(tm_structure *s, tm_particles *p, double dt);
+/* One monolithic backward-Euler step [t, t + Δt] of the coupled system (updates both
+ * committed states; the stiff window applies as in the particle participant). */
+void tm_monolithic_step(tm_structure *s, tm_particles *p, double t, double dt);
+
+/* Whether the step [t, t + Δt) overlaps [from, until). */
+int tm_overlaps(double t, double dt, double from, double until);
 
 /* Dense Gaussian elimination with partial pivoting: solves A x = b (A, b overwritten). */
 int tm_solve_dense(double *A, double *b, size_t n);
@@ -60,6 +79,9 @@ typedef struct tm_recorder {
     double time[4096];
     double force_z[4096];
     double dt[4096];
+    int rejected[4096];           /* /steps/rejected of each step */
+    long rejections;              /* on_reject calls */
+    cpl_reject_record reject[64]; /* the first ones (message not kept) */
     double step0_residual[512];   /* residual of each iteration of step 0 */
     long total_iterations;
     int last_iteration_count;

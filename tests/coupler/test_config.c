@@ -44,6 +44,10 @@ static void test_minimal_and_defaults(void **state)
     assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "none");
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_ACCEPT);
     assert_string_equal(c.fem.endpoint, "");
+    /* step control: dt_min dt / 64, doubling after 4 good steps, unconverged not accepted */
+    assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-3 / 64.0, 0.0);
+    assert_int_equal(c.loop.grow_after, 4);
+    assert_int_equal(c.accept_unconverged, 0);
 }
 
 static void test_full_file(void **state)
@@ -61,6 +65,8 @@ static void test_full_file(void **state)
         " \"efficiency\": {\"far_step\": true, \"far_step_factor\": 100,"
         "   \"skip_fem_without_contact\": true, \"contact_force_threshold\": 1e-9},"
         " \"timeouts\": {\"connect\": 5, \"reply\": 60, \"shutdown\": 2},"
+        " \"step_control\": {\"dt_min\": 1e-4, \"grow_after\": 10},"
+        " \"accept_unconverged\": true,"
         " \"output\": {\"iterations\": false, \"progress_interval\": 1}}";
     cpl_config c;
     nc_error err;
@@ -82,6 +88,9 @@ static void test_full_file(void **state)
     assert_true(c.loop.far_step && c.loop.skip_fem_without_contact);
     assert_near(c.reply_timeout_s, 60.0, 0.0);
     assert_int_equal(c.write_iterations, 0);
+    assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-4, 0.0);
+    assert_int_equal(c.loop.grow_after, 10);
+    assert_int_equal(c.accept_unconverged, 1);
 }
 
 static void expect_error(const char *text, const char *fragment)
@@ -115,6 +124,14 @@ static void test_bad_input_messages(void **state)
                  " \"fem\": {\"endpoint\": \"a\", \"endpoint_file\": \"b\"}}", "not both");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1, \"max_iterations\": 0}",
                  "max_iterations");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"step_control\": {\"dt_min\": 0.2}}", "step_control.dt_min");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"step_control\": {\"grow_after\": 0}}", "step_control.grow_after");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"step_control\": {\"dt_mn\": 0.01}}", "dt_mn: unknown key");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"accept_unconverged\": 1}", "accept_unconverged");
 }
 
 static void test_load_missing_file(void **state)

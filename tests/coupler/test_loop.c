@@ -1,7 +1,9 @@
 /* Coupling loops against closed-form in-process participants (cpl_test_models.h):
  * weak lags (first-order error), strong reproduces the monolithic solution, α = 1 diverges
  * exactly where |J| > 1, Aitken beats constant α, IQN-ILS bound, force vs displacement
- * relaxation, efficiency options, max-iteration policy, participant errors, interruption. */
+ * relaxation, efficiency options, max-iteration policy, participant errors, interruption,
+ * step rejection (failed solve, divergence, dt_min and the policy, with the efficiency
+ * options). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -33,7 +35,8 @@ typedef struct run_result {
     tm_recorder rec;
     double u_err;            /* max |u − u_monolithic| over the interface after the run */
     double u_mono_scale;     /* max |u_monolithic| */
-    long fem_solves, fem_begins;
+    long fem_solves, fem_begins, fem_accepts;
+    double u[12], v[12];     /* interface state after the run (first 4 nodes) */
     double fem_dt_max;
     cpl_timing timing;
 } run_result;
@@ -58,7 +61,8 @@ static void run(const problem *pb, const cpl_loop_settings *s, run_result *out,
     assert_int_equal(cpl_loop_create(&loop, s, pb->nodes, NULL, NULL, &out->err), 0);
     out->rc = cpl_loop_run(loop, &fem, &dem, &obs, NULL, &out->failure, &out->err);
     /* monolithic reference with the same step sizes */
-    for (long i = 0; i < out->rec.steps && i < 4096; i++) tm_monolithic_step(&st_ref, &pa_ref, out->rec.dt[i]);
+    for (long i = 0; i < out->rec.steps && i < 4096; i++)
+        tm_monolithic_step(&st_ref, &pa_ref, out->rec.time[i] - out->rec.dt[i], out->rec.dt[i]);
     const double *u = cpl_loop_displacement(loop);
     for (size_t i = 0; i < st.nd; i++) {
         out->u_err = fmax(out->u_err, fabs(u[i] - st_ref.u0[i]));
@@ -66,6 +70,9 @@ static void run(const problem *pb, const cpl_loop_settings *s, run_result *out,
     }
     out->fem_solves = st.solves;
     out->fem_begins = st.begins;
+    out->fem_accepts = st.accepts;
+    memcpy(out->u, u, sizeof(double) * (st.nd < 12 ? st.nd : 12));
+    memcpy(out->v, cpl_loop_velocity(loop), sizeof(double) * (st.nd < 12 ? st.nd : 12));
     out->fem_dt_max = st.dt_seen_max;
     out->timing = *cpl_loop_timing(loop);
     cpl_loop_free(loop);
@@ -182,6 +189,7 @@ static void test_alpha_one_diverges_where_theory_says(void **state)
 
     s.max_iterations = 40;
     s.end_time_s = dt;   /* one step */
+    s.dt_min_s = dt;     /* at this Δt: no step rejection */
     run(&bad, &s, &r, NULL);
     assert_int_equal(r.rc, 0);                    /* policy: accept with a warning */
     assert_int_equal(r.rec.converged[0], 0);
@@ -352,6 +360,7 @@ static void test_max_iterations_stop_policy(void **state)
     cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     s.max_iterations = 5;
     s.on_max_iterations = CPL_MAXIT_STOP;
+    s.dt_min_s = s.dt_s;   /* the policy at the nominal Δt: no step rejection */
     run_result r;
     run(&HARD, &s, &r, NULL);   /* α = 1 on |J| ≈ 45 cannot converge */
     assert_int_equal(r.rc, -1);
@@ -409,6 +418,317 @@ static void test_interrupt_flag(void **state)
     tm_particles_free(&pa);
 }
 
+/* ---- step rejection ------------------------------------------------------------------ */
+
+/* Largest |J| with the contact stiffness scaled by `factor`. */
+static double max_abs_J_kc(const problem *pb, double dt, double factor)
+{
+    problem stiff = *pb;
+    stiff.kc *= factor;
+    return max_abs_J(&stiff, dt);
+}
+
+/* A piece of a run with a fixed step (the last one shortened to end on t1). */
+typedef struct segment {
+    double t0, t1, dt;
+} segment;
+
+/* The same participants run segment after segment with fixed steps (no rejection possible:
+ * dt_min = dt), each loop starting from the interface state the previous one ended with. */
+static void run_segments(const problem *pb, const cpl_loop_settings *base, const segment *seg,
+                         int n_seg, void (*tweak)(tm_structure *, tm_particles *),
+                         double u_end[12], double v_end[12], long *steps)
+{
+    tm_structure st;
+    tm_particles pa;
+    tm_structure_init(&st, pb->nodes, pb->m, pb->k, pb->k_link);
+    tm_particles_init(&pa, pb->nodes, pb->mp, pb->kc, pb->g);
+    if (tweak) tweak(&st, &pa);
+    cpl_participant fem = tm_structure_participant(&st), dem = tm_particles_participant(&pa);
+    double u[12] = {0}, v[12] = {0};
+    *steps = 0;
+    for (int i = 0; i < n_seg; i++) {
+        cpl_loop_settings s = *base;
+        s.start_time_s = seg[i].t0;
+        s.end_time_s = seg[i].t1;
+        s.dt_s = seg[i].dt;
+        s.dt_min_s = seg[i].dt;
+        cpl_loop *loop;
+        nc_error err;
+        assert_int_equal(cpl_loop_create(&loop, &s, pb->nodes, u, v, &err), 0);
+        if (cpl_loop_run(loop, &fem, &dem, NULL, NULL, NULL, &err)) fail_msg("%s", err.message);
+        assert_int_equal(cpl_loop_timing(loop)->rejected_attempts, 0);
+        memcpy(u, cpl_loop_displacement(loop), 3 * pb->nodes * sizeof(double));
+        memcpy(v, cpl_loop_velocity(loop), 3 * pb->nodes * sizeof(double));
+        *steps += cpl_loop_timing(loop)->steps;
+        cpl_loop_free(loop);
+    }
+    memcpy(u_end, u, sizeof u);
+    memcpy(v_end, v, sizeof v);
+    tm_structure_free(&st);
+    tm_particles_free(&pa);
+}
+
+/* The accepted steps follow the segments exactly; the last ends exactly on the end time. */
+static void expect_schedule(const tm_recorder *r, const segment *seg, int n_seg)
+{
+    long i = 0;
+    for (int j = 0; j < n_seg; j++) {
+        double t = seg[j].t0;
+        while (t < seg[j].t1 - 1e-9 * seg[j].dt) {
+            double dt = fmin(seg[j].dt, seg[j].t1 - t);
+            assert_true(i < r->steps);
+            assert_near(r->dt[i], dt, 1e-15);
+            t += dt;
+            assert_near(r->time[i], t, 1e-12);
+            i++;
+        }
+    }
+    assert_int_equal(r->steps, i);
+    assert_near(r->time[r->steps - 1], seg[n_seg - 1].t1, 0.0);
+}
+
+/* Nominal 0.01 s; trouble in [0.05, 0.08) that Δt 0.005 cures; grow_after 4: the step at 0.05
+ * is rejected, four half steps, back to 0.01 at 0.07, rejected again (still in the window),
+ * four half steps to 0.09, nominal to 0.15, and a last half step to the end time 0.155. */
+static const segment WINDOW_SCHEDULE[] = {{0.0, 0.05, 0.01}, {0.05, 0.09, 0.005},
+                                          {0.09, 0.155, 0.01}};
+
+static void fem_fails_in_window(tm_structure *s, tm_particles *p)
+{
+    (void)p;
+    s->fail = (tm_fail_window){0.05, 0.08, 0.005, 0};
+}
+
+static void dem_fails_in_window(tm_structure *s, tm_particles *p)
+{
+    (void)s;
+    p->fail = (tm_fail_window){0.05, 0.08, 0.005, 0};
+}
+
+static void stiff_in_window(tm_structure *s, tm_particles *p)
+{
+    (void)s;
+    p->stiff_from_s = 0.05;
+    p->stiff_until_s = 0.08;
+    p->stiff_factor = 3.0;
+}
+
+static void no_gravity_dem_fails_in_window(tm_structure *s, tm_particles *p)
+{
+    for (size_t i = 0; i < p->nd; i++) p->g[i] = 0.0;
+    dem_fails_in_window(s, p);
+}
+
+/* Checks a run with the window schedule: two rejections (steps 5 and 9, each retried at
+ * half the step), the schedule, and the end state equal to the segment-wise run at the
+ * small Δt over the rejected interval: a retry starts from exactly the accepted state, so
+ * the two do the same arithmetic (observed 1e-16; tolerance 1e-12 m, 1e-10 m/s for |u| ≈
+ * 0.06 m); strong also equals the monolithic solution with the same steps (1e-8, as
+ * test_strong_matches_monolithic). */
+static void check_window_run(const problem *pb, const cpl_loop_settings *s, const run_result *r,
+                             void (*tweak)(tm_structure *, tm_particles *),
+                             cpl_reject_reason reason)
+{
+    if (r->rc) fail_msg("%s", r->err.message);
+    expect_schedule(&r->rec, WINDOW_SCHEDULE, 3);
+    assert_int_equal(r->rec.rejections, 2);
+    assert_int_equal(r->timing.rejected_attempts, 2);
+    assert_int_equal(r->timing.reduced_steps, 2);
+    assert_int_equal(r->timing.unconverged_steps, 0);
+    assert_near(r->timing.min_dt_s, 0.005, 1e-15);
+    const long steps[2] = {5, 9};
+    for (int i = 0; i < 2; i++) {
+        const cpl_reject_record *j = &r->rec.reject[i];
+        assert_int_equal(j->step, steps[i]);
+        assert_int_equal(j->attempt, 0);
+        assert_int_equal(j->reason, reason);
+        assert_near(j->dt_s, 0.01, 1e-15);
+        assert_near(j->next_dt_s, 0.005, 1e-15);
+        assert_int_equal(r->rec.rejected[steps[i]], 1);
+    }
+    assert_near(r->rec.reject[0].time_s, 0.05, 1e-12);
+    assert_near(r->rec.reject[1].time_s, 0.07, 1e-12);
+    double u[12], v[12];
+    long ref_steps;
+    run_segments(pb, s, WINDOW_SCHEDULE, 3, tweak, u, v, &ref_steps);
+    assert_int_equal(ref_steps, r->rec.steps);
+    double du = 0.0, dv = 0.0;
+    for (size_t i = 0; i < 3 * pb->nodes; i++) {
+        assert_near(r->u[i], u[i], 1e-12);
+        assert_near(r->v[i], v[i], 1e-10);
+        du = fmax(du, fabs(r->u[i] - u[i]));
+        dv = fmax(dv, fabs(r->v[i] - v[i]));
+    }
+    print_message("%s, %s rejections: |u - u_segments| %.1e m, |v - v_segments| %.1e m/s, "
+                  "|u - u_monolithic| %.1e m (|u| %.1e m)\n",
+                  s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak",
+                  cpl_reject_reason_text(reason), du, dv, r->u_err, r->u_mono_scale);
+    if (s->scheme == CPL_SCHEME_STRONG) {
+        assert_below(1e-4, r->u_mono_scale);
+        assert_below(r->u_err, 1e-8);
+    }
+}
+
+/* A solve that fails with CPL_ERR_STEP_FAILED above Δt 0.005 inside the window: strong and
+ * weak retry it at half the step and grow back after grow_after steps. */
+static void test_rejection_on_failed_solve(void **state)
+{
+    (void)state;
+    for (int weak = 0; weak < 2; weak++) {
+        cpl_loop_settings s = settings(weak ? CPL_SCHEME_WEAK : CPL_SCHEME_STRONG, 0.01, 0.155);
+        run_result r;
+        run(&MILD, &s, &r, fem_fails_in_window);
+        check_window_run(&MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
+        /* every try of a step is begun: 20 accepted steps + 2 rejected tries */
+        assert_int_equal(r.fem_begins, 22);
+        assert_int_equal(r.fem_accepts, 20);
+    }
+}
+
+/* Unrelaxed Gauss–Seidel whose contact is 3× stiffer in the window: |J| > 1 there at Δt 0.01
+ * (diverges), < 1 at 0.005 and outside the window: the non-converged steps are rejected
+ * (after max_iterations) and converge at half the step. */
+static void test_rejection_on_divergence(void **state)
+{
+    (void)state;
+    problem pb = problem_with_J(0.6, 0.01);
+    assert_below(1.1, max_abs_J_kc(&pb, 0.01, 3.0));
+    assert_below(max_abs_J_kc(&pb, 0.005, 3.0), 0.9);
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.155);
+    run_result r;
+    run(&pb, &s, &r, stiff_in_window);
+    check_window_run(&pb, &s, &r, stiff_in_window, CPL_REJECT_NOT_CONVERGED);
+    assert_int_equal(r.rec.reject[0].iterations, s.max_iterations);
+    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+}
+
+/* Never converges: the added-mass limit (contact far stiffer than 1/Δt², particle 10× the
+ * node's mass: |J| ≈ m_p / m ≈ 10 at every Δt down to dt_min). Six halvings to dt/64, then
+ * the policy: "accept" accepts and counts every step (status unreliable), "stop" stops at
+ * dt_min naming the retries. */
+static void test_never_converges_policy_at_dt_min(void **state)
+{
+    (void)state;
+    const problem never = {1, 1.0, 100.0, 0.0, 10.0, 1e12, -9.81};
+    assert_below(9.0, max_abs_J(&never, 0.01 / 64.0));
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.01);
+    s.max_iterations = 4;
+    s.max_steps = 3;
+    run_result r;
+    run(&never, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.rec.steps, 3);
+    assert_int_equal(r.timing.rejected_attempts, 6);
+    assert_int_equal(r.timing.reduced_steps, 1);
+    assert_int_equal(r.timing.unconverged_steps, 3);
+    assert_near(r.timing.min_dt_s, 0.01 / 64.0, 1e-18);
+    assert_int_equal(r.rec.rejected[0], 6);
+    assert_int_equal(r.rec.rejected[1], 0);
+    for (int i = 0; i < 6; i++) {
+        assert_near(r.rec.reject[i].dt_s, 0.01 / (double)(1 << i), 1e-18);
+        assert_near(r.rec.reject[i].next_dt_s, 0.01 / (double)(2 << i), 1e-18);
+        assert_int_equal(r.rec.reject[i].attempt, i);
+    }
+    for (long i = 0; i < 3; i++) {
+        assert_near(r.rec.dt[i], 0.01 / 64.0, 1e-18);
+        assert_int_equal(r.rec.converged[i], 0);
+    }
+
+    s.on_max_iterations = CPL_MAXIT_STOP;
+    run(&never, &s, &r, NULL);
+    assert_int_equal(r.rc, -1);
+    assert_int_equal(r.err.code, CPL_ERR_NOT_CONVERGED);
+    assert_int_equal(r.rec.steps, 0);
+    assert_int_equal(r.rec.rejections, 6);
+    assert_non_null(strstr(r.err.message, "after 6 rejected tries"));
+    assert_non_null(strstr(r.err.message, "dt_min"));
+
+    /* a dt_min of its own: dt / 8 is three halvings */
+    s.on_max_iterations = CPL_MAXIT_ACCEPT;
+    s.dt_min_s = 0.01 / 8.0;
+    run(&never, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.timing.rejected_attempts, 3);
+    assert_near(r.rec.dt[0], 0.01 / 8.0, 1e-18);
+}
+
+static void fem_always_fails(tm_structure *s, tm_particles *p)
+{
+    (void)p;
+    s->fail = (tm_fail_window){0.0, INFINITY, 0.0, 0};
+}
+
+/* A solve that fails at every Δt: retried down to dt_min, then the run ends naming the
+ * participant and the retries (a failed solve has nothing to accept). */
+static void test_failed_solve_at_dt_min_ends_run(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    run_result r;
+    run(&MILD, &s, &r, fem_always_fails);
+    assert_int_equal(r.rc, -1);
+    assert_int_equal(r.err.code, CPL_ERR_STEP_FAILED);
+    assert_non_null(r.failure.participant);
+    assert_string_equal(r.failure.participant->name, "fem");
+    assert_int_equal(r.rec.steps, 0);
+    assert_int_equal(r.rec.rejections, 6);
+    assert_non_null(strstr(r.err.message, "fem: step 0"));
+    assert_non_null(strstr(r.err.message, "after 6 rejected tries"));
+}
+
+/* With skip_fem_without_contact the FEM's step begins at its first solve:
+ * - no load: a DEM failure is retried and the FEM still never gets any command;
+ * - gravity: a FEM failure is retried with a BEGIN_STEP at the same start time (the FEM
+ *   restores), every accepted step is accepted once, the answer is the monolithic one. */
+static void test_rejection_with_skip_fem(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.155);
+    s.skip_fem_without_contact = 1;
+    run_result r;
+    run(&MILD, &s, &r, no_gravity_dem_fails_in_window);
+    if (r.rc) fail_msg("%s", r.err.message);
+    expect_schedule(&r.rec, WINDOW_SCHEDULE, 3);
+    assert_int_equal(r.timing.rejected_attempts, 2);
+    assert_int_equal(r.fem_begins, 0);
+    assert_int_equal(r.fem_solves, 0);
+    assert_int_equal(r.fem_accepts, 0);
+
+    run(&MILD, &s, &r, fem_fails_in_window);
+    check_window_run(&MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
+    assert_int_equal(r.fem_begins, 22);
+    assert_int_equal(r.fem_accepts, 20);
+}
+
+static void far_until_fem_fails_near(tm_structure *s, tm_particles *p)
+{
+    p->far_until_s = 0.1;
+    s->fail = (tm_fail_window){0.03, 0.2, 0.001, 0};
+}
+
+/* Efficiency option (i): an enlarged step that fails is retried at the nominal Δt (not half
+ * the enlarged one); nothing below the nominal step is needed. */
+static void test_rejected_far_step_retries_nominal(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.001, 0.2);
+    s.far_step = 1;
+    s.far_step_factor = 10.0;
+    run_result r;
+    run(&MILD, &s, &r, far_until_fem_fails_near);
+    if (r.rc) fail_msg("%s", r.err.message);
+    assert_below(0, r.rec.rejections);
+    for (long i = 0; i < r.rec.rejections && i < 64; i++) {
+        assert_near(r.rec.reject[i].dt_s, 0.01, 1e-15);
+        assert_near(r.rec.reject[i].next_dt_s, 0.001, 1e-15);
+    }
+    assert_near(r.timing.min_dt_s, 0.001, 1e-15);
+    for (long i = 0; i < r.rec.steps; i++)
+        if (r.rec.time[i] > 0.03 + 1e-12) assert_near(r.rec.dt[i], 0.001, 1e-15);
+    assert_near(r.rec.time[r.rec.steps - 1], 0.2, 0.0);
+}
+
 static void test_settings_check(void **state)
 {
     (void)state;
@@ -422,6 +742,14 @@ static void test_settings_check(void **state)
     set(&s, "alpha_min", 1.0);
     set(&s, "alpha_max", 0.5);
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
+    s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s.dt_min_s = 0.02;
+    assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
+    assert_non_null(strstr(err.message, "step_control.dt_min"));
+    s.dt_min_s = 0.0;
+    s.grow_after = 0;
+    assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
+    assert_non_null(strstr(err.message, "step_control.grow_after"));
 }
 
 int main(void)
@@ -438,6 +766,12 @@ int main(void)
         cmocka_unit_test(test_max_iterations_stop_policy),
         cmocka_unit_test(test_participant_error_names_where),
         cmocka_unit_test(test_interrupt_flag),
+        cmocka_unit_test(test_rejection_on_failed_solve),
+        cmocka_unit_test(test_rejection_on_divergence),
+        cmocka_unit_test(test_never_converges_policy_at_dt_min),
+        cmocka_unit_test(test_failed_solve_at_dt_min_ends_run),
+        cmocka_unit_test(test_rejection_with_skip_fem),
+        cmocka_unit_test(test_rejected_far_step_retries_nominal),
         cmocka_unit_test(test_settings_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
