@@ -185,7 +185,10 @@ int main(int argc, char **argv)
         printf("coupler_bench: %s or %s missing: skipping the coupled run\n", fem_prog, dem_prog);
         return 0;
     }
-    char dir[] = "/tmp/coupler_bench.XXXXXX";
+    const char *tmpdir = getenv("TMPDIR");
+    if (!tmpdir || !tmpdir[0]) tmpdir = P_tmpdir;
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/coupler_bench.XXXXXX", tmpdir);
     if (!mkdtemp(dir)) return 1;
     char path[700];
     snprintf(path, sizeof path, "%s/fem.json", dir);
