@@ -628,7 +628,9 @@ static int shift_start_acceleration(fem_analysis *s, nc_error *err)
     return 0;
 }
 
-int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
+/* The start of a dynamic step: start state saved, start acceleration shifted for a
+ * step-constant coupling load, integrator weights and the end-of-step load factor in ns. */
+static int begin_dynamic_step(fem_analysis *s, double dt_s, newton_setup *ns, nc_error *err)
 {
     const fem_settings *set = &s->m->settings;
     state_copy(&s->start, &s->cur, s->ndof);
@@ -639,10 +641,18 @@ int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
             return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
         }
     }
-    newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
-    method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
+    *ns = (newton_setup){1, dt_s, 0, 0, 0, 0, 0};
+    method_weights(set, &ns->beta, &ns->gamma, &ns->alpha_m, &ns->alpha_f);
+    ns->lambda = fem_analysis_load_factor(s, s->cur.time_s + dt_s);
+    return 0;
+}
+
+int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
+{
+    const fem_settings *set = &s->m->settings;
+    newton_setup ns;
+    if (begin_dynamic_step(s, dt_s, &ns, err)) return -1;
     double t1 = s->cur.time_s + dt_s;
-    ns.lambda = fem_analysis_load_factor(s, t1);
     /* predictor: the start-of-step displacement (for these stiff, strongly nonlinear nets it
      * did better than the constant-acceleration predictor), supports at their end value */
     apply_supports(s, ns.lambda);
@@ -664,19 +674,9 @@ int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
 int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end, double *r,
                                nc_error *err)
 {
-    const fem_settings *set = &s->m->settings;
-    state_copy(&s->start, &s->cur, s->ndof);
-    int shifted = set->coupling_load_constant;
-    if (shifted) {
-        memcpy(s->a_unshifted, s->start.a, (size_t)s->ndof * sizeof(double));
-        if (shift_start_acceleration(s, err)) {
-            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
-            return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
-        }
-    }
-    newton_setup ns = {1, dt_s, 0, 0, 0, 0, 0};
-    method_weights(set, &ns.beta, &ns.gamma, &ns.alpha_m, &ns.alpha_f);
-    ns.lambda = fem_analysis_load_factor(s, s->cur.time_s + dt_s);
+    int shifted = s->m->settings.coupling_load_constant;
+    newton_setup ns;
+    if (begin_dynamic_step(s, dt_s, &ns, err)) return -1;
     for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_end[s->dof_of_eq[q]];
     apply_supports(s, ns.lambda);
     double c_m, c_k, l_k, l_c, wf, tol;

@@ -3,7 +3,7 @@
 #  1. no tracked *.md/*.c/*.h/*.py/*.sh file holds a pointer to the source material outside the
 #     repository ("shared/reference") or to the removed scripts/diagnostics/, a temporary path (/tmp/..., except mktemp/TMPDIR lines,
 #     "--out /tmp/" examples and command lines, filtered as the repository's before-stop check
-#     does, and mkdtemp templates XXXXXX), report wording ("Helper report", "the lead"), a clock
+#     does, and mkdtemp templates XXXXXX), report wording (a helper's report header, "the lead"), a clock
 #     stamp "HH:MM UTC", or an equation citation in a non-canonical form ("eq. 8", "eqs. 8",
 #     "eq 8", "Eq."); the one form is eq. (34), eq. (A.5), eqs. (8)–(12), eqs. (28), (30);
 #  2. every equation cited as eq. (N) / eqs. (N)... in a tracked file has an entry "### (N)" in
@@ -49,7 +49,7 @@ report "pointer to the removed scripts/diagnostics/ (now docs/notes/ and scripts
 report "temporary path (/tmp/...): use mktemp, \$TMPDIR/\$NC_TMP or a results/ folder" < <(scan '/tmp/[A-Za-z0-9_]' |
   grep -v -E 'mktemp|TMPDIR|XXXXXX|(--out|--output) /tmp/|^[^:]+:[0-9]+:(scripts|bin|/usr/bin)/')
 
-report "report wording about who worked on what" < <(scan 'Helper report|[Tt]he lead([^a-z]|$)')
+report "report wording about who worked on what" < <(scan 'Helper[ ]report|[Tt]he lead([^a-z]|$)')
 
 report "clock stamp (HH:MM UTC)" < <(scan '[0-9]{2}:[0-9]{2} UTC')
 
