@@ -328,6 +328,6 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
     }
     dem_sim_net_gap(s, info);
     info->substeps = flown ? 1 : substeps;
-    if (jac && dem_net_jacobian_replay(s, jac, disp_end, NULL, 1, err)) return -1;
+    if (jac && dem_net_jacobian_replay(s, jac, disp_end, NULL, 2, err)) return -1;
     return 0;
 }

@@ -16,6 +16,7 @@
 void dem_net_jacobian_init(dem_net_jacobian *jac)
 {
     memset(jac, 0, sizeof *jac);
+    jac->particle_response = DEM_JAC_RESPOND_LOCAL;
 }
 
 void dem_net_jacobian_free(dem_net_jacobian *jac)
@@ -27,7 +28,9 @@ void dem_net_jacobian_free(dem_net_jacobian *jac)
     free(jac->weight);
     free(jac->sub_first);
     free(jac->start);
+    int response = jac->particle_response;
     dem_net_jacobian_init(jac);
+    jac->particle_response = response;
 }
 
 static int grow(void **p, size_t *cap, size_t need, size_t size, nc_error *err)
@@ -129,24 +132,44 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
 
 /* ---- the replay ------------------------------------------------------------------------ */
 
-#define NCOL 6
+#define NCOL (3 * DEM_JAC_MAX_NODES)
+
+/* A particle that touches the net in the step: its nodes (the columns of its tangents) and,
+ * with the particle response, the tangents and value changes of its state. */
+typedef struct particle {
+    int32_t i;
+    int n_nodes, respond, has_edge;
+    int32_t node[DEM_JAC_MAX_NODES];
+    double dx[3], dv[3], dw[3];               /* state - recorded state */
+    double Dx[3][NCOL], Dv[3][NCOL], Dw[3][NCOL];
+    double sf[3], st[3], Dsf[3][NCOL], Dst[3][NCOL]; /* net force / torque change of a sub-step */
+} particle;
 
 static double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* column c of a 3xNCOL tangent as a vector */
+/* column c of a 3xNCOL tangent dotted with a vector */
 static double col_dot(const double a[3], double d[3][NCOL], int c)
 {
     return a[0] * d[0][c] + a[1] * d[1][c] + a[2] * d[2][c];
 }
 
-/* One contact of one sub-step: the force on sphere i (f) and the nodal weight t, with their
- * tangents df (3xNCOL) and dt (NCOL); the outgoing history in out. */
+static int local_index(const particle *pt, int32_t node)
+{
+    for (int k = 0; k < pt->n_nodes; k++)
+        if (pt->node[k] == node) return k;
+    return -1;
+}
+
+/* One contact of one sub-step: the force f on sphere i, its torque tq about the centre and
+ * the nodal weight t, with their tangents (columns: the particle's nodes, 3 each). The
+ * outgoing history in out. */
 static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac_record *r,
-                    const double *end, const dem_jac_state *in, int want, double f[3],
-                    double df[3][NCOL], double *t_out, double dt_out[NCOL], dem_jac_state *out)
+                    const double *end, const dem_jac_state *in, const particle *pt, int want,
+                    double f[3], double tq[3], double df[3][NCOL], double dtq[3][NCOL],
+                    double *t_out, double dt_out[NCOL], dem_jac_state *out)
 {
     const dem_net *net = &s->model.net;
     const dem_params *prm = &s->model.prm;
@@ -155,7 +178,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     int edge = r->kind == DEM_CONTACT_NET_EDGE;
     int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
     int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
-    int nc = edge ? 6 : 3;
+    int nc = 3 * pt->n_nodes, ca = 3 * local_index(pt, na), cb = 3 * local_index(pt, nb);
     double xa[3], xb[3], va[3], vb[3];
     for (int k = 0; k < 3; k++) {
         size_t ka = 3 * (size_t)na + (size_t)k, kb = 3 * (size_t)nb + (size_t)k;
@@ -165,49 +188,56 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         va[k] = (end[ka] - st[ka]) / dts;
         vb[k] = (end[kb] - st[kb]) / dts;
     }
-    /* tangents of the node positions and velocities: columns 0-2 node a, 3-5 node b */
-    double Dxa[3][NCOL] = {{0}}, Dxb[3][NCOL] = {{0}}, Dva[3][NCOL] = {{0}}, Dvb[3][NCOL] = {{0}};
+    /* the particle: recorded state plus its response (zero when frozen) */
+    double p[3], vi[3], w[3];
     for (int k = 0; k < 3; k++) {
-        Dxa[k][k] = frac;
-        Dva[k][k] = 1.0 / dts;
-        if (edge) {
-            Dxb[k][3 + k] = frac;
-            Dvb[k][3 + k] = 1.0 / dts;
-        }
+        p[k] = r->p[k] + pt->dx[k];
+        vi[k] = r->v[k] + pt->dv[k];
+        w[k] = r->w[k] + pt->dw[k];
     }
     /* closest point (dem_detect_net.c) */
-    const double *p = r->p;
-    double q[3], t = 0.0, Dt[NCOL] = {0}, Dq[3][NCOL];
+    double q[3], t = 0.0, Dt[NCOL] = {0}, Dq[3][NCOL] = {{0}};
     if (edge) {
         dem_closest_on_segment(p, xa, xb, q, &t);
-        double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
-        double ap[3] = {p[0] - xa[0], p[1] - xa[1], p[2] - xa[2]};
-        double M = dot3(d, d);
-        for (int c = 0; c < nc; c++) {
-            double Dd[3], dN = 0.0, dM = 0.0;
-            for (int k = 0; k < 3; k++) {
-                Dd[k] = Dxb[k][c] - Dxa[k][c];
-                dN += -Dxa[k][c] * d[k] + ap[k] * Dd[k];
-                dM += 2.0 * d[k] * Dd[k];
-            }
-            Dt[c] = (t > 0.0 && t < 1.0) ? (dN - t * dM) / M : 0.0;
-            for (int k = 0; k < 3; k++) Dq[k][c] = Dxa[k][c] + Dt[c] * d[k] + t * Dd[k];
-        }
     } else {
         memcpy(q, xa, sizeof q);
-        memcpy(Dq, Dxa, sizeof Dq);
     }
+    double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+    double ap[3] = {p[0] - xa[0], p[1] - xa[1], p[2] - xa[2]};
+    double M = dot3(d, d);
+    int interior = edge && t > 0.0 && t < 1.0;
+    if (want)
+        for (int c = 0; c < nc; c++) {
+            double Dxa[3], Dxb[3];
+            for (int k = 0; k < 3; k++) {
+                Dxa[k] = c == ca + k ? frac : 0.0;
+                Dxb[k] = c == cb + k ? frac : 0.0;
+            }
+            if (edge) {
+                double Dd[3], dN = 0.0, dM = 0.0;
+                for (int k = 0; k < 3; k++) {
+                    Dd[k] = Dxb[k] - Dxa[k];
+                    dN += (pt->Dx[k][c] - Dxa[k]) * d[k] + ap[k] * Dd[k];
+                    dM += 2.0 * d[k] * Dd[k];
+                }
+                Dt[c] = interior ? (dN - t * dM) / M : 0.0;
+                for (int k = 0; k < 3; k++) Dq[k][c] = Dxa[k] + Dt[c] * d[k] + t * Dd[k];
+            } else {
+                for (int k = 0; k < 3; k++) Dq[k][c] = Dxa[k];
+            }
+        }
     double rr[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
     double dist = sqrt(dot3(rr, rr));
-    double n[3], Dn[3][NCOL], Ddist[NCOL];
+    double n[3], Dn[3][NCOL] = {{0}}, Ddist[NCOL] = {0}, Dr[3][NCOL] = {{0}};
     for (int k = 0; k < 3; k++) n[k] = rr[k] / dist;
-    for (int c = 0; c < nc; c++) {
-        Ddist[c] = col_dot(n, Dq, c);
-        for (int k = 0; k < 3; k++) Dn[k][c] = (Dq[k][c] - n[k] * Ddist[c]) / dist;
+    for (int c = 0; c < nc && want; c++) {
+        for (int k = 0; k < 3; k++) Dr[k][c] = Dq[k][c] - pt->Dx[k][c];
+        Ddist[c] = col_dot(n, Dr, c);
+        for (int k = 0; k < 3; k++) Dn[k][c] = (Dr[k][c] - n[k] * Ddist[c]) / dist;
     }
-    double overlap = r->reach - dist, Dov[NCOL];
+    double overlap = r->reach - dist, Dov[NCOL] = {0};
     for (int c = 0; c < nc; c++) Dov[c] = -Ddist[c];
-    double lever = r->radius - 0.5 * overlap, Dlever[NCOL];
+    double lever = r->radius - 0.5 * overlap, Dlever[NCOL] = {0};
     for (int c = 0; c < nc; c++) Dlever[c] = -0.5 * Dov[c];
     /* the incoming history (dem_new_record) and the crossed-cable flip (dem_emit_wall_contact) */
     double ft[3], kt_prev, fn_prev, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
@@ -245,30 +275,35 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         }
     }
     /* relative velocity (eq. (A.2)): the wall point minus the sphere's surface point */
-    double vo[3], Dvo[3][NCOL];
+    double vo[3], Dvo[3][NCOL] = {{0}};
     for (int k = 0; k < 3; k++) {
         vo[k] = edge ? (1.0 - t) * va[k] + t * vb[k] : va[k];
-        for (int c = 0; c < nc; c++)
-            Dvo[k][c] = edge ? (1.0 - t) * Dva[k][c] + t * Dvb[k][c] + Dt[c] * (vb[k] - va[k])
-                             : Dva[k][c];
+        for (int c = 0; c < nc && want; c++) {
+            double Dva = c == ca + k ? 1.0 / dts : 0.0, Dvb = c == cb + k ? 1.0 / dts : 0.0;
+            Dvo[k][c] = edge ? (1.0 - t) * Dva + t * Dvb + Dt[c] * (vb[k] - va[k]) : Dva;
+        }
     }
     double ri[3] = {lever * n[0], lever * n[1], lever * n[2]}, wr[3];
-    const double *w = r->w;
     wr[0] = w[1] * ri[2] - w[2] * ri[1];
     wr[1] = w[2] * ri[0] - w[0] * ri[2];
     wr[2] = w[0] * ri[1] - w[1] * ri[0];
-    double vc[3], Dvc[3][NCOL];
-    for (int k = 0; k < 3; k++) vc[k] = vo[k] - (r->v[k] + wr[k]);
-    for (int c = 0; c < nc; c++) {
-        double Dri[3];
-        for (int k = 0; k < 3; k++) Dri[k] = Dlever[c] * n[k] + lever * Dn[k][c];
-        double Dwr[3] = {w[1] * Dri[2] - w[2] * Dri[1], w[2] * Dri[0] - w[0] * Dri[2],
-                         w[0] * Dri[1] - w[1] * Dri[0]};
-        for (int k = 0; k < 3; k++) Dvc[k][c] = Dvo[k][c] - Dwr[k];
+    double vc[3], Dvc[3][NCOL] = {{0}}, Dri[3][NCOL] = {{0}};
+    for (int k = 0; k < 3; k++) vc[k] = vo[k] - (vi[k] + wr[k]);
+    for (int c = 0; c < nc && want; c++) {
+        for (int k = 0; k < 3; k++) Dri[k][c] = Dlever[c] * n[k] + lever * Dn[k][c];
+        double a1[3] = {pt->Dw[0][c], pt->Dw[1][c], pt->Dw[2][c]};
+        double b1[3] = {Dri[0][c], Dri[1][c], Dri[2][c]};
+        double Dwr[3] = {a1[1] * ri[2] - a1[2] * ri[1] + w[1] * b1[2] - w[2] * b1[1],
+                         a1[2] * ri[0] - a1[0] * ri[2] + w[2] * b1[0] - w[0] * b1[2],
+                         a1[0] * ri[1] - a1[1] * ri[0] + w[0] * b1[1] - w[1] * b1[0]};
+        for (int k = 0; k < 3; k++) Dvc[k][c] = Dvo[k][c] - pt->Dv[k][c] - Dwr[k];
     }
     /* the values exactly as the DEM computes them */
     double ft_in[3] = {ft[0], ft[1], ft[2]}, ktp_in = kt_prev, fnp_in = fn_prev;
     dem_contact_force(prm, &r->pair, overlap, n, vc, h, ft, &kt_prev, &fn_prev, f);
+    tq[0] = ri[1] * f[2] - ri[2] * f[1];
+    tq[1] = ri[2] * f[0] - ri[0] * f[2];
+    tq[2] = ri[0] * f[1] - ri[1] * f[0];
     memcpy(out->ft, ft, sizeof ft);
     out->kt = kt_prev;
     out->fn = fn_prev;
@@ -349,6 +384,11 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
     for (int k = 0; k < 3; k++)
         for (int c = 0; c < nc; c++) df[k][c] = -Dfn[c] * n[k] - fn * Dn[k][c] + Dtr[k][c];
+    for (int c = 0; c < nc; c++) { /* torque ri x f */
+        dtq[0][c] = Dri[1][c] * f[2] - Dri[2][c] * f[1] + ri[1] * df[2][c] - ri[2] * df[1][c];
+        dtq[1][c] = Dri[2][c] * f[0] - Dri[0][c] * f[2] + ri[2] * df[0][c] - ri[0] * df[2][c];
+        dtq[2][c] = Dri[0][c] * f[1] - Dri[1][c] * f[0] + ri[0] * df[1][c] - ri[1] * df[0][c];
+    }
     memset(out->dft, 0, sizeof out->dft);
     memset(out->dkt, 0, sizeof out->dkt);
     for (int c = 0; c < nc; c++) {
@@ -372,53 +412,144 @@ static int block_cmp(const void *a, const void *b)
     return 0;
 }
 
+static int rec_cmp(const void *a, const void *b)
+{
+    const dem_jac_record *const *x = a, *const *y = b;
+    return (*x)->i < (*y)->i ? -1 : (*x)->i > (*y)->i;
+}
+
+/* The particles of the records, each with its nodes; slot[x] is record x's particle. */
+static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, particle **out,
+                             size_t *n_out, size_t *slot, nc_error *err)
+{
+    const dem_net *net = &s->model.net;
+    size_t nr = jac->n_rec, np = 0;
+    const dem_jac_record **order = malloc((nr + 1) * sizeof *order);
+    particle *pts = calloc(nr + 1, sizeof *pts);
+    if (!order || !pts) {
+        free(order);
+        free(pts);
+        return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+    }
+    for (size_t x = 0; x < nr; x++) order[x] = &jac->rec[x];
+    qsort(order, nr, sizeof *order, rec_cmp);
+    for (size_t x = 0; x < nr; x++) {
+        const dem_jac_record *r = order[x];
+        if (np == 0 || pts[np - 1].i != r->i) {
+            particle *pt = &pts[np++];
+            pt->i = r->i;
+            int32_t b = s->model.sph.body[r->i];
+            pt->respond = jac->particle_response && !s->model.bod.is_cluster[b];
+        }
+        particle *pt = &pts[np - 1];
+        slot[r - jac->rec] = np - 1;
+        int edge = r->kind == DEM_CONTACT_NET_EDGE;
+        pt->has_edge |= edge;
+        int32_t nodes[2] = {edge ? net->edges[2 * (size_t)r->j] : r->j,
+                            edge ? net->edges[2 * (size_t)r->j + 1] : r->j};
+        for (int k = 0; k < (edge ? 2 : 1); k++) {
+            if (local_index(pt, nodes[k]) >= 0) continue;
+            if (pt->n_nodes == DEM_JAC_MAX_NODES) {
+                free(order);
+                free(pts);
+                return nc_error_set(err, 1, "dem: interface Jacobian: particle %d touches more "
+                                            "than %d net nodes in one step", s->model.sph.id[r->i],
+                                    DEM_JAC_MAX_NODES);
+            }
+            pt->node[pt->n_nodes++] = nodes[k];
+        }
+    }
+    free(order);
+    /* DEM_JAC_RESPOND_LOCAL: only a particle whose nodes are one node or one edge's two
+     * nodes responds (its blocks then stay within one element) */
+    for (size_t k = 0; k < np && jac->particle_response == DEM_JAC_RESPOND_LOCAL; k++)
+        if (!(pts[k].n_nodes == 1 || (pts[k].n_nodes == 2 && pts[k].has_edge))) pts[k].respond = 0;
+    *out = pts;
+    *n_out = np;
+    return 0;
+}
+
 int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const double *disp_end,
                             double *force_out, int want_K, nc_error *err)
 {
     const dem_net *net = &s->model.net;
     size_t nn = net->n_nodes;
     if (jac->n_nodes != nn) return nc_error_set(err, 1, "dem: Jacobian replay without a recorded step");
+    /* the base values (f, torque) are taken at the displacement of the solve: the replay
+     * with want_K from dem_sim_solve_coupled_jacobian() */
+    int base = want_K == 2;
     double *end = malloc(3 * nn * sizeof *end);
-    double *force = force_out ? calloc(3 * nn, sizeof *force) : NULL;
-    double *impulse = force_out ? calloc(3 * nn, sizeof *impulse) : NULL;
-    block *blocks = want_K ? malloc((4 * jac->n_rec + 1) * sizeof *blocks) : NULL;
+    double *force = calloc(3 * nn, sizeof *force);
+    double *impulse = calloc(3 * nn, sizeof *impulse);
+    size_t *slot = malloc((jac->n_rec + 1) * sizeof *slot);
+    block *blocks = NULL;
     dem_jac_state *state = malloc((jac->n_rec + 1) * sizeof *state);
-    if (!end || (force_out && (!force || !impulse)) || (want_K && !blocks) || !state) {
-        free(end); free(force); free(impulse); free(blocks); free(state);
-        return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+    particle *pts = NULL;
+    size_t npt = 0;
+    int rc = 0;
+    if (!end || !force || !impulse || !slot || !state) {
+        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        goto done;
+    }
+    if (collect_particles(s, jac, &pts, &npt, slot, err)) {
+        rc = -1;
+        goto done;
+    }
+    size_t max_blocks = 0; /* each record: its 1 or 2 nodes times its particle's nodes */
+    for (size_t x = 0; x < jac->n_rec; x++) max_blocks += 2 * (size_t)pts[slot[x]].n_nodes;
+    if (want_K && !(blocks = malloc((max_blocks + 1) * sizeof *blocks))) {
+        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        goto done;
     }
     for (size_t k = 0; k < 3 * nn; k++) end[k] = net->ref[k] + disp_end[k];
     size_t nbk = 0;
     for (long sub = 0; sub < jac->n_sub; sub++) {
-        if (force) memset(force, 0, 3 * nn * sizeof *force);
+        memset(force, 0, 3 * nn * sizeof *force);
         double wgt = jac->weight[sub];
         for (size_t x = jac->sub_first[sub]; x < jac->sub_first[sub + 1]; x++) {
-            const dem_jac_record *r = &jac->rec[x];
+            dem_jac_record *r = &jac->rec[x];
+            particle *pt = &pts[slot[x]];
             const dem_jac_state *in = r->sub > 0 && r->link >= 0 ? &state[r->link] : NULL;
-            double f[3], df[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
-            contact(s, jac, r, end, in, want_K, f, df, &t, dt, &state[x]);
+            double f[3], tq[3], df[3][NCOL] = {{0}}, dtq[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
+            contact(s, jac, r, end, in, pt, want_K, f, tq, df, dtq, &t, dt, &state[x]);
+            if (base) {
+                memcpy(r->f_base, f, sizeof f);
+                memcpy(r->t_base, tq, sizeof tq);
+            }
+            if (pt->respond) { /* the change of the net's force and torque on the particle */
+                int nc = 3 * pt->n_nodes;
+                for (int k = 0; k < 3; k++) {
+                    pt->sf[k] += f[k] - r->f_base[k];
+                    pt->st[k] += tq[k] - r->t_base[k];
+                    for (int c = 0; c < nc && want_K; c++) {
+                        pt->Dsf[k][c] += df[k][c];
+                        pt->Dst[k][c] += dtq[k][c];
+                    }
+                }
+            }
             int edge = r->kind == DEM_CONTACT_NET_EDGE;
             int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
             int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
-            if (force) { /* as the contact pass sums the net reactions */
-                if (edge) {
-                    for (int d = 0; d < 3; d++) {
-                        force[3 * (size_t)na + (size_t)d] -= (1.0 - t) * f[d];
-                        force[3 * (size_t)nb + (size_t)d] -= t * f[d];
-                    }
-                } else {
-                    for (int d = 0; d < 3; d++) force[3 * (size_t)r->j + (size_t)d] -= f[d];
+            if (edge) { /* as the contact pass sums the net reactions */
+                for (int d = 0; d < 3; d++) {
+                    force[3 * (size_t)na + (size_t)d] -= (1.0 - t) * f[d];
+                    force[3 * (size_t)nb + (size_t)d] -= t * f[d];
                 }
+            } else {
+                for (int d = 0; d < 3; d++) force[3 * (size_t)r->j + (size_t)d] -= f[d];
             }
             if (!want_K || wgt == 0.0) continue;
-            /* F_a = -(1-t) f, F_b = -t f; K = -weight dF */
-            int nodes[2] = {na, nb}, ncol = edge ? 2 : 1;
-            for (int a = 0; a < ncol; a++) {
+            /* F_a = -(1-t) f, F_b = -t f; K = -weight dF; columns: the particle's nodes
+             * (frozen: only this contact's nodes carry a derivative) */
+            int nodes[2] = {na, nb}, nrow = edge ? 2 : 1;
+            for (int a = 0; a < nrow; a++) {
                 double sa = a == 0 ? 1.0 - t : t, sgn = a == 0 ? 1.0 : -1.0;
-                for (int b = 0; b < ncol; b++) {
+                for (int b = 0; b < pt->n_nodes; b++) {
+                    int32_t node_b = pt->node[b];
+                    if (!pt->respond && node_b != na && node_b != nb) continue;
                     block *bk = &blocks[nbk++];
                     bk->i = nodes[a];
-                    bk->j = nodes[b];
+                    bk->j = node_b;
                     for (int row = 0; row < 3; row++)
                         for (int c = 0; c < 3; c++) {
                             int col = 3 * b + c;
@@ -428,8 +559,28 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                 }
             }
         }
-        if (force)
-            for (size_t k = 0; k < 3 * nn; k++) impulse[k] += jac->h * force[k];
+        for (size_t k = 0; k < 3 * nn; k++) impulse[k] += jac->h * force[k];
+        /* the particles' response to the change of the net force (symplectic Euler of
+         * dem_integrate.c, velocity first; free spheres only) */
+        for (size_t x = 0; x < npt; x++) {
+            particle *pt = &pts[x];
+            if (!pt->respond) continue;
+            int32_t b = s->model.sph.body[pt->i];
+            double im = s->model.bod.inv_mass[b], ii = s->model.bod.inv_inertia_iso[b], h = jac->h;
+            int nc = 3 * pt->n_nodes;
+            for (int k = 0; k < 3; k++) {
+                pt->dv[k] += h * pt->sf[k] * im;
+                pt->dx[k] += h * pt->dv[k];
+                pt->dw[k] += h * pt->st[k] * ii;
+                pt->sf[k] = pt->st[k] = 0.0;
+                for (int c = 0; c < nc && want_K; c++) {
+                    pt->Dv[k][c] += h * pt->Dsf[k][c] * im;
+                    pt->Dx[k][c] += h * pt->Dv[k][c];
+                    pt->Dw[k][c] += h * pt->Dst[k][c] * ii;
+                    pt->Dsf[k][c] = pt->Dst[k][c] = 0.0;
+                }
+            }
+        }
     }
     if (force_out) {
         if (jac->force_at_end)
@@ -437,7 +588,6 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
         else
             for (size_t k = 0; k < 3 * nn; k++) force_out[k] = impulse[k] / jac->dt_step;
     }
-    int rc = 0;
     if (want_K) {
         qsort(blocks, nbk, sizeof *blocks, block_cmp);
         size_t m = 0;
@@ -448,23 +598,26 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                 blocks[m++] = blocks[b];
             }
         }
-        if (grow((void **)&jac->nodes, &jac->cap_blocks, m, 2 * sizeof *jac->nodes, err)) {
+        size_t cap = jac->cap_blocks;
+        if (grow((void **)&jac->nodes, &cap, m, 2 * sizeof *jac->nodes, err)) {
             rc = -1;
-        } else {
-            double *K = realloc(jac->K, (jac->cap_blocks ? jac->cap_blocks : 1) * 9 * sizeof *K);
-            if (!K) {
-                rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
-            } else {
-                jac->K = K;
-                for (size_t b = 0; b < m; b++) {
-                    jac->nodes[2 * b] = blocks[b].i;
-                    jac->nodes[2 * b + 1] = blocks[b].j;
-                    memcpy(jac->K + 9 * b, blocks[b].k, sizeof blocks[b].k);
-                }
-                jac->n_blocks = m;
-            }
+            goto done;
         }
+        double *K = realloc(jac->K, (cap ? cap : 1) * 9 * sizeof *K);
+        if (!K) {
+            rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+            goto done;
+        }
+        jac->K = K;
+        jac->cap_blocks = cap;
+        for (size_t b = 0; b < m; b++) {
+            jac->nodes[2 * b] = blocks[b].i;
+            jac->nodes[2 * b + 1] = blocks[b].j;
+            memcpy(jac->K + 9 * b, blocks[b].k, sizeof blocks[b].k);
+        }
+        jac->n_blocks = m;
     }
-    free(end); free(force); free(impulse); free(blocks); free(state);
+done:
+    free(end); free(force); free(impulse); free(slot); free(blocks); free(state); free(pts);
     return rc;
 }

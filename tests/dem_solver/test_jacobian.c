@@ -35,6 +35,7 @@ typedef struct scenario {
     int n_nodes;            /* 2: edge (0,0,0)-(1,0,0); 3: plus (2,0,0) */
     double node_motion[3];  /* end-of-step displacement of every node in the tested step */
     int warmup;             /* coupled steps before the tested one (history) */
+    int bent;               /* 3 nodes: node 2 at (0, 0.02, 0), the line folds back */
 } scenario;
 
 static void build(dem_sim *s, const scenario *c)
@@ -57,6 +58,10 @@ static void build(dem_sim *s, const scenario *c)
              c->omega[2], c->net_youngs, c->net_friction, c->net_extra ? c->net_extra : "", dt);
     dem_test_build(s, json);
     double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+    if (c->bent) {
+        xyz[6] = 0.0;
+        xyz[7] = 0.02;
+    }
     int32_t edges[4] = {0, 1, 1, 2};
     nc_error err;
     assert_int_equal(dem_sim_set_interface(s, (size_t)c->n_nodes, NULL, xyz, (size_t)c->n_nodes - 1,
@@ -80,13 +85,15 @@ static void warm_up(dem_sim *s, const scenario *c, double *disp)
 }
 
 /* Dense K (3n x 3n) from the blocks; checks the pattern (one node or one edge's nodes). */
+static int any_pair; /* the blocks may join nodes of different edges (DEM_JAC_RESPOND) */
+
 static void dense(const dem_net_jacobian *jac, int n, double *K)
 {
     memset(K, 0, (size_t)(9 * n * n) * sizeof *K);
     for (size_t b = 0; b < jac->n_blocks; b++) {
         int i = jac->nodes[2 * b], j = jac->nodes[2 * b + 1];
         assert_true(i >= 0 && i < n && j >= 0 && j < n);
-        assert_true(abs(i - j) <= 1); /* the nodes of one edge of the line */
+        if (!any_pair) assert_true(abs(i - j) <= 1); /* the nodes of one edge of the line */
         for (size_t e = 0; e < b; e++) /* each (i, j) once */
             assert_false(jac->nodes[2 * e] == i && jac->nodes[2 * e + 1] == j);
         for (int r = 0; r < 3; r++)
@@ -101,10 +108,10 @@ static double max_abs(const double *a, size_t n)
     return m;
 }
 
-/* Solves the tested step with the Jacobian, checks the replay against the returned force and
- * K against central differences of the replay (step eps, m). Returns the largest |K| entry;
- * K_out (3n x 3n) receives K if not NULL. */
-static double check_case(const scenario *c, double eps, double *K_out, int *n_contacts)
+/* Solves the tested step with the Jacobian (particles frozen, or responding), checks the
+ * replay against the returned force and K against central differences of the replay (step
+ * eps, m). K_out (3n x 3n) receives K if not NULL. */
+static void check_mode(const scenario *c, int response, double eps, double *K_out, int *n_contacts)
 {
     dem_sim s;
     build(&s, c);
@@ -112,6 +119,7 @@ static double check_case(const scenario *c, double eps, double *K_out, int *n_co
     warm_up(&s, c, disp);
     dem_net_jacobian jac;
     dem_net_jacobian_init(&jac);
+    jac.particle_response = response;
     dem_coupled_info info;
     nc_error err;
     assert_int_equal(dem_sim_solve_coupled_jacobian(&s, c->dt_step, disp, NULL, force, &info, &jac, &err), 0);
@@ -142,14 +150,20 @@ static double check_case(const scenario *c, double eps, double *K_out, int *n_co
     if (K_out) memcpy(K_out, K, (size_t)(nd * nd) * sizeof *K);
     dem_net_jacobian_free(&jac);
     dem_sim_free(&s);
-    return kmax;
+}
+
+/* Both linearisations; K_out: the frozen one. */
+static void check_case(const scenario *c, double eps, double *K_out, int *n_contacts)
+{
+    check_mode(c, DEM_JAC_FROZEN, eps, K_out, n_contacts);
+    check_mode(c, DEM_JAC_RESPOND_LOCAL, eps, NULL, NULL);
 }
 
 /* A small soft sphere (R 0.1 m) pressing into the edge at t = 0.3 while the net moves too. */
 static scenario base_case(void)
 {
     scenario c = {"hertz_mindlin", 0.1, 2500.0, 1e7, 0.5, 0.4, 1e7, 0.4, {0.3, 0.004, 0.0995},
-                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0};
+                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0, 0};
     return c;
 }
 
@@ -253,6 +267,30 @@ static void test_separates_with_clamp(void **state)
     assert_true(n > 0);
 }
 
+/* A sphere in the fold touches both edges: with DEM_JAC_RESPOND_LOCAL it stays frozen (the
+ * blocks of a responding particle would join nodes 0 and 2, which share no element); with
+ * DEM_JAC_RESPOND it responds and K has those blocks. */
+static void test_two_edges(void **state)
+{
+    (void)state;
+    scenario c = base_case();
+    c.n_nodes = 3;
+    c.bent = 1;
+    c.pos[1] = 0.005;
+    c.pos[2] = 0.099;
+    int n = 0;
+    double K0[81], K1[81];
+    check_mode(&c, DEM_JAC_FROZEN, 1e-8, K0, &n);
+    assert_true(n >= 20); /* both edges in every sub-step */
+    check_mode(&c, DEM_JAC_RESPOND_LOCAL, 1e-8, K1, NULL);
+    assert_memory_equal(K0, K1, sizeof K0);
+    assert_near(K0[2 * 9 + 8], 0.0, 0.0); /* node 0 force, node 2 motion */
+    any_pair = 1;
+    check_mode(&c, DEM_JAC_RESPOND, 1e-8, K1, NULL);
+    any_pair = 0;
+    assert_true(fabs(K1[2 * 9 + 8]) > 0.0);
+}
+
 /* Option off: the same step without the Jacobian gives the same bits. */
 static void test_off_unchanged(void **state)
 {
@@ -288,25 +326,25 @@ static void test_off_unchanged(void **state)
  * steel net (E 1e11), coupling dt 1e-3 s, in the step where it hits: the frozen K against a
  * central difference of the real step (particles responding), for the vertical motion of both
  * nodes. Prints the relative difference and bounds it. */
-static void test_frozen_against_real(void **state)
+static void granite_case(int response, double *rel_real, double *rel_replay)
 {
-    (void)state;
     scenario c = {"hertz_mindlin", 0.4, 2650.0, 3e10, 0.2, 0.5, 1e11, 0.5, {0.3, 0.0, 0.4002},
-                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0};
+                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0, 0};
     dem_sim s;
     build(&s, &c);
     double disp[9], force[9];
     warm_up(&s, &c, disp);
     dem_net_jacobian jac;
     dem_net_jacobian_init(&jac);
+    jac.particle_response = response;
     dem_coupled_info info;
     nc_error err;
     assert_int_equal(dem_sim_solve_coupled_jacobian(&s, c.dt_step, disp, NULL, force, &info, &jac, &err), 0);
     assert_true(jac.n_rec > 0);
     double K[36];
     dense(&jac, 2, K);
-    double eps = 1e-7, worst = 0.0, kmax = max_abs(K, 36), worst_frozen = 0.0;
-    for (int col = 2; col < 6; col += 3) {
+    double eps = 1e-7, worst = 0.0, kmax = max_abs(K, 36), worst_replay = 0.0;
+    for (int col = 0; col < 6; col++) {
         double dp[6], fp[6], fm[6], rp[6], rm[6];
         memcpy(dp, disp, sizeof dp);
         dp[col] = disp[col] + eps;
@@ -318,24 +356,39 @@ static void test_frozen_against_real(void **state)
         assert_int_equal(dem_sim_solve_coupled(&s, c.dt_step, dp, NULL, fm, &info, &err), 0);
         assert_int_equal(dem_net_jacobian_replay(&s, &jac, dp, rm, 0, &err), 0);
         for (int row = 0; row < 6; row++) {
-            double real = -(fp[row] - fm[row]) / (2.0 * eps), frozen = -(rp[row] - rm[row]) / (2.0 * eps);
+            double real = -(fp[row] - fm[row]) / (2.0 * eps), replay = -(rp[row] - rm[row]) / (2.0 * eps);
             worst = fmax(worst, fabs(K[row * 6 + col] - real));
-            if (row == 2 || row == 5)
-                print_message("K[%d][%d] frozen %.6g, FD of the real step %.6g\n", row, col,
-                              K[row * 6 + col], real);
-            worst_frozen = fmax(worst_frozen, fabs(K[row * 6 + col] - frozen));
+            worst_replay = fmax(worst_replay, fabs(K[row * 6 + col] - replay));
+            if ((row == 2 || row == 5) && (col == 2 || col == 5))
+                print_message("%s K[%d][%d] %.6g, FD of the real step %.6g\n",
+                              response ? "responding" : "frozen", row, col, K[row * 6 + col], real);
         }
     }
-    print_message("granite on steel: %zu net contact records, %ld sub-steps, max |K| %.4g N/m; "
-                  "|K - FD(real step)| / max|K| = %.3g, |K - FD(frozen)| / max|K| = %.3g\n",
-                  jac.n_rec, info.substeps, kmax, worst / kmax, worst_frozen / kmax);
-    /* the replay is what K linearises; the real step differs by the particle's response
-     * (K dt² / m ~ 1.4 here: the rock's whole impact lasts about one coupling step), which
-     * the frozen K neglects: measured 0.6 of max |K| (the real step's K is 0.4 of the frozen) */
-    assert_below(worst_frozen / kmax, 1e-6);
-    assert_below(worst / kmax, 0.7);
+    *rel_real = worst / kmax;
+    *rel_replay = worst_replay / kmax;
+    print_message("granite on steel, %s particle: %zu net contact records, %ld sub-steps, "
+                  "max |K| %.4g N/m; |K - FD(real step)| / max|K| = %.3g, "
+                  "|K - FD(replay)| / max|K| = %.3g\n", response ? "responding" : "frozen",
+                  jac.n_rec, info.substeps, kmax, *rel_real, *rel_replay);
     dem_net_jacobian_free(&jac);
     dem_sim_free(&s);
+}
+
+static void test_granite_on_steel(void **state)
+{
+    (void)state;
+    double real, replay;
+    /* frozen: the replay is what K linearises; the real step differs by the particle's
+     * response (K dt² / m ~ 1.4 here: the rock's whole impact lasts about one coupling
+     * step), measured 0.6 of max |K| (the real step's K is 0.4 of the frozen one) */
+    granite_case(DEM_JAC_FROZEN, &real, &replay);
+    assert_below(replay, 1e-6);
+    assert_below(real, 0.7);
+    /* responding: the rock touches only the net, so the response through its net contacts
+     * is the whole real step */
+    granite_case(DEM_JAC_RESPOND_LOCAL, &real, &replay);
+    assert_below(replay, 1e-6);
+    assert_below(real, 1e-6);
 }
 
 int main(void)
@@ -348,8 +401,9 @@ int main(void)
         cmocka_unit_test(test_sliding),
         cmocka_unit_test(test_closes_within_step),
         cmocka_unit_test(test_separates_with_clamp),
+        cmocka_unit_test(test_two_edges),
         cmocka_unit_test(test_off_unchanged),
-        cmocka_unit_test(test_frozen_against_real),
+        cmocka_unit_test(test_granite_on_steel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
