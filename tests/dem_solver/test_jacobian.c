@@ -1,14 +1,16 @@
 /* test_jacobian — the interface Jacobian of a coupled step (dem_net_jacobian.h): K against
- * central finite differences of the DEM's own returned force with the particles frozen
- * (dem_net_jacobian_replay(): the sub-steps replayed with the recorded particle states, which
- * is what K linearises), relative agreement 1e-6 of the largest entry, for an edge-interior
- * contact (both nodes, off-diagonal blocks), a vertex contact, a sliding contact (Coulomb cap),
- * a contact that closes within the step and one that separates within it (the no-tension
- * clamp), Hertz and linear laws, a spinning sphere, a contact with history from the previous
- * step, and coupling_force "end_of_step"; every case has 10 or more sub-steps. The replay at
- * the received displacement reproduces the returned force. With the option off the results
- * are unchanged (memcmp against a run with it on). A realistic case (granite sphere on a steel
- * net) measures how far the frozen K is from a finite difference of the real step. */
+ * central finite differences of the DEM's own returned force, relative agreement 1e-6 of the
+ * largest entry, with the particles treated as K treats them: dem_net_jacobian_replay()
+ * replays the recorded sub-steps with the particles frozen (DEM_JAC_FROZEN) or responding
+ * through their net contacts (DEM_JAC_RESPOND_LOCAL / _RESPOND). Cases: an edge-interior
+ * contact (both nodes, off-diagonal blocks), a vertex contact, a sliding contact (Coulomb
+ * cap, checked on the returned force), a contact that closes within the step, one whose
+ * force drops to the no-tension clamp (Hertz) within the step, Hertz and linear laws, a
+ * spinning sphere with history from the previous step, a sphere on two edges; every case has
+ * 10 or more sub-steps. The replay at the received displacement reproduces the returned
+ * force. With the option off the results are unchanged (memcmp against a run with it on).
+ * The granite sphere on the steel net measures the frozen K against a finite difference of
+ * the real step, and checks the responding K against it. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
