@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dem_contact_law.h"
 #include "dem_neighbor_grid.h"
 #include "dem_stl.h"
 #include "nc_file.h"
@@ -390,7 +391,11 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
                                        "dt_safety", "end_time_s", "output_interval_s",
                                        "contact_law", "damping", "linear", "net_wall", "threads",
                                        "neighbor_skin_m", "free_flight", NULL};
-    static const char *const laws[] = {"hertz_mindlin", "linear", NULL};
+    const char *laws[8];
+    size_t n_laws = 0;
+    for (; dem_contact_laws[n_laws] && n_laws + 1 < sizeof laws / sizeof *laws; n_laws++)
+        laws[n_laws] = dem_contact_laws[n_laws]->name;
+    laws[n_laws] = NULL;
     static const char *const dampings[] = {"fit", "a7", NULL};
     static const double g0[3] = {0, 0, -9.81};
     snprintf(s->model.source, sizeof s->model.source, "%s", file);
@@ -401,8 +406,9 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
         nc_json_choice_opt(root, file, "contact_law", laws, 0, &law, err))
         return -1;
     p->law = (dem_law)law;
+    const dem_contact_law *law_ops = dem_contact_law_of(p->law);
     int damping;
-    if (nc_json_choice_opt(root, file, "damping", dampings, law == 0 ? 0 : 1, &damping, err))
+    if (nc_json_choice_opt(root, file, "damping", dampings, (int)law_ops->default_damping, &damping, err))
         return -1;
     p->damping = (dem_damping_formula)damping;
     const cJSON *dt = cJSON_GetObjectItemCaseSensitive(root, "dt_s");
@@ -436,9 +442,9 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
             nc_json_number_range_opt(lin, where, "tangential_stiffness_ratio", 2.0 / 7.0, 0.0,
                                      INFINITY, &p->linear_kt_ratio, err))
             return -1;
-    } else if (p->law == DEM_LAW_LINEAR) {
-        return nc_error_set(err, 1, "%s.linear: missing (the linear contact law needs "
-                                    "{\"normal_stiffness_n_per_m\": k})", file);
+    } else if (law_ops->section) {
+        return nc_error_set(err, 1, "%s.%s: missing (the %s contact law needs %s)", file,
+                            law_ops->section, law_ops->name, law_ops->section_example);
     }
     if (parse_materials(s, root, file, err) || parse_particles(s, root, file, err) ||
         parse_generators(s, root, file, err) || parse_clusters(s, root, file, err) ||

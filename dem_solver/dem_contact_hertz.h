@@ -6,6 +6,8 @@
  * rescaled by kt/kt_prev while unloading, dashpot ct = 2 ζ sqrt(m* kt), Coulomb cap μ Fn.
  * Linear: Fn = kn δ + 2 ζ sqrt(m* kn) δ̇ (the classic spring–dashpot for which eq. (A.7) is exact;
  * the dashpot may pull slightly at the end of the contact, as eq. (A.7) assumes), kt = ratio kn.
+ * The normal part of each law is an inline function of its header (dem_law_hertz.h,
+ * dem_law_linear.h); everything else about a law is in its table (dem_contact_law.h).
  */
 #ifndef DEM_CONTACT_HERTZ_H
 #define DEM_CONTACT_HERTZ_H
@@ -25,6 +27,9 @@ typedef struct dem_pair {
     double kt_kn_root; /* sqrt(kt / kn') = sqrt(4 G* / E*) (Hertz), sqrt(ratio) (linear) */
 } dem_pair;
 
+#include "dem_law_hertz.h"
+#include "dem_law_linear.h"
+
 /* 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 ; 1/G* = (2-ν1)/G1 + (2-ν2)/G2. */
 double dem_effective_modulus(double e1, double nu1, double e2, double nu2);
 double dem_effective_shear(double g1, double nu1, double g2, double nu2);
@@ -43,19 +48,12 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
     double vn = vc[0] * n[0] + vc[1] * n[1] + vc[2] * n[2];
     double overlap_rate = -vn; /* > 0 while approaching (eq. (A.3)) */
     double fn, kt, cn_root; /* cn_root = sqrt(m* kn') */
+    /* compile-time dispatch on the law (dem_contact_law.h): each branch is inlined */
     if (prm->law == DEM_LAW_HERTZ_MINDLIN) {
-        double root = sqrt(pair->r_star * overlap);
-        double kn_tangent = 2.0 * pair->e_star * root;             /* dFn/dδ */
-        double fn_elastic = (2.0 / 3.0) * kn_tangent * overlap;    /* 4/3 E* sqrt(R*) δ^1.5 */
-        cn_root = sqrt(pair->m_star * kn_tangent);
-        fn = fn_elastic + 2.0 * pair->zeta * cn_root * overlap_rate;
+        fn = dem_hertz_normal_force(pair, overlap, overlap_rate, &kt, &cn_root);
         if (fn < 0.0) fn = 0.0; /* no tension */
-        kt = 8.0 * pair->g_star * root;
     } else {
-        double kn = prm->linear_kn_n_per_m;
-        cn_root = sqrt(pair->m_star * kn);
-        fn = kn * overlap + 2.0 * pair->zeta * cn_root * overlap_rate;
-        kt = prm->linear_kt_ratio * kn;
+        fn = dem_linear_normal_force(prm, pair, overlap, overlap_rate, &kt, &cn_root);
     }
     double ct = 2.0 * pair->zeta * cn_root * pair->kt_kn_root; /* 2 ζ sqrt(m* kt) */
     /* written out per component (no loops): the vectors then stay in registers */

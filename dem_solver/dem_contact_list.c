@@ -69,8 +69,7 @@ static int build_wall_pairs(dem_contact_state *c, const dem_model *md, nc_error 
             p->r_star = p->m_star = 0.0;
             p->zeta = 0.5 * (m->zeta + (w->zeta >= 0.0 ? w->zeta : m->zeta));
             p->mu = 0.5 * (m->friction + w->friction);
-            p->kt_kn_root = md->prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
-                                                                 : sqrt(md->prm.linear_kt_ratio);
+            p->kt_kn_root = dem_contact_law_of(md->prm.law)->kt_kn_root(&md->prm, p->e_star, p->g_star);
         }
     return 0;
 }

@@ -14,6 +14,7 @@
 #include <math.h>
 
 #include "dem_contact_hertz.h"
+#include "dem_contact_law.h"
 #include "dem_model.h"
 #include "nc_error.h"
 
@@ -86,8 +87,7 @@ static inline void dem_net_wall_pair(const dem_model *m, size_t i, dem_pair *p)
     p->m_star = m->bod.mass[m->sph.body[i]];
     p->zeta = 0.5 * (mi->zeta + (net->zeta >= 0.0 ? net->zeta : mi->zeta));
     p->mu = 0.5 * (mi->friction + net->friction);
-    p->kt_kn_root = m->prm.law == DEM_LAW_HERTZ_MINDLIN ? sqrt(4.0 * p->g_star / p->e_star)
-                                                        : sqrt(m->prm.linear_kt_ratio);
+    p->kt_kn_root = dem_contact_law_of(m->prm.law)->kt_kn_root(&m->prm, p->e_star, p->g_star);
 }
 
 #endif

@@ -9,6 +9,7 @@
 
 #include "dem_contact_geometry.h"
 #include "dem_integrate.h"
+#include "dem_net_jacobian.h"
 #include "dem_neighbor_list.h"
 #include "dem_sim.h"
 
@@ -257,6 +258,13 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
                           const double *vel_end, double *force_out, dem_coupled_info *info,
                           nc_error *err)
 {
+    return dem_sim_solve_coupled_jacobian(s, dt_step, disp_end, vel_end, force_out, info, NULL, err);
+}
+
+int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *disp_end,
+                                   const double *vel_end, double *force_out,
+                                   dem_coupled_info *info, dem_net_jacobian *jac, nc_error *err)
+{
     dem_net *net = &s->model.net;
     if (!net->active) return nc_error_set(err, 1, "dem: solve before the interface was received");
     if (!(dt_step > 0.0) || !isfinite(dt_step))
@@ -282,6 +290,7 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
         if (build_net_grid(s, err) || try_free_flight(s, dt_step, substeps, &flown, err)) return -1;
         if (flown) substeps = 0; /* reported as 1 step below */
     }
+    if (jac && dem_net_jacobian_begin(jac, s, dt_step, substeps, err)) return -1;
     for (long sub = 0; sub < substeps; sub++) {
         /* The wall is placed where it is at the END of the sub-step (default): the last
          * sub-step uses exactly the position the FEM returned, so even a single sub-step
@@ -295,7 +304,12 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
         for (size_t k = 0; k < 3 * nn; k++)
             net->cur[k] = net->start[k] + frac * (net->end[k] - net->start[k]);
         if (build_net_grid(s, err)) return -1;
-        if (dem_sim_step(s, h, err)) return -1;
+        if (jac) { /* the particles as the contact pass saw them, before they move */
+            if (dem_sim_step_forces(s, h, err) || dem_net_jacobian_record(jac, s, sub, err)) return -1;
+            dem_sim_step_advance(s, h);
+        } else if (dem_sim_step(s, h, err)) {
+            return -1;
+        }
         for (size_t k = 0; k < 3 * nn; k++) net->impulse[k] += h * net->force[k];
     }
     memcpy(net->cur, net->end, 3 * nn * sizeof(double));
@@ -314,5 +328,6 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
     }
     dem_sim_net_gap(s, info);
     info->substeps = flown ? 1 : substeps;
+    if (jac && dem_net_jacobian_replay(s, jac, disp_end, NULL, 2, err)) return -1;
     return 0;
 }

@@ -7,7 +7,9 @@
  * dem_sim_solve_coupled() moves the net linearly from its start-of-step position to the FEM's
  * end-of-step position over DEM sub-steps and returns the nodal forces of the particles on the
  * net. Algorithm 1's larger step: with prm.free_flight, a coupling step in which nothing can
- * touch is one exact ballistic step.
+ * touch is one exact ballistic step. dem_sim_solve_coupled_jacobian() (dem_net_jacobian.h) is
+ * the same step that also returns the derivative of that force with respect to the received
+ * end-of-step displacement.
  */
 #ifndef DEM_COUPLING_H
 #define DEM_COUPLING_H

@@ -56,9 +56,8 @@ static __attribute__((noinline)) int contacts_from(const dem_sim *s, dem_emit_ct
                                                 mj->youngs_modulus_pa, mj->poisson_ratio);
             pair.g_star = dem_effective_shear(mi->shear_modulus_pa, mi->poisson_ratio,
                                               mj->shear_modulus_pa, mj->poisson_ratio);
-            pair.kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN
-                                  ? sqrt(4.0 * pair.g_star / pair.e_star)
-                                  : sqrt(s->model.prm.linear_kt_ratio);
+            pair.kt_kn_root = dem_contact_law_of(s->model.prm.law)->kt_kn_root(&s->model.prm, pair.e_star,
+                                                                                pair.g_star);
         }
         pair.r_star = ri * rj / rs;
         pair.m_star = m_i * m_j / (m_i + m_j);

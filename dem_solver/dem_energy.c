@@ -60,10 +60,7 @@ double dem_sim_contact_energy(const dem_sim *s)
             break;
         }
         double d = c->overlap[k];
-        if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN)
-            e += 8.0 / 15.0 * p.e_star * sqrt(p.r_star) * pow(d, 2.5); /* ∫ 4/3 E* sqrt(R*) δ^1.5 dδ */
-        else
-            e += 0.5 * s->model.prm.linear_kn_n_per_m * d * d;
+        e += dem_contact_law_of(s->model.prm.law)->elastic_energy(&s->model.prm, &p, d);
         const double *ft = c->ft + 3 * k;
         if (c->kt_prev[k] > 0.0) e += 0.5 * (ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]) / c->kt_prev[k];
     }

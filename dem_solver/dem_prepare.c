@@ -1,7 +1,7 @@
 /* dem_prepare — completing a built model and allocating the step storage: material
  * properties and damping ratios, body mass properties, the overlap check at the start, the
- * critical time step (Rayleigh wave or linear spring) and the Hertz contact time that limit an
- * automatic dt. */
+ * critical time step and the contact time of the contact law (dem_contact_law.h) that limit
+ * an automatic dt. */
 #include "dem_sim.h"
 
 #include <math.h>
@@ -12,6 +12,7 @@
 #endif
 
 #include "dem_contact_hertz.h"
+#include "dem_contact_law.h"
 #include "dem_damping.h"
 #include "dem_integrate.h"
 
@@ -71,50 +72,7 @@ static void body_mass_properties(dem_sim *s, size_t b)
 
 double dem_sim_critical_dt(const dem_sim *s)
 {
-    double crit = INFINITY;
-    if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN) {
-        /* Rayleigh wave time step: π R sqrt(ρ/G) / (0.1631 ν + 0.8766) */
-        for (size_t i = 0; i < s->model.sph.n; i++) {
-            const dem_material *m = &s->model.materials[s->model.sph.material[i]];
-            double t = M_PI * s->model.sph.radius[i] * sqrt(m->density_kg_m3 / m->shear_modulus_pa) /
-                       (0.1631 * m->poisson_ratio + 0.8766);
-            if (t < crit) crit = t;
-        }
-    } else {
-        /* stability of the spring between the two lightest bodies: 2 sqrt(m_star / k) */
-        for (size_t b = 0; b < s->model.bod.n; b++) {
-            double t = 2.0 * sqrt(0.5 * s->model.bod.mass[b] / s->model.prm.linear_kn_n_per_m);
-            if (t < crit) crit = t;
-        }
-    }
-    return crit;
-}
-
-/* Hertz contact duration t_c = 2.87 (m*² / (R* E*² v))^(1/5) for the lightest, smallest
- * sphere against the stiffest partner at the impact speed v. */
-static double hertz_contact_time(const dem_sim *s, double v)
-{
-    double tc = INFINITY;
-    for (size_t i = 0; i < s->model.sph.n; i++) {
-        const dem_material *m = &s->model.materials[s->model.sph.material[i]];
-        double e_max = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
-                                             m->youngs_modulus_pa, m->poisson_ratio);
-        for (size_t k = 0; k < s->model.n_materials; k++) {
-            const dem_material *w = &s->model.materials[k];
-            double e = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
-                                             w->youngs_modulus_pa, w->poisson_ratio);
-            if (e > e_max) e_max = e;
-        }
-        if (s->model.net.youngs_modulus_pa > 0.0) {
-            double e = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
-                                             s->model.net.youngs_modulus_pa, s->model.net.poisson_ratio);
-            if (e > e_max) e_max = e;
-        }
-        double mstar = 0.5 * s->model.bod.mass[s->model.sph.body[i]], r = 0.5 * s->model.sph.radius[i];
-        double t = 2.87 * pow(mstar * mstar / (r * e_max * e_max * v), 0.2);
-        if (t < tc) tc = t;
-    }
-    return tc;
+    return dem_contact_law_of(s->model.prm.law)->critical_dt(s);
 }
 
 static int check_overlaps(dem_sim *s, nc_error *err)
@@ -157,9 +115,8 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     if (s->model.n_materials == 0) return nc_error_set(err, 1, "%s: no materials", s->model.source);
     /* arrays exist even without particles (memcpy/memset never see NULL) */
     if (dem_model_reserve_spheres(&s->model, 1, err) || dem_model_reserve_bodies(&s->model, 1, err)) return -1;
-    if (s->model.prm.law == DEM_LAW_LINEAR && !(s->model.prm.linear_kn_n_per_m > 0.0))
-        return nc_error_set(err, 1, "%s: the linear contact law needs "
-                                    "linear.normal_stiffness_n_per_m > 0", s->model.source);
+    const dem_contact_law *law = dem_contact_law_of(s->model.prm.law);
+    if (law->check(&s->model.prm, s->model.source, err)) return -1;
     for (size_t k = 0; k < s->model.n_materials; k++) {
         dem_material *m = &s->model.materials[k];
         m->shear_modulus_pa = m->youngs_modulus_pa / (2.0 * (1.0 + m->poisson_ratio));
@@ -169,9 +126,7 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
                                                m->youngs_modulus_pa, m->poisson_ratio);
         m->pair_g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio,
                                              m->shear_modulus_pa, m->poisson_ratio);
-        m->pair_kt_kn_root = s->model.prm.law == DEM_LAW_HERTZ_MINDLIN
-                                 ? sqrt(4.0 * m->pair_g_star / m->pair_e_star)
-                                 : sqrt(s->model.prm.linear_kt_ratio);
+        m->pair_kt_kn_root = law->kt_kn_root(&s->model.prm, m->pair_e_star, m->pair_g_star);
     }
     dem_net *net = &s->model.net;
     if (net->youngs_modulus_pa > 0.0)
@@ -193,7 +148,7 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
 
     if (s->model.prm.dt_auto) {
         double dt = s->model.prm.dt_safety * dem_sim_critical_dt(s);
-        if (s->model.prm.law == DEM_LAW_HERTZ_MINDLIN && s->model.sph.n > 0) {
+        if (s->model.sph.n > 0) {
             double vmax = 0.0;
             for (size_t b = 0; b < s->model.bod.n; b++) {
                 const double *v = s->model.bod.vel + 3 * b;
@@ -201,7 +156,7 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
                 if (sp > vmax) vmax = sp;
             }
             double vref = fmax(1.0, 2.0 * vmax);
-            double tc = hertz_contact_time(s, vref) / 40.0; /* >= 40 steps per impact */
+            double tc = law->contact_time(s, vref) / 40.0; /* >= 40 steps per impact */
             if (tc < dt) dt = tc;
         }
         if (!isfinite(dt) || !(dt > 0.0)) dt = 1e-4;

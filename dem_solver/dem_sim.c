@@ -130,7 +130,7 @@ int dem_sim_add_plane(dem_sim *s, const double point[3], const double normal[3],
 
 /* ---- stepping ------------------------------------------------------------------------------- */
 
-int dem_sim_step(dem_sim *s, double dt, nc_error *err)
+int dem_sim_step_forces(dem_sim *s, double dt, nc_error *err)
 {
     for (size_t w = 0; w < s->model.n_planes; w++)
         for (int k = 0; k < 3; k++)
@@ -139,9 +139,19 @@ int dem_sim_step(dem_sim *s, double dt, nc_error *err)
     for (size_t m = 0; m < s->model.n_meshes; m++)
         for (int k = 0; k < 3; k++)
             s->model.meshes[m].offset[k] = s->model.meshes[m].velocity[k] * s->time_s;
-    if (dem_contact_pass(s, dt, err)) return -1;
+    return dem_contact_pass(s, dt, err);
+}
+
+void dem_sim_step_advance(dem_sim *s, double dt)
+{
     dem_integrate_bodies(s, dt);
     s->time_s += dt;
     s->step++;
+}
+
+int dem_sim_step(dem_sim *s, double dt, nc_error *err)
+{
+    if (dem_sim_step_forces(s, dt, err)) return -1;
+    dem_sim_step_advance(s, dt);
     return 0;
 }

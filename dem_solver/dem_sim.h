@@ -66,6 +66,11 @@ double dem_sim_critical_dt(const dem_sim *s);
 
 /* One explicit step of size dt with every wall at its current position. */
 int dem_sim_step(dem_sim *s, double dt, nc_error *err);
+/* The two halves of dem_sim_step(): the walls placed and the contact pass (forces, contact
+ * list), then the integration of the bodies. Between them the particles are still at the
+ * state the forces were computed from (the interface Jacobian records it there). */
+int dem_sim_step_forces(dem_sim *s, double dt, nc_error *err);
+void dem_sim_step_advance(dem_sim *s, double dt);
 
 /* Diagnostics used by tests and output (dem_energy.c). */
 double dem_sim_kinetic_energy(const dem_sim *s);

@@ -1,0 +1,623 @@
+/* dem_net_jacobian — the record of a coupled step's net contacts and its frozen-particle
+ * replay with forward derivatives (the contract is in dem_net_jacobian.h). The replay repeats
+ * dem_detect_net.c, dem_emit_wall_contact() and dem_contact_force() for one contact and
+ * carries, beside each value, its derivative with respect to the end positions of the
+ * contact's nodes (6 columns for an edge: node a then node b; 3 for a node). */
+#include "dem_net_jacobian.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dem_contact_geometry.h"
+#include "dem_contact_law.h"
+#include "dem_sim.h"
+
+void dem_net_jacobian_init(dem_net_jacobian *jac)
+{
+    memset(jac, 0, sizeof *jac);
+    jac->particle_response = DEM_JAC_RESPOND_LOCAL;
+}
+
+void dem_net_jacobian_free(dem_net_jacobian *jac)
+{
+    free(jac->nodes);
+    free(jac->K);
+    free(jac->rec);
+    free(jac->frac);
+    free(jac->weight);
+    free(jac->sub_first);
+    free(jac->start);
+    int response = jac->particle_response;
+    dem_net_jacobian_init(jac);
+    jac->particle_response = response;
+}
+
+static int grow(void **p, size_t *cap, size_t need, size_t size, nc_error *err)
+{
+    if (need <= *cap) return 0;
+    size_t c = *cap ? *cap : 16;
+    while (c < need) c *= 2;
+    void *q = realloc(*p, c * size);
+    if (!q) return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+    *p = q;
+    *cap = c;
+    return 0;
+}
+
+int dem_net_jacobian_begin(dem_net_jacobian *jac, const dem_sim *s, double dt_step,
+                           long substeps, nc_error *err)
+{
+    const dem_net *net = &s->model.net;
+    size_t ns = (size_t)(substeps > 0 ? substeps : 0), cap_sub = jac->cap_sub;
+    if (ns + 1 > cap_sub) {
+        size_t c = ns + 1;
+        double *f = realloc(jac->frac, c * sizeof *f), *w = f ? realloc(jac->weight, c * sizeof *w) : NULL;
+        if (f) jac->frac = f;
+        if (w) jac->weight = w;
+        size_t *sf = w ? realloc(jac->sub_first, c * sizeof *sf) : NULL;
+        if (!sf) return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        jac->sub_first = sf;
+        jac->cap_sub = c;
+    }
+    if (jac->n_nodes != net->n_nodes) {
+        free(jac->start);
+        jac->start = malloc(3 * net->n_nodes * sizeof *jac->start);
+        if (!jac->start) return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        jac->n_nodes = net->n_nodes;
+    }
+    memcpy(jac->start, net->start, 3 * net->n_nodes * sizeof *jac->start);
+    jac->n_sub = (long)ns;
+    jac->n_rec = 0;
+    jac->n_blocks = 0;
+    jac->dt_step = dt_step;
+    jac->h = ns > 0 ? dt_step / (double)ns : dt_step;
+    jac->force_at_end = net->force_at_end;
+    for (size_t k = 0; k < ns; k++) {
+        /* as in dem_sim_solve_coupled() */
+        jac->frac[k] = ((double)k + (net->wall_at_middle ? 0.5 : 1.0)) / (double)ns;
+        jac->weight[k] = net->force_at_end ? (k + 1 == ns ? 1.0 : 0.0) : jac->h / dt_step;
+    }
+    jac->sub_first[0] = 0;
+    return 0;
+}
+
+int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, nc_error *err)
+{
+    const dem_contacts *c = &s->contact.list, *pv = &s->contact.prev;
+    size_t lo = sub > 0 ? jac->sub_first[sub - 1] : 0, hi = jac->n_rec, q = lo;
+    for (size_t k = 0; k < c->n; k++) {
+        int kind = c->kind[k];
+        if (kind != DEM_CONTACT_NET_EDGE && kind != DEM_CONTACT_NET_NODE) continue;
+        if (grow((void **)&jac->rec, &jac->cap_rec, jac->n_rec + 1, sizeof *jac->rec, err)) return -1;
+        dem_jac_record *r = &jac->rec[jac->n_rec];
+        size_t i = (size_t)c->i[k];
+        r->sub = (int32_t)sub;
+        r->i = (int32_t)i;
+        r->kind = kind;
+        r->j = c->j[k];
+        memcpy(r->p, s->model.sph.pos + 3 * i, sizeof r->p);
+        memcpy(r->v, s->model.sph.vel + 3 * i, sizeof r->v);
+        memcpy(r->w, s->model.bod.omega + 3 * (size_t)s->model.sph.body[i], sizeof r->w);
+        r->radius = s->model.sph.radius[i];
+        r->reach = r->radius + s->model.net.cable_radius_m;
+        dem_net_wall_pair(&s->model, i, &r->pair);
+        /* the incoming history, looked up by key as dem_new_record() does */
+        r->has_prev = 0;
+        memset(r->ft, 0, sizeof r->ft);
+        memset(r->n_prev, 0, sizeof r->n_prev);
+        r->kt_prev = r->fn_prev = 0.0;
+        for (int32_t p = s->contact.prev_first[i]; p < s->contact.prev_first[i + 1]; p++)
+            if (pv->kind[p] == kind && pv->j[p] == r->j && pv->aux[p] == c->aux[k]) {
+                r->has_prev = 1;
+                memcpy(r->ft, pv->ft + 3 * (size_t)p, sizeof r->ft);
+                memcpy(r->n_prev, pv->normal + 3 * (size_t)p, sizeof r->n_prev);
+                r->kt_prev = pv->kt_prev[p];
+                r->fn_prev = pv->fn_prev[p];
+                break;
+            }
+        /* the same contact in the previous sub-step (both lists are ordered by sphere) */
+        r->link = -1;
+        while (q < hi && (size_t)jac->rec[q].i < i) q++;
+        for (size_t u = q; u < hi && (size_t)jac->rec[u].i == i; u++)
+            if (jac->rec[u].kind == kind && jac->rec[u].j == r->j) {
+                r->link = (int32_t)u;
+                break;
+            }
+        jac->n_rec++;
+    }
+    jac->sub_first[sub + 1] = jac->n_rec;
+    return 0;
+}
+
+/* ---- the replay ------------------------------------------------------------------------ */
+
+#define NCOL (3 * DEM_JAC_MAX_NODES)
+
+/* A particle that touches the net in the step: its nodes (the columns of its tangents) and,
+ * with the particle response, the tangents and value changes of its state. */
+typedef struct particle {
+    int32_t i;
+    int n_nodes, respond, has_edge;
+    int32_t node[DEM_JAC_MAX_NODES];
+    double dx[3], dv[3], dw[3];               /* state - recorded state */
+    double Dx[3][NCOL], Dv[3][NCOL], Dw[3][NCOL];
+    double sf[3], st[3], Dsf[3][NCOL], Dst[3][NCOL]; /* net force / torque change of a sub-step */
+} particle;
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* column c of a 3xNCOL tangent dotted with a vector */
+static double col_dot(const double a[3], double d[3][NCOL], int c)
+{
+    return a[0] * d[0][c] + a[1] * d[1][c] + a[2] * d[2][c];
+}
+
+static int local_index(const particle *pt, int32_t node)
+{
+    for (int k = 0; k < pt->n_nodes; k++)
+        if (pt->node[k] == node) return k;
+    return -1;
+}
+
+/* One contact of one sub-step: the force f on sphere i, its torque tq about the centre and
+ * the nodal weight t, with their tangents (columns: the particle's nodes, 3 each). The
+ * outgoing history in out. */
+static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac_record *r,
+                    const double *end, const dem_jac_state *in, const particle *pt, int want,
+                    double f[3], double tq[3], double df[3][NCOL], double dtq[3][NCOL],
+                    double *t_out, double dt_out[NCOL], dem_jac_state *out)
+{
+    const dem_net *net = &s->model.net;
+    const dem_params *prm = &s->model.prm;
+    const dem_contact_law *law = dem_contact_law_of(prm->law);
+    double frac = jac->frac[r->sub], dts = jac->dt_step, h = jac->h;
+    int edge = r->kind == DEM_CONTACT_NET_EDGE;
+    int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
+    int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+    int nc = 3 * pt->n_nodes, ca = 3 * local_index(pt, na), cb = 3 * local_index(pt, nb);
+    double xa[3], xb[3], va[3], vb[3];
+    for (int k = 0; k < 3; k++) {
+        size_t ka = 3 * (size_t)na + (size_t)k, kb = 3 * (size_t)nb + (size_t)k;
+        const double *st = jac->start;
+        xa[k] = st[ka] + frac * (end[ka] - st[ka]);
+        xb[k] = st[kb] + frac * (end[kb] - st[kb]);
+        va[k] = (end[ka] - st[ka]) / dts;
+        vb[k] = (end[kb] - st[kb]) / dts;
+    }
+    /* the particle: recorded state plus its response (zero when frozen) */
+    double p[3], vi[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        p[k] = r->p[k] + pt->dx[k];
+        vi[k] = r->v[k] + pt->dv[k];
+        w[k] = r->w[k] + pt->dw[k];
+    }
+    /* closest point (dem_detect_net.c) */
+    double q[3], t = 0.0, Dt[NCOL] = {0}, Dq[3][NCOL] = {{0}};
+    if (edge) {
+        dem_closest_on_segment(p, xa, xb, q, &t);
+    } else {
+        memcpy(q, xa, sizeof q);
+    }
+    double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+    double ap[3] = {p[0] - xa[0], p[1] - xa[1], p[2] - xa[2]};
+    double M = dot3(d, d);
+    int interior = edge && t > 0.0 && t < 1.0;
+    if (want)
+        for (int c = 0; c < nc; c++) {
+            double Dxa[3], Dxb[3];
+            for (int k = 0; k < 3; k++) {
+                Dxa[k] = c == ca + k ? frac : 0.0;
+                Dxb[k] = c == cb + k ? frac : 0.0;
+            }
+            if (edge) {
+                double Dd[3], dN = 0.0, dM = 0.0;
+                for (int k = 0; k < 3; k++) {
+                    Dd[k] = Dxb[k] - Dxa[k];
+                    dN += (pt->Dx[k][c] - Dxa[k]) * d[k] + ap[k] * Dd[k];
+                    dM += 2.0 * d[k] * Dd[k];
+                }
+                Dt[c] = interior ? (dN - t * dM) / M : 0.0;
+                for (int k = 0; k < 3; k++) Dq[k][c] = Dxa[k] + Dt[c] * d[k] + t * Dd[k];
+            } else {
+                for (int k = 0; k < 3; k++) Dq[k][c] = Dxa[k];
+            }
+        }
+    double rr[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    double dist = sqrt(dot3(rr, rr));
+    double n[3], Dn[3][NCOL] = {{0}}, Ddist[NCOL] = {0}, Dr[3][NCOL] = {{0}};
+    for (int k = 0; k < 3; k++) n[k] = rr[k] / dist;
+    for (int c = 0; c < nc && want; c++) {
+        for (int k = 0; k < 3; k++) Dr[k][c] = Dq[k][c] - pt->Dx[k][c];
+        Ddist[c] = col_dot(n, Dr, c);
+        for (int k = 0; k < 3; k++) Dn[k][c] = (Dr[k][c] - n[k] * Ddist[c]) / dist;
+    }
+    double overlap = r->reach - dist, Dov[NCOL] = {0};
+    for (int c = 0; c < nc; c++) Dov[c] = -Ddist[c];
+    double lever = r->radius - 0.5 * overlap, Dlever[NCOL] = {0};
+    for (int c = 0; c < nc; c++) Dlever[c] = -0.5 * Dov[c];
+    /* the incoming history (dem_new_record) and the crossed-cable flip (dem_emit_wall_contact) */
+    double ft[3], kt_prev, fn_prev, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
+    const double *np;
+    int has_prev;
+    if (in) {
+        memcpy(ft, in->ft, sizeof ft);
+        kt_prev = in->kt;
+        fn_prev = in->fn;
+        np = in->n;
+        has_prev = 1;
+        memcpy(Dft, in->dft, sizeof Dft);
+        memcpy(Dktp, in->dkt, sizeof Dktp);
+    } else if (r->sub == 0 && r->has_prev) {
+        memcpy(ft, r->ft, sizeof ft);
+        kt_prev = r->kt_prev;
+        fn_prev = r->fn_prev;
+        np = r->n_prev;
+        has_prev = 1;
+    } else {
+        ft[0] = ft[1] = ft[2] = 0.0;
+        kt_prev = fn_prev = 0.0;
+        np = NULL;
+        has_prev = 0;
+    }
+    if (has_prev && dot3(np, n) < 0.0) {
+        overlap = r->reach + dist;
+        for (int k = 0; k < 3; k++) n[k] = -n[k];
+        double l = r->radius - 0.5 * overlap;
+        lever = fmax(0.0, l);
+        for (int c = 0; c < nc; c++) {
+            Dov[c] = Ddist[c];
+            for (int k = 0; k < 3; k++) Dn[k][c] = -Dn[k][c];
+            Dlever[c] = l > 0.0 ? -0.5 * Dov[c] : 0.0;
+        }
+    }
+    /* relative velocity (eq. (A.2)): the wall point minus the sphere's surface point */
+    double vo[3], Dvo[3][NCOL] = {{0}};
+    for (int k = 0; k < 3; k++) {
+        vo[k] = edge ? (1.0 - t) * va[k] + t * vb[k] : va[k];
+        for (int c = 0; c < nc && want; c++) {
+            double Dva = c == ca + k ? 1.0 / dts : 0.0, Dvb = c == cb + k ? 1.0 / dts : 0.0;
+            Dvo[k][c] = edge ? (1.0 - t) * Dva + t * Dvb + Dt[c] * (vb[k] - va[k]) : Dva;
+        }
+    }
+    double ri[3] = {lever * n[0], lever * n[1], lever * n[2]}, wr[3];
+    wr[0] = w[1] * ri[2] - w[2] * ri[1];
+    wr[1] = w[2] * ri[0] - w[0] * ri[2];
+    wr[2] = w[0] * ri[1] - w[1] * ri[0];
+    double vc[3], Dvc[3][NCOL] = {{0}}, Dri[3][NCOL] = {{0}};
+    for (int k = 0; k < 3; k++) vc[k] = vo[k] - (vi[k] + wr[k]);
+    for (int c = 0; c < nc && want; c++) {
+        for (int k = 0; k < 3; k++) Dri[k][c] = Dlever[c] * n[k] + lever * Dn[k][c];
+        double a1[3] = {pt->Dw[0][c], pt->Dw[1][c], pt->Dw[2][c]};
+        double b1[3] = {Dri[0][c], Dri[1][c], Dri[2][c]};
+        double Dwr[3] = {a1[1] * ri[2] - a1[2] * ri[1] + w[1] * b1[2] - w[2] * b1[1],
+                         a1[2] * ri[0] - a1[0] * ri[2] + w[2] * b1[0] - w[0] * b1[2],
+                         a1[0] * ri[1] - a1[1] * ri[0] + w[0] * b1[1] - w[1] * b1[0]};
+        for (int k = 0; k < 3; k++) Dvc[k][c] = Dvo[k][c] - pt->Dv[k][c] - Dwr[k];
+    }
+    /* the values exactly as the DEM computes them */
+    double ft_in[3] = {ft[0], ft[1], ft[2]}, ktp_in = kt_prev, fnp_in = fn_prev;
+    dem_contact_force(prm, &r->pair, overlap, n, vc, h, ft, &kt_prev, &fn_prev, f);
+    tq[0] = ri[1] * f[2] - ri[2] * f[1];
+    tq[1] = ri[2] * f[0] - ri[0] * f[2];
+    tq[2] = ri[0] * f[1] - ri[1] * f[0];
+    memcpy(out->ft, ft, sizeof ft);
+    out->kt = kt_prev;
+    out->fn = fn_prev;
+    memcpy(out->n, n, sizeof n);
+    *t_out = t;
+    if (!want) return;
+
+    /* ---- tangents of dem_contact_force() ---- */
+    const dem_pair *pr = &r->pair;
+    dem_law_normal L;
+    law->normal(prm, pr, overlap, &L);
+    double vn = dot3(vc, n), rate = -vn, Dvn[NCOL];
+    for (int c = 0; c < nc; c++) Dvn[c] = col_dot(n, Dvc, c) + col_dot(vc, Dn, c);
+    double fn = L.fn_elastic + 2.0 * pr->zeta * L.cn_root * rate, Dfn[NCOL];
+    int clamped = law->no_tension && fn < 0.0;
+    if (clamped) fn = 0.0;
+    for (int c = 0; c < nc; c++)
+        Dfn[c] = clamped ? 0.0 : (L.kn_tangent + 2.0 * pr->zeta * L.dcn_root * rate) * Dov[c] -
+                                     2.0 * pr->zeta * L.cn_root * Dvn[c];
+    double kt = L.kt, Dkt[NCOL], ct = 2.0 * pr->zeta * L.cn_root * pr->kt_kn_root, Dct[NCOL];
+    for (int c = 0; c < nc; c++) {
+        Dkt[c] = L.dkt * Dov[c];
+        Dct[c] = 2.0 * pr->zeta * L.dcn_root * pr->kt_kn_root * Dov[c];
+    }
+    double vt[3], Dvt[3][NCOL];
+    for (int k = 0; k < 3; k++) {
+        vt[k] = vc[k] - vn * n[k];
+        for (int c = 0; c < nc; c++) Dvt[k][c] = Dvc[k][c] - Dvn[c] * n[k] - vn * Dn[k][c];
+    }
+    double g[3] = {ft_in[0], ft_in[1], ft_in[2]};
+    double old2 = dot3(g, g);
+    if (old2 > 0.0) {
+        double fdn = dot3(g, n), g1[3], Dg1[3][NCOL];
+        for (int k = 0; k < 3; k++) g1[k] = g[k] - fdn * n[k];
+        for (int c = 0; c < nc; c++) {
+            double Dfdn = col_dot(n, Dft, c) + col_dot(g, Dn, c);
+            for (int k = 0; k < 3; k++) Dg1[k][c] = Dft[k][c] - Dfdn * n[k] - fdn * Dn[k][c];
+        }
+        double new2 = dot3(g1, g1);
+        double sc = new2 > 0.0 ? sqrt(old2 / new2) : 0.0, Dsc[NCOL];
+        for (int c = 0; c < nc; c++) {
+            double Dold2 = 2.0 * col_dot(g, Dft, c), Dnew2 = 2.0 * col_dot(g1, Dg1, c);
+            Dsc[c] = new2 > 0.0 ? 0.5 * sc * (Dold2 / old2 - Dnew2 / new2) : 0.0;
+        }
+        if (fn < fnp_in && ktp_in > 0.0) { /* unloading: times kt / kt_prev */
+            double ratio = kt / ktp_in;
+            for (int c = 0; c < nc; c++)
+                Dsc[c] = Dsc[c] * ratio + sc * (Dkt[c] - ratio * Dktp[c]) / ktp_in;
+            sc *= ratio;
+        }
+        for (int k = 0; k < 3; k++) {
+            for (int c = 0; c < nc; c++) Dft[k][c] = Dsc[c] * g1[k] + sc * Dg1[k][c];
+            g[k] = sc * g1[k];
+        }
+    }
+    for (int k = 0; k < 3; k++) { /* eq. (A.4) */
+        for (int c = 0; c < nc; c++) Dft[k][c] += (Dkt[c] * vt[k] + kt * Dvt[k][c]) * h;
+        g[k] += kt * vt[k] * h;
+    }
+    double tr[3], Dtr[3][NCOL];
+    for (int k = 0; k < 3; k++) {
+        tr[k] = g[k] + ct * vt[k];
+        for (int c = 0; c < nc; c++) Dtr[k][c] = Dft[k][c] + Dct[c] * vt[k] + ct * Dvt[k][c];
+    }
+    double trial2 = dot3(tr, tr), cap = pr->mu * (fn > 0.0 ? fn : 0.0);
+    if (trial2 > cap * cap) { /* Coulomb: the spring slides at the cap */
+        double len = sqrt(trial2), sc = trial2 > 0.0 ? cap / len : 0.0;
+        for (int c = 0; c < nc; c++) {
+            double Dcap = fn > 0.0 ? pr->mu * Dfn[c] : 0.0;
+            double Dlen = trial2 > 0.0 ? col_dot(tr, Dtr, c) / len : 0.0;
+            double Dsc = trial2 > 0.0 ? (Dcap - sc * Dlen) / len : 0.0;
+            for (int k = 0; k < 3; k++) {
+                Dtr[k][c] = Dsc * tr[k] + sc * Dtr[k][c];
+                Dft[k][c] = Dtr[k][c] - Dct[c] * vt[k] - ct * Dvt[k][c];
+            }
+        }
+        for (int k = 0; k < 3; k++) tr[k] *= sc;
+    }
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < nc; c++) df[k][c] = -Dfn[c] * n[k] - fn * Dn[k][c] + Dtr[k][c];
+    for (int c = 0; c < nc; c++) { /* torque ri x f */
+        dtq[0][c] = Dri[1][c] * f[2] - Dri[2][c] * f[1] + ri[1] * df[2][c] - ri[2] * df[1][c];
+        dtq[1][c] = Dri[2][c] * f[0] - Dri[0][c] * f[2] + ri[2] * df[0][c] - ri[0] * df[2][c];
+        dtq[2][c] = Dri[0][c] * f[1] - Dri[1][c] * f[0] + ri[0] * df[1][c] - ri[1] * df[0][c];
+    }
+    memset(out->dft, 0, sizeof out->dft);
+    memset(out->dkt, 0, sizeof out->dkt);
+    for (int c = 0; c < nc; c++) {
+        for (int k = 0; k < 3; k++) out->dft[k][c] = Dft[k][c];
+        out->dkt[c] = Dkt[c];
+        dt_out[c] = Dt[c];
+    }
+}
+
+/* Orders blocks by (i, j) for the merge. */
+typedef struct block {
+    int32_t i, j;
+    double k[9];
+} block;
+
+static int block_cmp(const void *a, const void *b)
+{
+    const block *x = a, *y = b;
+    if (x->i != y->i) return x->i < y->i ? -1 : 1;
+    if (x->j != y->j) return x->j < y->j ? -1 : 1;
+    return 0;
+}
+
+static int rec_cmp(const void *a, const void *b)
+{
+    const dem_jac_record *const *x = a, *const *y = b;
+    return (*x)->i < (*y)->i ? -1 : (*x)->i > (*y)->i;
+}
+
+/* The particles of the records, each with its nodes; slot[x] is record x's particle. */
+static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, particle **out,
+                             size_t *n_out, size_t *slot, nc_error *err)
+{
+    const dem_net *net = &s->model.net;
+    size_t nr = jac->n_rec, np = 0;
+    const dem_jac_record **order = malloc((nr + 1) * sizeof *order);
+    particle *pts = calloc(nr + 1, sizeof *pts);
+    if (!order || !pts) {
+        free(order);
+        free(pts);
+        return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+    }
+    for (size_t x = 0; x < nr; x++) order[x] = &jac->rec[x];
+    qsort(order, nr, sizeof *order, rec_cmp);
+    for (size_t x = 0; x < nr; x++) {
+        const dem_jac_record *r = order[x];
+        if (np == 0 || pts[np - 1].i != r->i) {
+            particle *pt = &pts[np++];
+            pt->i = r->i;
+            int32_t b = s->model.sph.body[r->i];
+            pt->respond = jac->particle_response && !s->model.bod.is_cluster[b];
+        }
+        particle *pt = &pts[np - 1];
+        slot[r - jac->rec] = np - 1;
+        int edge = r->kind == DEM_CONTACT_NET_EDGE;
+        pt->has_edge |= edge;
+        int32_t nodes[2] = {edge ? net->edges[2 * (size_t)r->j] : r->j,
+                            edge ? net->edges[2 * (size_t)r->j + 1] : r->j};
+        for (int k = 0; k < (edge ? 2 : 1); k++) {
+            if (local_index(pt, nodes[k]) >= 0) continue;
+            if (pt->n_nodes == DEM_JAC_MAX_NODES) {
+                free(order);
+                free(pts);
+                return nc_error_set(err, 1, "dem: interface Jacobian: particle %d touches more "
+                                            "than %d net nodes in one step", s->model.sph.id[r->i],
+                                    DEM_JAC_MAX_NODES);
+            }
+            pt->node[pt->n_nodes++] = nodes[k];
+        }
+    }
+    free(order);
+    /* DEM_JAC_RESPOND_LOCAL: only a particle whose nodes are one node or one edge's two
+     * nodes responds (its blocks then stay within one element) */
+    for (size_t k = 0; k < np && jac->particle_response == DEM_JAC_RESPOND_LOCAL; k++)
+        if (!(pts[k].n_nodes == 1 || (pts[k].n_nodes == 2 && pts[k].has_edge))) pts[k].respond = 0;
+    *out = pts;
+    *n_out = np;
+    return 0;
+}
+
+int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const double *disp_end,
+                            double *force_out, int want_K, nc_error *err)
+{
+    const dem_net *net = &s->model.net;
+    size_t nn = net->n_nodes;
+    if (jac->n_nodes != nn) return nc_error_set(err, 1, "dem: Jacobian replay without a recorded step");
+    /* the base values (f, torque) are taken at the displacement of the solve: the replay
+     * with want_K from dem_sim_solve_coupled_jacobian() */
+    int base = want_K == 2;
+    double *end = malloc(3 * nn * sizeof *end);
+    double *force = calloc(3 * nn, sizeof *force);
+    double *impulse = calloc(3 * nn, sizeof *impulse);
+    size_t *slot = malloc((jac->n_rec + 1) * sizeof *slot);
+    block *blocks = NULL;
+    dem_jac_state *state = malloc((jac->n_rec + 1) * sizeof *state);
+    particle *pts = NULL;
+    size_t npt = 0;
+    int rc = 0;
+    if (!end || !force || !impulse || !slot || !state) {
+        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        goto done;
+    }
+    if (collect_particles(s, jac, &pts, &npt, slot, err)) {
+        rc = -1;
+        goto done;
+    }
+    size_t max_blocks = 0; /* each record: its 1 or 2 nodes times its particle's nodes */
+    for (size_t x = 0; x < jac->n_rec; x++) max_blocks += 2 * (size_t)pts[slot[x]].n_nodes;
+    if (want_K && !(blocks = malloc((max_blocks + 1) * sizeof *blocks))) {
+        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+        goto done;
+    }
+    for (size_t k = 0; k < 3 * nn; k++) end[k] = net->ref[k] + disp_end[k];
+    size_t nbk = 0;
+    for (long sub = 0; sub < jac->n_sub; sub++) {
+        memset(force, 0, 3 * nn * sizeof *force);
+        double wgt = jac->weight[sub];
+        for (size_t x = jac->sub_first[sub]; x < jac->sub_first[sub + 1]; x++) {
+            dem_jac_record *r = &jac->rec[x];
+            particle *pt = &pts[slot[x]];
+            const dem_jac_state *in = r->sub > 0 && r->link >= 0 ? &state[r->link] : NULL;
+            double f[3], tq[3], df[3][NCOL] = {{0}}, dtq[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
+            contact(s, jac, r, end, in, pt, want_K, f, tq, df, dtq, &t, dt, &state[x]);
+            if (base) {
+                memcpy(r->f_base, f, sizeof f);
+                memcpy(r->t_base, tq, sizeof tq);
+            }
+            if (pt->respond) { /* the change of the net's force and torque on the particle */
+                int nc = 3 * pt->n_nodes;
+                for (int k = 0; k < 3; k++) {
+                    pt->sf[k] += f[k] - r->f_base[k];
+                    pt->st[k] += tq[k] - r->t_base[k];
+                    for (int c = 0; c < nc && want_K; c++) {
+                        pt->Dsf[k][c] += df[k][c];
+                        pt->Dst[k][c] += dtq[k][c];
+                    }
+                }
+            }
+            int edge = r->kind == DEM_CONTACT_NET_EDGE;
+            int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
+            int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+            if (edge) { /* as the contact pass sums the net reactions */
+                for (int d = 0; d < 3; d++) {
+                    force[3 * (size_t)na + (size_t)d] -= (1.0 - t) * f[d];
+                    force[3 * (size_t)nb + (size_t)d] -= t * f[d];
+                }
+            } else {
+                for (int d = 0; d < 3; d++) force[3 * (size_t)r->j + (size_t)d] -= f[d];
+            }
+            if (!want_K || wgt == 0.0) continue;
+            /* F_a = -(1-t) f, F_b = -t f; K = -weight dF; columns: the particle's nodes
+             * (frozen: only this contact's nodes carry a derivative) */
+            int nodes[2] = {na, nb}, nrow = edge ? 2 : 1;
+            for (int a = 0; a < nrow; a++) {
+                double sa = a == 0 ? 1.0 - t : t, sgn = a == 0 ? 1.0 : -1.0;
+                for (int b = 0; b < pt->n_nodes; b++) {
+                    int32_t node_b = pt->node[b];
+                    if (!pt->respond && node_b != na && node_b != nb) continue;
+                    block *bk = &blocks[nbk++];
+                    bk->i = nodes[a];
+                    bk->j = node_b;
+                    for (int row = 0; row < 3; row++)
+                        for (int c = 0; c < 3; c++) {
+                            int col = 3 * b + c;
+                            double dF = -sa * df[row][col] + (edge ? sgn * dt[col] * f[row] : 0.0);
+                            bk->k[3 * row + c] = -wgt * dF;
+                        }
+                }
+            }
+        }
+        for (size_t k = 0; k < 3 * nn; k++) impulse[k] += jac->h * force[k];
+        /* the particles' response to the change of the net force (symplectic Euler of
+         * dem_integrate.c, velocity first; free spheres only) */
+        for (size_t x = 0; x < npt; x++) {
+            particle *pt = &pts[x];
+            if (!pt->respond) continue;
+            int32_t b = s->model.sph.body[pt->i];
+            double im = s->model.bod.inv_mass[b], ii = s->model.bod.inv_inertia_iso[b], h = jac->h;
+            int nc = 3 * pt->n_nodes;
+            for (int k = 0; k < 3; k++) {
+                pt->dv[k] += h * pt->sf[k] * im;
+                pt->dx[k] += h * pt->dv[k];
+                pt->dw[k] += h * pt->st[k] * ii;
+                pt->sf[k] = pt->st[k] = 0.0;
+                for (int c = 0; c < nc && want_K; c++) {
+                    pt->Dv[k][c] += h * pt->Dsf[k][c] * im;
+                    pt->Dx[k][c] += h * pt->Dv[k][c];
+                    pt->Dw[k][c] += h * pt->Dst[k][c] * ii;
+                    pt->Dsf[k][c] = pt->Dst[k][c] = 0.0;
+                }
+            }
+        }
+    }
+    if (force_out) {
+        if (jac->force_at_end)
+            memcpy(force_out, force, 3 * nn * sizeof *force_out);
+        else
+            for (size_t k = 0; k < 3 * nn; k++) force_out[k] = impulse[k] / jac->dt_step;
+    }
+    if (want_K) {
+        qsort(blocks, nbk, sizeof *blocks, block_cmp);
+        size_t m = 0;
+        for (size_t b = 0; b < nbk; b++) {
+            if (m > 0 && blocks[m - 1].i == blocks[b].i && blocks[m - 1].j == blocks[b].j) {
+                for (int e = 0; e < 9; e++) blocks[m - 1].k[e] += blocks[b].k[e];
+            } else {
+                blocks[m++] = blocks[b];
+            }
+        }
+        size_t cap = jac->cap_blocks;
+        if (grow((void **)&jac->nodes, &cap, m, 2 * sizeof *jac->nodes, err)) {
+            rc = -1;
+            goto done;
+        }
+        double *K = realloc(jac->K, (cap ? cap : 1) * 9 * sizeof *K);
+        if (!K) {
+            rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+            goto done;
+        }
+        jac->K = K;
+        jac->cap_blocks = cap;
+        for (size_t b = 0; b < m; b++) {
+            jac->nodes[2 * b] = blocks[b].i;
+            jac->nodes[2 * b + 1] = blocks[b].j;
+            memcpy(jac->K + 9 * b, blocks[b].k, sizeof blocks[b].k);
+        }
+        jac->n_blocks = m;
+    }
+done:
+    free(end); free(force); free(impulse); free(slot); free(blocks); free(state); free(pts);
+    return rc;
+}
