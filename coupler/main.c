@@ -186,16 +186,15 @@ static void print_timing(app *a)
     fflush(o);
 }
 
-/* The energy part of the summary: the balance and the guard's verdict (cpl_energy.h).
- * Returns 1 when the guard did not fire. */
-static int print_energy(app *a)
+/* The energy balance line of the summary (cpl_energy.h). */
+static void print_energy(app *a)
 {
     const cpl_energy *e = cpl_loop_energy(a->loop);
     FILE *o = a->progress.out;
     if (!e->available || !e->started) {
         fprintf(o, "coupler: energy balance: not available (a participant does not report its "
                 "energies), energy guard off\n");
-        return 1;
+        return;
     }
     double created = e->sum_mismatch_j + fmax(0.0, -e->sum_fem_diss_j) + fmax(0.0, -e->sum_dem_diss_j);
     double limit = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
@@ -204,7 +203,13 @@ static int print_energy(app *a)
             "%.6g J; created %.6g J, limit %.6g J (energy_tolerance %.3g)\n", e->input_j,
             e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j, e->sum_ext_j, created, limit,
             e->s.tol_rel);
-    if (e->first_step < 0) return 1;
+}
+
+/* The guard's verdict when it fired: the last line of the summary. */
+static void print_energy_verdict(app *a)
+{
+    const cpl_energy *e = cpl_loop_energy(a->loop);
+    FILE *o = a->progress.out;
     fprintf(o, "coupler: results are NOT reliable: the run created energy: %.6g J at step %ld "
             "(t = %.6g s), above the limit %.6g J (%ld steps above it, largest excess %.6g J); "
             "%s\n", e->first_created_j, e->first_step, e->first_time_s, e->first_limit_j,
@@ -213,7 +218,6 @@ static int print_energy(app *a)
                 ? "accepted because coupler.json sets accept_energy_growth"
                 : "exit status 3 (coupler.json \"accept_energy_growth\": true accepts it with "
                   "exit status 0)");
-    return 0;
 }
 
 /* The end of the summary: how far the results can be trusted; the verdict is the last line.
@@ -231,14 +235,20 @@ static int print_status(app *a, int *energy_ok)
     else
         fprintf(o, "coupler: step control: no step rejected, no dt reduced (nominal %.3g s, "
                 "dt_min %.3g s)\n", s->dt_s, dt_min);
+    const cpl_energy *e = cpl_loop_energy(a->loop);
+    *energy_ok = e->first_step < 0;
+    print_energy(a);
     int reliable = 1;
-    if (s->scheme == CPL_SCHEME_WEAK) {
+    if (s->scheme == CPL_SCHEME_WEAK)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
                 "residual is not iterated away (it is recorded in /steps/residual)\n");
-    } else if (t->unconverged_steps == 0) {
-        fprintf(o, "coupler: results are reliable: every step converged to the tolerance "
-                "%.3g\n", s->tol_abs);
-    } else {
+    /* both verdicts when both apply, the unconverged steps last */
+    if (!*energy_ok) print_energy_verdict(a);
+    if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
+        if (*energy_ok)
+            fprintf(o, "coupler: results are reliable: every step converged to the tolerance "
+                    "%.3g\n", s->tol_abs);
+    } else if (s->scheme == CPL_SCHEME_STRONG) {
         reliable = 0;
         char why[256];
         if (dt_min < s->dt_s * (1.0 - 1e-9))
@@ -253,7 +263,6 @@ static int print_status(app *a, int *energy_ok)
                     : "exit status 3 (coupler.json \"accept_unconverged\": true accepts them "
                       "with exit status 0)");
     }
-    *energy_ok = print_energy(a);
     fflush(o);
     return reliable && *energy_ok;
 }
