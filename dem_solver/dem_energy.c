@@ -47,6 +47,7 @@ double dem_sim_contact_energy(const dem_sim *s)
             p.e_star = dem_effective_modulus(mi->youngs_modulus_pa, mi->poisson_ratio,
                                              mj->youngs_modulus_pa, mj->poisson_ratio);
             p.r_star = s->model.sph.radius[i] * s->model.sph.radius[j] / (s->model.sph.radius[i] + s->model.sph.radius[j]);
+            p.mu = 0.5 * (mi->friction + mj->friction);   /* as dem_detect_sphere.c */
             break;
         }
         case DEM_CONTACT_PLANE:
@@ -64,8 +65,13 @@ double dem_sim_contact_energy(const dem_sim *s)
             e += 8.0 / 15.0 * p.e_star * sqrt(p.r_star) * pow(d, 2.5); /* ∫ 4/3 E* sqrt(R*) δ^1.5 dδ */
         else
             e += 0.5 * s->model.prm.linear_kn_n_per_m * d * d;
+        /* the tangential spring's force is at most the Coulomb cap mu fn: while sliding the
+         * stored ft is the capped total force minus the dashpot part (ft = -c_t v_t for
+         * mu = 0), which is not a spring force and may be large on a new, soft contact */
         const double *ft = c->ft + 3 * k;
-        if (c->kt_prev[k] > 0.0) e += 0.5 * (ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]) / c->kt_prev[k];
+        double cap = p.mu * fmax(c->fn_prev[k], 0.0);
+        double ft2 = fmin(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2], cap * cap);
+        if (c->kt_prev[k] > 0.0) e += 0.5 * ft2 / c->kt_prev[k];
     }
     return e;
 }
