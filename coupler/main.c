@@ -242,13 +242,12 @@ static int print_status(app *a, int *energy_ok)
     if (s->scheme == CPL_SCHEME_WEAK)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
                 "residual is not iterated away (it is recorded in /steps/residual)\n");
-    /* both verdicts when both apply, the unconverged steps last */
-    if (!*energy_ok) print_energy_verdict(a);
     if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
-        if (*energy_ok)
-            fprintf(o, "coupler: results are reliable: every step converged to the tolerance "
-                    "%.3g\n", s->tol_abs);
+        fprintf(o, "coupler: %severy step converged to the tolerance %.3g\n",
+                *energy_ok ? "results are reliable: " : "", s->tol_abs);
     } else if (s->scheme == CPL_SCHEME_STRONG) {
+        /* both verdicts when both apply, the unconverged steps last */
+        if (!*energy_ok) print_energy_verdict(a);
         reliable = 0;
         char why[256];
         if (dt_min < s->dt_s * (1.0 - 1e-9))
@@ -263,6 +262,7 @@ static int print_status(app *a, int *energy_ok)
                     : "exit status 3 (coupler.json \"accept_unconverged\": true accepts them "
                       "with exit status 0)");
     }
+    if (!*energy_ok && reliable) print_energy_verdict(a);
     fflush(o);
     return reliable && *energy_ok;
 }
