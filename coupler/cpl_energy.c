@@ -90,12 +90,13 @@ void cpl_energy_step(cpl_energy *e, long step, double end_time_s, const cpl_ener
     rec->fem_dissipated_j = f.dissipated_j;
     rec->dem_dissipated_j = dem->dissipated_j;
     rec->external_work_j = f.external_work_j + dem->external_work_j;
-    rec->created_j = e->sum_mismatch_j + fmax(0.0, -e->sum_fem_diss_j) +
-                     fmax(0.0, -e->sum_dem_diss_j);
+    rec->created_j = total(&f) + total(dem) - e->e0_j - e->sum_ext_j;
     rec->input_j = e->input_j;
     rec->limit_j = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
     rec->closure_j = total(&f) + total(dem) - e->e0_j - e->sum_ext_j + e->sum_fem_diss_j +
                      e->sum_dem_diss_j - e->sum_mismatch_j;
+    e->created_j = rec->created_j;
+    e->closure_j = rec->closure_j;
     rec->above = rec->created_j > rec->limit_j;
     if (rec->above) {
         e->above_steps++;

@@ -8,14 +8,20 @@
  *       force (as the FEM integrates it) plus the work the moving net did on the particles
  *       (minus the averaged force times the wall's displacement increment). Zero for an
  *       energy-exact exchange; > 0 is energy the coupling itself created.
- *   created(n) = Σ mismatch + max(0, −Σ D_fem) + max(0, −Σ D_dem): the coupling's net
- *       creation plus a side whose accumulated dissipation became negative (an integrator
- *       that produced energy).
+ *   created(n) = E(n) − E(0) − Σ W_ext, E = kinetic + elastic + potential of both sides: how
+ *       far the coupled system's energy has risen above its start plus what external loads
+ *       put in. The structure, the particles and their contacts are passive (conservative
+ *       or dissipative), so a correct model keeps created <= 0; > 0 is energy the numerical
+ *       model produced, wherever it came from (the coupling, an integrator, an unresolved
+ *       contact). It does not depend on how the interface work and the dissipation are split
+ *       between the two sides, but it is a lower bound: creation that physical damping
+ *       removes again in the same run does not show (the mismatch and the dissipated terms
+ *       are kept for that).
  *   input(n) = the largest kinetic + elastic energy of both sides reached in steps 0..n
  *       (the potentials are left out: their zero is arbitrary; what falls is converted to
  *       kinetic or elastic energy, which is counted).
- *   closure(n) = E(n) − E(0) − Σ W_ext + Σ D − Σ mismatch, E = kinetic + elastic + potential
- *       of both: zero when the reports are consistent (a check of the reports, not a guard).
+ *   closure(n) = created(n) + Σ D − Σ mismatch: zero when the reports are consistent (each
+ *       side's balance closes; a check of the reports, not a guard).
  * The guard fires when created(n) > tol_rel · input(n) + tol_abs_j; the first such step is
  * kept (step, time) and the steps above the limit are counted. Without energy reports from
  * both participants the balance is unavailable (every value NAN) and the guard is off.
@@ -63,6 +69,7 @@ typedef struct cpl_energy {
     double e0_j;               /* total energy at the start (first report's start state) */
     double sum_mismatch_j, sum_fem_diss_j, sum_dem_diss_j, sum_ext_j;
     double input_j;
+    double created_j, closure_j;  /* of the last accepted step */
     cpl_energy_report fem_last;   /* last FEM report (a skipped FEM solve keeps its state) */
     long above_steps;          /* accepted steps above the limit */
     long first_step;           /* first step above the limit, -1: none */

@@ -196,13 +196,12 @@ static void print_energy(app *a)
                 "energies), energy guard off\n");
         return;
     }
-    double created = e->sum_mismatch_j + fmax(0.0, -e->sum_fem_diss_j) + fmax(0.0, -e->sum_dem_diss_j);
     double limit = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
     fprintf(o, "coupler: energy balance: input %.6g J (largest kinetic + elastic energy), "
+            "energy now %+.6g J from the start (created, limit %.6g J, energy_tolerance %.3g); "
             "interface work mismatch %.6g J, dissipated fem %.6g J, dem %.6g J, external work "
-            "%.6g J; created %.6g J, limit %.6g J (energy_tolerance %.3g)\n", e->input_j,
-            e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j, e->sum_ext_j, created, limit,
-            e->s.tol_rel);
+            "%.6g J, closure %.3g J\n", e->input_j, e->created_j, limit, e->s.tol_rel,
+            e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j, e->sum_ext_j, e->closure_j);
 }
 
 /* The guard's verdict when it fired: the last line of the summary. */

@@ -2,8 +2,9 @@
 # End to end: the energy balance and the energy guard with the three real programs.
 #  - cases/rest_position strong, 1.5 s, COR 0.5 (physically dissipative: Rayleigh damping of
 #    the cable, the contact dashpot, Bossak's numerical damping): the balance closes (the
-#    reports' closure below 1e-9 of the input energy), the coupling creates at no step more
-#    than 1 % of the input energy, the run reports reliable with exit 0; coupling.h5 holds
+#    reports' closure below 1e-9 of the input energy), the run creates at no step more
+#    than 1 % of the input energy (the system's energy never rises above its start), the run
+#    reports reliable with exit 0; coupling.h5 holds
 #    /energy/* with units "J" and iterations.log the created_J and input_J columns;
 #  - cases/cable_impact weak at dt 1e-3 (the paper's weak step; unstable here: the contact
 #    between the light net and the heavy sphere pumps energy in, the sphere is thrown back
@@ -78,6 +79,8 @@ for name in ("dissipative", "unstable", "opted_in"):
         first = int(a["energy_first_step"])
         assert first >= 0 and e["above"][first] == 1 and not e["above"][:first].any(), a
         assert abs(a["energy_first_time"] - t[first]) < 1e-12, a
-        assert e["created"][-1] > e["input"][-1], name   # more created than ever was put in
+        # the system ends with far more energy than it started with (measured 2.7 MJ, the
+        # sphere brought 74 kJ)
+        assert e["created"][-1] > 10 * e["dem_kinetic"][0] + 1e5, name
 PY
 echo PASS
