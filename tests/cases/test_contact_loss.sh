@@ -22,6 +22,10 @@
 #    max force within 50 % of the reference's (measured +26 %), peak u_A within 1 % of the
 #    reference's (measured -0.5512 vs -0.5511 m). It does NOT have one continuous contact over
 #    W (7 short gaps of 1-8 ms); neither has the reference around W's ends.
+#  - both weak runs create energy, so the coupler's energy guard fires (they opt in with
+#    accept_energy_growth, the warning is checked): weak 1e-3's total mechanical energy rises
+#    up to 52 J (2.4 % of the 2.2 kJ input) above its start during the impact, although the
+#    cable is damped and the contact is elastic; strong 1e-2's does not rise.
 # Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
 # (a factor >= 2 away from each measurement).
 # All of this is for COR 1 (the case's value). With a damped contact (COR <= 0.5) weak coupling
@@ -45,7 +49,9 @@ run() {   # name scheme dt [run_case.sh arguments]
 run weak_dt1e-2 weak 1e-2 --set coupler.accept_energy_growth=true
 grep -q "^warning: step [0-9]* (t = .* s): the run has created .* J of energy" \
   "$NC_TMP/weak_dt1e-2/coupler.log" || fail "weak_dt1e-2: no energy-created warning"
-run weak_dt1e-3 weak 1e-3
+run weak_dt1e-3 weak 1e-3 --set coupler.accept_energy_growth=true
+grep -q "^warning: step [0-9]* (t = .* s): the run has created .* J of energy" \
+  "$NC_TMP/weak_dt1e-3/coupler.log" || fail "weak_dt1e-3: no energy-created warning"
 run strong_dt1e-2 strong 1e-2
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
