@@ -21,6 +21,8 @@
  * converged steps in a row (and on the grid of the larger step) a reduced Δt doubles again,
  * never above the nominal Δt. At dt_min a step that still does not converge is accepted or
  * stops the run (on_max_iterations); a failed solve there ends the run.
+ * Energy balance: every accepted step feeds the energies both participants reported with
+ * their last solve to the energy guard (cpl_energy.h); its record goes with the step record.
  * The loop itself never prints: it reports every iteration, rejection and step to an
  * observer.
  */
