@@ -25,7 +25,7 @@
 #  - both weak runs create energy, so the coupler's energy guard fires (they opt in with
 #    accept_energy_growth, the warning is checked): weak 1e-3's total mechanical energy rises
 #    up to 52 J (2.4 % of the 2.2 kJ input) above its start during the impact, although the
-#    cable is damped and the contact is elastic; strong 1e-2's does not rise.
+#    cable is damped and the contact is elastic; strong 1e-2 stays below the guard's limit.
 # Tolerances are the midpoints between the measured values of the "keeps" and "loses" runs
 # (a factor >= 2 away from each measurement).
 # All of this is for COR 1 (the case's value). With a damped contact (COR <= 0.5) weak coupling
