@@ -137,7 +137,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
         "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
-        "timeouts", "output", "comment", NULL};
+        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "timeouts", "output", "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -168,6 +168,12 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         parse_step_control(root, where, s, err) ||
         nc_json_bool_opt(root, where, "accept_unconverged", c->accept_unconverged,
                          &c->accept_unconverged, err) ||
+        nc_json_number_range_opt(root, where, "energy_tolerance", s->energy.tol_rel, 0.0,
+                                 INFINITY, &s->energy.tol_rel, err) ||
+        nc_json_number_range_opt(root, where, "energy_tolerance_abs", s->energy.tol_abs_j, 0.0,
+                                 INFINITY, &s->energy.tol_abs_j, err) ||
+        nc_json_bool_opt(root, where, "accept_energy_growth", c->accept_energy_growth,
+                         &c->accept_energy_growth, err) ||
         parse_timeouts(root, where, c, err) ||
         parse_output(root, where, c, err))
         return -1;

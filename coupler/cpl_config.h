@@ -27,6 +27,7 @@ typedef struct cpl_config {
     double progress_interval_s; /* plain progress lines when not on a terminal */
     int accept_unconverged;     /* accepted unconverged steps do not make the exit status
                                    non-zero (they are still reported as not reliable) */
+    int accept_energy_growth;   /* likewise for energy created beyond energy_tolerance */
 } cpl_config;
 
 void cpl_config_default(cpl_config *c);

@@ -5,6 +5,22 @@
 #include <stdint.h>
 #include <string.h>
 
+/* /energy/<name> datasets in the order of energy_values() */
+static const char *const energy_names[CPL_HISTORY_ENERGY_SERIES] = {
+    "fem_kinetic", "fem_elastic", "fem_potential", "dem_kinetic", "dem_elastic", "dem_potential",
+    "fem_interface_work", "dem_interface_work", "interface_created", "fem_dissipated",
+    "dem_dissipated", "external_work", "created", "input", "limit", "closure"};
+
+static void energy_values(const cpl_energy_record *e, double *v)
+{
+    const double all[CPL_HISTORY_ENERGY_SERIES] = {
+        e->fem_kinetic_j, e->fem_elastic_j, e->fem_potential_j, e->dem_kinetic_j,
+        e->dem_elastic_j, e->dem_potential_j, e->fem_interface_work_j, e->dem_interface_work_j,
+        e->interface_created_j, e->fem_dissipated_j, e->dem_dissipated_j, e->external_work_j,
+        e->created_j, e->input_j, e->limit_j, e->closure_j};
+    memcpy(v, all, sizeof all);
+}
+
 static int series(cpl_history *h, nc_h5_series *s, const char *path, nc_h5_type type, int cols,
                   nc_error *err)
 {
@@ -39,8 +55,17 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         series(h, &h->r_next_dt, "/rejections/next_dt", NC_H5_F64, 1, err) ||
         series(h, &h->r_iterations, "/rejections/iterations", NC_H5_I32, 1, err) ||
         series(h, &h->r_residual, "/rejections/residual", NC_H5_F64, 1, err) ||
-        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, err))
+        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, err) ||
+        series(h, &h->e_above, "/energy/above", NC_H5_I32, 1, err) ||
+        nc_h5_attr_string(&h->h5, "/energy/above", "units", "1", err))
         goto fail;
+    for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "/energy/%s", energy_names[k]);
+        if (series(h, &h->e_series[k], name, NC_H5_F64, 1, err) ||
+            nc_h5_attr_string(&h->h5, name, "units", "J", err))
+            goto fail;
+    }
     if (write_iterations &&
         (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, err) ||
          series(h, &h->i_iteration, "/iterations/iteration", NC_H5_I32, 1, err) ||
@@ -59,6 +84,8 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
         nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||
+        nc_h5_attr_double(&h->h5, "/", "energy_tolerance", s->energy.tol_rel, err) ||
+        nc_h5_attr_double(&h->h5, "/", "energy_tolerance_abs", s->energy.tol_abs_j, err) ||
         nc_h5_flush(&h->h5, err))
         goto fail;
     snprintf(path, sizeof path, "%s/iterations.log", dir);
@@ -67,11 +94,11 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         nc_error_set(err, 1, "%s: cannot create the iterations log", path);
         goto fail;
     }
-    fprintf(h->log, "# step time iterations converged residual dt rejected\n");
+    fprintf(h->log, "# step time iterations converged residual dt rejected created_J input_J\n");
     fflush(h->log);
     return 0;
 fail:
-    cpl_history_close(h, NULL, NULL);
+    cpl_history_close(h, NULL, NULL, NULL);
     return -1;
 }
 
@@ -105,11 +132,22 @@ int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err)
         nc_h5_series_append(&h->s_contact, &contact, err) ||
         nc_h5_series_append(&h->s_near, &near, err) ||
         nc_h5_series_append(&h->s_gap, &rec->min_gap_m, err) ||
-        nc_h5_series_append(&h->s_rejected, &rejected, err) ||
-        nc_h5_flush(&h->h5, err))
+        nc_h5_series_append(&h->s_rejected, &rejected, err))
         return -1;
-    fprintf(h->log, "%ld %.9g %d %d %.6e %.9g %d\n", rec->step, rec->time_s, rec->iterations,
-            rec->converged, rec->residual, rec->dt_s, rec->rejected);
+    double ev[CPL_HISTORY_ENERGY_SERIES];
+    energy_values(&rec->energy, ev);
+    int32_t above = rec->energy.above;
+    for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++)
+        if (nc_h5_series_append(&h->e_series[k], &ev[k], err)) return -1;
+    if (nc_h5_series_append(&h->e_above, &above, err) || nc_h5_flush(&h->h5, err)) return -1;
+    fprintf(h->log, "%ld %.9g %d %d %.6e %.9g %d %.6e %.6e\n", rec->step, rec->time_s,
+            rec->iterations, rec->converged, rec->residual, rec->dt_s, rec->rejected,
+            rec->energy.created_j, rec->energy.input_j);
+    if (rec->energy.above && h->energy_warned++ == 0)
+        fprintf(h->log, "# energy created: step %ld (t = %.9g s): %.6e J created, above the "
+                "limit %.6e J (energy_tolerance x input %.6e J + energy_tolerance_abs)\n",
+                rec->step, rec->time_s, rec->energy.created_j, rec->energy.limit_j,
+                rec->energy.input_j);
     if (fflush(h->log) != 0)
         return nc_error_set(err, 1, "iterations.log: write failed (disk full?)");
     return 0;
@@ -139,7 +177,8 @@ int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *e
     return 0;
 }
 
-void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_run_status *status)
+void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *energy,
+                       const cpl_run_status *status)
 {
     if (!h->open) return;
     if (t) {
@@ -159,18 +198,29 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_run_status
         nc_h5_attr_double(&h->h5, "/", "reduced_steps", (double)t->reduced_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "min_dt_used", t->min_dt_s, NULL);
     }
+    if (energy) {
+        nc_h5_attr_double(&h->h5, "/", "energy_available", energy->available && energy->started,
+                          NULL);
+        nc_h5_attr_double(&h->h5, "/", "energy_above_steps", (double)energy->above_steps, NULL);
+        nc_h5_attr_double(&h->h5, "/", "energy_first_step", (double)energy->first_step, NULL);
+        nc_h5_attr_double(&h->h5, "/", "energy_first_time", energy->first_time_s, NULL);
+    }
     if (status) {
         nc_h5_attr_double(&h->h5, "/", "finished", status->finished, NULL);
         nc_h5_attr_double(&h->h5, "/", "reliable", status->reliable, NULL);
         nc_h5_attr_double(&h->h5, "/", "accept_unconverged", status->accept_unconverged, NULL);
+        nc_h5_attr_double(&h->h5, "/", "energy_growth", status->energy_growth, NULL);
+        nc_h5_attr_double(&h->h5, "/", "accept_energy_growth", status->accept_energy_growth,
+                          NULL);
     }
     nc_h5_series *all[] = {&h->s_time, &h->s_dt, &h->s_iterations, &h->s_residual,
                            &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,
                            &h->s_rejected, &h->i_step, &h->i_iteration, &h->i_residual,
                            &h->i_alpha, &h->i_force, &h->i_fem_solved, &h->i_attempt, &h->i_dt,
                            &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
-                           &h->r_iterations, &h->r_residual, &h->r_reason};
+                           &h->r_iterations, &h->r_residual, &h->r_reason, &h->e_above};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
+    for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) nc_h5_series_close(&h->e_series[k]);
     nc_h5_flush(&h->h5, NULL);
     nc_h5_close(&h->h5);
     if (h->log) fclose(h->log);

@@ -5,10 +5,18 @@
  *                     fem_solved, attempt, dt}
  *                     /rejections/{step, attempt, time, dt, next_dt, iterations, residual,
  *                     reason}
+ *                     /energy/{fem_kinetic, fem_elastic, fem_potential, dem_kinetic,
+ *                     dem_elastic, dem_potential (end of step), fem_interface_work,
+ *                     dem_interface_work, interface_created, fem_dissipated, dem_dissipated,
+ *                     external_work (of the step), created, input, limit, closure
+ *                     (accumulated; cpl_energy.h), above}: one row per step, units "J"
+ *                     (above: 1 when created > limit), NAN when unavailable
  *                     root attributes: scheme, relaxation, relaxed_quantity, tolerance, dt,
  *                     dt_min, grow_after; at the end the run's status (cpl_history_close)
  *   DIR/iterations.log  one row per step: "step time iterations converged residual dt
- *                     rejected", and a "# rejected ..." comment line per rejected try
+ *                     rejected created_J input_J", a "# rejected ..." comment line per
+ *                     rejected try and one "# energy created ..." line at the first step
+ *                     above the energy guard's limit
  * Both are flushed after every step, so they stay readable if the coupler is killed.
  */
 #ifndef CPL_HISTORY_H
@@ -18,15 +26,19 @@
 #include "cpl_loop.h"
 #include "nc_h5.h"
 
+#define CPL_HISTORY_ENERGY_SERIES 16
+
 typedef struct cpl_history {
     nc_h5_file h5;
     nc_h5_series s_time, s_dt, s_iterations, s_residual, s_converged, s_force, s_contact,
         s_near, s_gap, s_rejected;
     nc_h5_series i_step, i_iteration, i_residual, i_alpha, i_force, i_fem_solved, i_attempt,
         i_dt;
+    nc_h5_series e_series[CPL_HISTORY_ENERGY_SERIES], e_above;
     nc_h5_series r_step, r_attempt, r_time, r_dt, r_next_dt, r_iterations, r_residual,
         r_reason;
     int write_iterations;
+    long energy_warned;         /* energy-created lines written to the log */
     FILE *log;
     int open;
 } cpl_history;
@@ -43,12 +55,16 @@ typedef struct cpl_run_status {
     int finished;               /* the run reached its end (no error, not interrupted) */
     int reliable;               /* finished and no unconverged step accepted */
     int accept_unconverged;     /* the user opted in to accepting unconverged steps */
+    int energy_growth;          /* the energy guard fired (cpl_energy.h) */
+    int accept_energy_growth;   /* the user opted in to accepting that */
 } cpl_run_status;
 
 /* Stores the timing split as attributes of /timing/total and the run's counts and status
  * (unconverged_steps, rejected_attempts, reduced_steps, min_dt_used, finished, reliable,
- * accept_unconverged) as root attributes (status may be NULL: counts only), flushes and
+ * accept_unconverged, energy_growth, accept_energy_growth, energy_created, energy_input,
+ * energy_first_step, energy_first_time) as root attributes (status may be NULL: counts only), flushes and
  * closes (safe to repeat). */
-void cpl_history_close(cpl_history *h, const cpl_timing *timing, const cpl_run_status *status);
+void cpl_history_close(cpl_history *h, const cpl_timing *timing, const cpl_energy *energy,
+                       const cpl_run_status *status);
 
 #endif

@@ -31,6 +31,7 @@ struct cpl_loop {
     double *u_out, *v_out;  /* FEM output */
     double *x_in, *x_out, *r;
     cpl_timing timing;
+    cpl_energy energy;
 };
 
 void cpl_loop_settings_default(cpl_loop_settings *s)
@@ -54,6 +55,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->max_steps = 0;
     s->dt_min_s = 0.0;   /* dt_s / 64 */
     s->grow_after = 4;
+    cpl_energy_settings_default(&s->energy);
 }
 
 double cpl_loop_settings_dt_min(const cpl_loop_settings *s)
@@ -82,6 +84,12 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (s->dt_min_s < 0.0 || !isfinite(s->dt_min_s) || s->dt_min_s > s->dt_s * (1.0 + 1e-12))
         return nc_error_set(err, 1, "%s: step_control.dt_min must be in (0, dt = %g s], got %g",
                             where, s->dt_s, s->dt_min_s);
+    if (!(s->energy.tol_rel >= 0.0) || !isfinite(s->energy.tol_rel))
+        return nc_error_set(err, 1, "%s: energy_tolerance must be a finite number >= 0, got %g",
+                            where, s->energy.tol_rel);
+    if (!(s->energy.tol_abs_j >= 0.0) || !isfinite(s->energy.tol_abs_j))
+        return nc_error_set(err, 1, "%s: energy_tolerance_abs_j must be a finite number >= 0, "
+                            "got %g", where, s->energy.tol_abs_j);
     if (s->grow_after < 1)
         return nc_error_set(err, 1, "%s: step_control.grow_after must be >= 1, got %d", where,
                             s->grow_after);
@@ -124,6 +132,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->timing.solver_fem_s = NAN;
     L->timing.solver_dem_s = NAN;
     L->timing.min_dt_s = INFINITY;
+    cpl_energy_init(&L->energy, &s->energy);
     *out = L;
     return 0;
 oom:
@@ -165,6 +174,7 @@ const double *cpl_loop_displacement(const cpl_loop *L) { return L->u; }
 const double *cpl_loop_velocity(const cpl_loop *L) { return L->v; }
 const double *cpl_loop_force(const cpl_loop *L) { return L->f; }
 double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
+const cpl_energy *cpl_loop_energy(const cpl_loop *L) { return &L->energy; }
 
 /* ---- calls into the participants: timing, interruption, error context ----------------- */
 
@@ -238,6 +248,7 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
     info->min_gap_m = INFINITY;
     info->contacts = 0.0;
     info->solver_time_s = NAN;
+    info->energy = cpl_energy_report_none();
     double t0 = nc_clock_now_s();
     int rc = p->solve(p->ctx, call, in0, in1, out0, out1, info, c->err);
     *wait_of(c, p) += nc_clock_now_s() - t0;
@@ -269,7 +280,7 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
  * not been solved in this step, it stays where it is (valid only when it is otherwise
  * unloaded and at rest). Returns 1 when solved, 0 when skipped, -1 on failure. */
 static int fem_solve_or_skip(run_ctx *c, const cpl_call *call, const double *force,
-                             int solved_before)
+                             int solved_before, cpl_solve_info *info)
 {
     cpl_loop *L = c->L;
     if (L->s.skip_fem_without_contact) {
@@ -282,8 +293,7 @@ static int fem_solve_or_skip(run_ctx *c, const cpl_call *call, const double *for
          * step is not a step for it at all (no BEGIN_STEP, no ACCEPT_STEP) */
         if (!solved_before && do_begin(c, c->fem, call)) return -1;
     }
-    cpl_solve_info info;
-    if (do_solve(c, c->fem, call, force, NULL, L->u_out, L->v_out, &info)) return -1;
+    if (do_solve(c, c->fem, call, force, NULL, L->u_out, L->v_out, info)) return -1;
     return 1;
 }
 
@@ -360,6 +370,7 @@ typedef struct try_result {
     double residual;        /* of the last completed iteration, NAN if none */
     int fem_solved;         /* the FEM was solved (efficiency option (ii) may skip it) */
     cpl_solve_info dem_info;
+    cpl_solve_info fem_info;    /* of the last FEM solve (when fem_solved) */
 } try_result;
 
 /* A failed request that a smaller step may cure: the participant said so. c->err keeps the
@@ -383,7 +394,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     t->iterations = 0;
     t->residual = NAN;
     t->fem_solved = 0;
-    t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN};
+    t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN, cpl_energy_report_none()};
+    t->fem_info = t->dem_info;
 
     const int lazy_fem = L->s.skip_fem_without_contact;
     if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
@@ -408,7 +420,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             return try_failed(c, t);
         if (!force_mode) {
             /* weak, or algorithm 2: forces go to the structure unrelaxed, eq. (39) */
-            int solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved);
+            int solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved, &t->fem_info);
             if (solved < 0) return try_failed(c, t);
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
@@ -445,7 +457,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             /* iteration 1 evaluated the DEM at the predicted position, not at the FEM's
              * answer to the previous relaxed force: no secant information in this pair */
             if (k == 1) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
-            int solved = fem_solve_or_skip(c, call, L->f_in, t->fem_solved); /* eq. (42) */
+            int solved = fem_solve_or_skip(c, call, L->f_in, t->fem_solved, &t->fem_info); /* eq. (42) */
             if (solved < 0) return try_failed(c, t);
             t->fem_solved |= solved;
             if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
@@ -558,6 +570,9 @@ static int advance_step(run_ctx *c)
     L->timing.steps++;
     if (!ends) L->timing.min_dt_s = fmin(L->timing.min_dt_s, dt);
     if (rejected) L->timing.reduced_steps++;
+    cpl_energy_record energy;
+    cpl_energy_step(&L->energy, call.step, L->time_s, t.fem_solved ? &t.fem_info.energy : NULL,
+                    &t.dem_info.energy, &energy);
 
     /* step control: a reduced Δt doubles after grow_after good steps in a row, once the
      * time is on the grid of the larger step (counted from where the reduction began) */
@@ -576,7 +591,8 @@ static int advance_step(run_ctx *c)
                                .iterations = t.iterations, .converged = converged,
                                .residual = t.residual,
                                .near_interface = t.dem_info.near_interface,
-                               .min_gap_m = t.dem_info.min_gap_m, .rejected = rejected};
+                               .min_gap_m = t.dem_info.min_gap_m, .rejected = rejected,
+                               .energy = energy};
         cpl_total_force(L->f_dem, n3 / 3, rec.contact_force);
         rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");

@@ -21,6 +21,8 @@
  * converged steps in a row (and on the grid of the larger step) a reduced Δt doubles again,
  * never above the nominal Δt. At dt_min a step that still does not converge is accepted or
  * stops the run (on_max_iterations); a failed solve there ends the run.
+ * Energy balance: every accepted step feeds the energies both participants reported with
+ * their last solve to the energy guard (cpl_energy.h); its record goes with the step record.
  * The loop itself never prints: it reports every iteration, rejection and step to an
  * observer.
  */
@@ -29,6 +31,7 @@
 
 #include <signal.h>
 #include <stddef.h>
+#include "cpl_energy.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
 
@@ -47,6 +50,7 @@ typedef struct cpl_solve_info {
     double min_gap_m;       /* DEM: smallest particle-interface gap (INFINITY when unknown) */
     double contacts;        /* DEM: number of contacts at the end of the step */
     double solver_time_s;   /* time the participant spent computing, NAN when not reported */
+    cpl_energy_report energy;   /* its energies (cpl_energy.h); valid = 0 when not reported */
 } cpl_solve_info;
 
 /* A participant: `ctx` is passed back to every function; all return 0 / -1 (+ err). */
@@ -87,6 +91,7 @@ typedef struct cpl_loop_settings {
     double dt_min_s;                /* step rejection: smallest retry Δt (<= 0: dt_s / 64;
                                        >= dt_s: no retries) */
     int grow_after;                 /* converged steps in a row before a reduced Δt doubles */
+    cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
 } cpl_loop_settings;
 
 /* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */
@@ -142,6 +147,7 @@ typedef struct cpl_step_record {
     int near_interface;
     double min_gap_m;
     int rejected;                   /* tries of this step rejected before this one */
+    cpl_energy_record energy;       /* the energy balance after this step */
 } cpl_step_record;
 
 /* Every function may be NULL. */
@@ -200,5 +206,7 @@ const double *cpl_loop_displacement(const cpl_loop *loop);
 const double *cpl_loop_velocity(const cpl_loop *loop);
 const double *cpl_loop_force(const cpl_loop *loop);
 double cpl_loop_time(const cpl_loop *loop);
+/* The energy balance and guard of the accepted steps so far. */
+const cpl_energy *cpl_loop_energy(const cpl_loop *loop);
 
 #endif

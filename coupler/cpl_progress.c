@@ -81,6 +81,11 @@ void cpl_progress_step(cpl_progress *p, const cpl_step_record *rec, int strong)
                                  "steps so far)", rec->step, rec->time_s, rec->iterations,
                                  rec->dt_s, rec->residual, p->warnings);
     }
+    if (rec->energy.above && p->energy_warnings++ == 0)
+        cpl_progress_message(p, "warning: step %ld (t = %.6g s): the run has created %.6g J of "
+                             "energy, above the limit %.6g J (energy_tolerance x input energy "
+                             "%.6g J + energy_tolerance_abs)", rec->step, rec->time_s,
+                             rec->energy.created_j, rec->energy.limit_j, rec->energy.input_j);
     if (p->quiet) return;
     double now = nc_clock_now_s();
     double every = p->tty ? 0.1 : p->interval_s;

@@ -22,6 +22,7 @@ typedef struct cpl_progress {
     double dt_nominal_s;        /* the status line shows Δt when a step is shorter */
     int line_open;              /* a status line is on screen without newline */
     long warnings;              /* unconverged steps reported */
+    long energy_warnings;       /* steps above the energy guard's limit (the first is reported) */
     long rejections;            /* rejected tries reported */
     cpl_step_record last;
     int have_last;

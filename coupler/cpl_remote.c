@@ -135,6 +135,21 @@ static int copy_array(cpl_remote *r, const char *name, double *out, nc_error *er
     return 0;
 }
 
+/* The optional energy values of a SOLVE reply (protocol/README.md §3): valid only when all
+ * six are present. */
+static void read_energy(const proto_message *reply, cpl_energy_report *e)
+{
+    e->kinetic_j = proto_message_value(reply, "kinetic_energy_j", NAN);
+    e->elastic_j = proto_message_value(reply, "elastic_energy_j", NAN);
+    e->potential_j = proto_message_value(reply, "potential_energy_j", NAN);
+    e->interface_work_j = proto_message_value(reply, "interface_work_j", NAN);
+    e->external_work_j = proto_message_value(reply, "external_work_j", NAN);
+    e->dissipated_j = proto_message_value(reply, "dissipated_energy_j", NAN);
+    e->valid = isfinite(e->kinetic_j) && isfinite(e->elastic_j) && isfinite(e->potential_j) &&
+               isfinite(e->interface_work_j) && isfinite(e->external_work_j) &&
+               isfinite(e->dissipated_j);
+}
+
 static int remote_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
                         double *out0, double *out1, cpl_solve_info *info, nc_error *err)
 {
@@ -155,6 +170,7 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
         info->contacts = proto_message_value(&r->reply, "contacts", 0.0);
     }
     info->solver_time_s = proto_message_value(&r->reply, "solve_time_s", NAN);
+    read_energy(&r->reply, &info->energy);
     return 0;
 }
 

@@ -3,8 +3,8 @@
  *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
  *
  * Exit codes: 0 success, 1 input/participant/coupling failure, 3 finished but with accepted
- * unconverged steps (results not reliable; 0 instead when coupler.json sets
- * accept_unconverged), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
+ * unconverged steps or with energy created beyond energy_tolerance (results not reliable; 0
+ * instead when coupler.json sets accept_unconverged, respectively accept_energy_growth), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
  * coupler/README.md.
  */
 #include <math.h>
@@ -36,7 +36,7 @@ static void usage(FILE *out)
             "  --quiet             only warnings, errors and the final summary\n");
 }
 
-/* A run that finished with accepted unconverged steps (not opted in). */
+/* A run that finished with accepted unconverged steps or created energy (not opted in). */
 enum { EXIT_UNRELIABLE = 3 };
 
 typedef struct app {
@@ -186,9 +186,42 @@ static void print_timing(app *a)
     fflush(o);
 }
 
+/* The energy balance line of the summary (cpl_energy.h). */
+static void print_energy(app *a)
+{
+    const cpl_energy *e = cpl_loop_energy(a->loop);
+    FILE *o = a->progress.out;
+    if (!e->available || !e->started) {
+        fprintf(o, "coupler: energy balance: not available (a participant does not report its "
+                "energies), energy guard off\n");
+        return;
+    }
+    double limit = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
+    fprintf(o, "coupler: energy balance: input %.6g J (largest kinetic + elastic energy), "
+            "energy now %+.6g J from the start (created, limit %.6g J, energy_tolerance %.3g); "
+            "interface work mismatch %.6g J, dissipated fem %.6g J, dem %.6g J, external work "
+            "%.6g J, closure %.3g J\n", e->input_j, e->created_j, limit, e->s.tol_rel,
+            e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j, e->sum_ext_j, e->closure_j);
+}
+
+/* The guard's verdict when it fired: the last line of the summary. */
+static void print_energy_verdict(app *a)
+{
+    const cpl_energy *e = cpl_loop_energy(a->loop);
+    FILE *o = a->progress.out;
+    fprintf(o, "coupler: results are NOT reliable: the run created energy: %.6g J at step %ld "
+            "(t = %.6g s), above the limit %.6g J (%ld steps above it, largest excess %.6g J); "
+            "%s\n", e->first_created_j, e->first_step, e->first_time_s, e->first_limit_j,
+            e->above_steps, e->max_excess_j,
+            a->cfg.accept_energy_growth
+                ? "accepted because coupler.json sets accept_energy_growth"
+                : "exit status 3 (coupler.json \"accept_energy_growth\": true accepts it with "
+                  "exit status 0)");
+}
+
 /* The end of the summary: how far the results can be trusted; the verdict is the last line.
- * Returns 1 when the results are reliable. */
-static int print_status(app *a)
+ * Returns 1 when the results are reliable; *energy_ok: the energy guard did not fire. */
+static int print_status(app *a, int *energy_ok)
 {
     const cpl_timing *t = cpl_loop_timing(a->loop);
     const cpl_loop_settings *s = &a->cfg.loop;
@@ -201,14 +234,19 @@ static int print_status(app *a)
     else
         fprintf(o, "coupler: step control: no step rejected, no dt reduced (nominal %.3g s, "
                 "dt_min %.3g s)\n", s->dt_s, dt_min);
+    const cpl_energy *e = cpl_loop_energy(a->loop);
+    *energy_ok = e->first_step < 0;
+    print_energy(a);
     int reliable = 1;
-    if (s->scheme == CPL_SCHEME_WEAK) {
+    if (s->scheme == CPL_SCHEME_WEAK)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
                 "residual is not iterated away (it is recorded in /steps/residual)\n");
-    } else if (t->unconverged_steps == 0) {
-        fprintf(o, "coupler: results are reliable: every step converged to the tolerance "
-                "%.3g\n", s->tol_abs);
-    } else {
+    if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
+        fprintf(o, "coupler: %severy step converged to the tolerance %.3g\n",
+                *energy_ok ? "results are reliable: " : "", s->tol_abs);
+    } else if (s->scheme == CPL_SCHEME_STRONG) {
+        /* both verdicts when both apply, the unconverged steps last */
+        if (!*energy_ok) print_energy_verdict(a);
         reliable = 0;
         char why[256];
         if (dt_min < s->dt_s * (1.0 - 1e-9))
@@ -223,8 +261,9 @@ static int print_status(app *a)
                     : "exit status 3 (coupler.json \"accept_unconverged\": true accepts them "
                       "with exit status 0)");
     }
+    if (!*energy_ok && reliable) print_energy_verdict(a);
     fflush(o);
-    return reliable;
+    return reliable && *energy_ok;
 }
 
 int main(int argc, char **argv)
@@ -243,7 +282,7 @@ int main(int argc, char **argv)
     double *u0 = NULL, *v0 = NULL;
     cpl_failure failure;
     memset(&failure, 0, sizeof failure);
-    cpl_run_status status = {0, 0, 0};
+    cpl_run_status status = {0, 0, 0, 0, 0};
     cpl_config_default(&a.cfg);
     cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet, 10.0, 0.0, 1.0, 1.0);
     /* endpoints given on the command line are known even if coupler.json is bad */
@@ -313,8 +352,12 @@ int main(int argc, char **argv)
     rc = shutdown_all(&a, NULL) ? 1 : 0;
     print_timing(&a);
     status.finished = 1;
-    status.reliable = print_status(&a);
-    if (rc == 0 && !status.reliable && !a.cfg.accept_unconverged) rc = EXIT_UNRELIABLE;
+    int energy_ok = 1;
+    status.reliable = print_status(&a, &energy_ok);
+    status.energy_growth = !energy_ok;
+    if (rc == 0 && ((cpl_loop_timing(a.loop)->unconverged_steps > 0 && !a.cfg.accept_unconverged) ||
+                    (!energy_ok && !a.cfg.accept_energy_growth)))
+        rc = EXIT_UNRELIABLE;
     goto done;
 
 fail:
@@ -326,8 +369,10 @@ fail:
 
 done:
     status.accept_unconverged = a.cfg.accept_unconverged;
+    status.accept_energy_growth = a.cfg.accept_energy_growth;
     if (history_open)
-        cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL, &status);
+        cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL,
+                          a.loop ? cpl_loop_energy(a.loop) : NULL, &status);
     if (a.fem_open) cpl_remote_close(&a.fem);
     if (a.dem_open) cpl_remote_close(&a.dem);
     cpl_loop_free(a.loop);

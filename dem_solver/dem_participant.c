@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dem_energy.h"
 #include "nc_file.h"
 #include "proto_serve.h"
 
@@ -14,6 +15,7 @@ typedef struct participant {
     double *force;          /* 3 per node: last time-averaged nodal force */
     size_t force_cap;
     double next_out_s;      /* next output time */
+    double e_start_j;       /* mechanical energy at BEGIN_STEP (dem_energy.h) */
 } participant;
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -45,7 +47,9 @@ static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
 {
     (void)cmd;
     participant *c = ctx;
-    return dem_sim_begin_step(c->s, err);
+    if (dem_sim_begin_step(c->s, err)) return -1;
+    c->e_start_j = dem_sim_mechanical_energy(c->s);
+    return 0;
 }
 
 static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
@@ -67,7 +71,17 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
         return -1;
     dem_coupled_info info;
     if (dem_sim_solve_coupled(s, cmd->dt_s, disp, vel, c->force, &info, err)) return -1;
+    /* the energy values of protocol/README.md §3: elastic = contact springs, potential =
+     * gravity, interface work = the net wall's work on the particles, no external loads */
+    dem_step_energy e;
+    dem_sim_step_energy(s, cmd->dt_s, c->e_start_j, &e);
     if (proto_message_add_f64(reply, "force", c->force, n, 3, err) ||
+        proto_message_set_value(reply, "kinetic_energy_j", e.kinetic_j, err) ||
+        proto_message_set_value(reply, "elastic_energy_j", e.contact_j, err) ||
+        proto_message_set_value(reply, "potential_energy_j", e.gravity_j, err) ||
+        proto_message_set_value(reply, "interface_work_j", e.wall_work_j, err) ||
+        proto_message_set_value(reply, "external_work_j", 0.0, err) ||
+        proto_message_set_value(reply, "dissipated_energy_j", e.dissipated_j, err) ||
         proto_message_set_value(reply, "near_interface", info.near_interface, err) ||
         proto_message_set_value(reply, "min_gap_m", info.min_gap_m, err) ||
         proto_message_set_value(reply, "contacts", (double)info.contacts, err) ||

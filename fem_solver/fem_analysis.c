@@ -742,11 +742,15 @@ void fem_analysis_update_axial(fem_analysis *s)
     s->stats.slack_elements = slack;
 }
 
-double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain)
+static void method_weights(const fem_settings *set, double *beta, double *gamma, double *am,
+                           double *af);
+
+/* Kinetic and strain energy of the state u, v. */
+static void state_energy(const fem_analysis *s, const double *u, const double *v, double *kinetic,
+                         double *strain)
 {
     const fem_model *m = s->m;
     double T = 0, W = 0;
-    const double *u = s->cur.u, *v = s->cur.v;
     for (int e = 0; e < m->n_elements; e++) {
         const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
         double m11, m12, l2 = 0;
@@ -762,7 +766,78 @@ double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strai
         /* W = A L int S dE = L ((A S_tot)^2 - (A S_pre)^2) / (2 E A) */
         if (m->EA[e] > 0) W += m->L0[e] * (AS_tot * AS_tot - m->AS[e] * m->AS[e]) / (2.0 * m->EA[e]);
     }
+    *kinetic = T;
+    *strain = W;
+}
+
+double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain)
+{
+    double T, W;
+    state_energy(s, s->cur.u, s->cur.v, &T, &W);
     if (kinetic) *kinetic = T;
     if (strain) *strain = W;
     return T + W;
+}
+
+int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy *e)
+{
+    const fem_model *m = s->m;
+    const double dt = s->cur.time_s - s->start.time_s;
+    if (!(dt > 0.0)) return -1;
+    double T0 = 0, W0, T1 = 0, W1;
+    state_energy(s, s->start.u, s->start.v, &T0, &W0);
+    state_energy(s, s->cur.u, s->cur.v, &T1, &W1);
+    if (!inertia) T0 = T1 = 0.0;
+    /* quasi-static coupling solves at the full load (fem_analysis_static(s, 1, ...)) */
+    const double lam0 = inertia ? fem_analysis_load_factor(s, s->start.time_s) : 1.0;
+    const double lam1 = inertia ? fem_analysis_load_factor(s, s->cur.time_s) : 1.0;
+    /* the coupling force the start-of-step acceleration stands for: with "step_constant" it
+     * was shifted to this step's force */
+    const double *fc0 = m->settings.coupling_load_constant ? s->f_coupling : s->start.fc;
+    /* the loads' weights of the velocity update v_n+1 - v_n = dt ((1 - gamma) a_n + gamma
+     * a_n+1): the impulse the integrator takes from the start and the end force */
+    double beta, gamma = 0.5, am, af;
+    if (inertia) method_weights(&m->settings, &beta, &gamma, &am, &af);
+    double load_work = 0, coupling_work = 0, v0 = 0, v1 = 0;
+    for (int q = 0; q < s->neq; q++) {
+        int i = s->dof_of_eq[q];
+        double du = s->cur.u[i] - s->start.u[i];
+        load_work += 0.5 * (lam0 + lam1) * s->f_model[i] * du;
+        coupling_work += ((1.0 - gamma) * fc0[i] + gamma * s->cur.fc[i]) * du;
+        v0 -= lam0 * s->f_model[i] * s->start.u[i];
+        v1 -= lam1 * s->f_model[i] * s->cur.u[i];
+    }
+    /* Rayleigh C = tau M + kappa K_T at the mid-step velocity, K_T at the end of the step */
+    double rayleigh = 0;
+    if (inertia && (m->tau_per_s != 0.0 || m->kappa_s != 0.0)) {
+        for (int e = 0; e < m->n_elements; e++) {
+            const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+            double vk[3], vl[3], dv[3], d[3], f[3], Kb[9], m11, m12;
+            for (int c = 0; c < 3; c++) {
+                vk[c] = 0.5 * (s->start.v[k + c] + s->cur.v[k + c]);
+                vl[c] = 0.5 * (s->start.v[l + c] + s->cur.v[l + c]);
+                dv[c] = vl[c] - vk[c];
+                d[c] = m->X[l + c] + s->cur.u[l + c] - m->X[k + c] - s->cur.u[k + c];
+            }
+            fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+            for (int c = 0; c < 3; c++)
+                rayleigh += m->tau_per_s * (m11 * (vk[c] * vk[c] + vl[c] * vl[c]) + 2.0 * m12 * vk[c] * vl[c]);
+            if (m->kappa_s != 0.0) {
+                int slack;
+                fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb, &slack);
+                for (int i = 0; i < 3; i++)
+                    for (int j = 0; j < 3; j++) rayleigh += m->kappa_s * dv[i] * Kb[3 * i + j] * dv[j];
+            }
+        }
+        rayleigh *= dt;
+    }
+    e->kinetic_j = T1;
+    e->strain_j = W1;
+    e->load_potential_j = v1;
+    e->load_work_j = load_work;
+    e->load_input_j = load_work + (v1 - v0);
+    e->coupling_work_j = coupling_work;
+    e->rayleigh_j = rayleigh;
+    e->numerical_j = load_work + coupling_work - (T1 + W1 - T0 - W0) - rayleigh;
+    return 0;
 }

@@ -124,4 +124,28 @@ void fem_analysis_update_axial(fem_analysis *s);
 /* Total mechanical energy: kinetic (1/2 v^T M v) + strain energy of the elements. */
 double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain);
 
+/* The energy balance of the step just solved, from `start` to `cur` (J):
+ *   load_work     = 1/2 (lambda_n + lambda_n+1) f_model · Δu (self-weight, point loads);
+ *   coupling_work = ((1 - gamma) fc_n + gamma fc_n+1) · Δu, the weights the velocity update
+ *                   v_n+1 - v_n = dt ((1 - gamma) a_n + gamma a_n+1) gives the start and end
+ *                   force (the trapezoid for Newmark); fc_n the coupling force the start-of-
+ *                   step acceleration stands for (start.fc; f_coupling with "step_constant");
+ *   rayleigh      = Δt v_m^T C v_m, v_m = (v_n + v_n+1) / 2, C = tau M + kappa K_T(u_n+1);
+ *   numerical     = load_work + coupling_work - Δ(kinetic + strain) - rayleigh, the balance.
+ * Work sums run over the free dofs (reactions of prescribed displacements are left out).
+ * For Newmark beta = 1/4, gamma = 1/2 on a linear system every term is exact and numerical
+ * vanishes to round-off (the trapezoidal rule conserves the discrete energy); the alpha
+ * methods' (and the geometric nonlinearity's) energy error shows up in numerical, and for
+ * them the split between coupling_work and numerical is a convention.
+ * load_potential = -lambda_n+1 f_model · u_n+1; load_input = load_work + Δ load_potential,
+ * the work of the loads beyond their potential (0 for constant loads; a ramp's share).
+ * inertia = 0 (quasi-static coupling): no kinetic energy, no Rayleigh term, load factor 1
+ * (the caller keeps cur.fc = f_coupling).
+ * Returns -1 when no step was solved (cur.time_s <= start.time_s). */
+typedef struct fem_step_energy {
+    double kinetic_j, strain_j, load_potential_j;   /* at the end of the step */
+    double load_work_j, load_input_j, coupling_work_j, rayleigh_j, numerical_j;   /* of the step */
+} fem_step_energy;
+int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy *e);
+
 #endif

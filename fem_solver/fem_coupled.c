@@ -74,6 +74,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         long step0 = s->cur.step;
         if (fem_analysis_static(s, 1.0, err)) return -1;
         for (int i = 0; i < s->ndof; i++) s->cur.v[i] = (s->cur.u[i] - s->start.u[i]) / dt;
+        memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));   /* for the energy */
         s->cur.time_s = t0 + dt;
         s->cur.step = step0 + 1;
     } else if (fem_analysis_step(s, dt, err)) {
@@ -84,8 +85,22 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
             c->iface_u[3 * i + d] = s->cur.u[3 * m->iface_nodes[i] + d];
             c->iface_v[3 * i + d] = s->cur.v[3 * m->iface_nodes[i] + d];
         }
+    /* the energy values of protocol/README.md §3 (fem_analysis_step_energy): elastic =
+     * strain, potential = of the model loads, external work = their ramp's share,
+     * dissipated = Rayleigh + the integrator's numerical damping */
+    fem_step_energy e;
+    if (fem_analysis_step_energy(s, m->settings.type != FEM_STATIC, &e))
+        return nc_error_set(err, 1, "step energy: no step was solved");
     if (proto_message_add_f64(reply, "displacement", c->iface_u, (size_t)n, 3, err) ||
         proto_message_add_f64(reply, "velocity", c->iface_v, (size_t)n, 3, err) ||
+        proto_message_set_value(reply, "kinetic_energy_j", e.kinetic_j, err) ||
+        proto_message_set_value(reply, "elastic_energy_j", e.strain_j, err) ||
+        proto_message_set_value(reply, "potential_energy_j", e.load_potential_j, err) ||
+        proto_message_set_value(reply, "interface_work_j", e.coupling_work_j, err) ||
+        proto_message_set_value(reply, "external_work_j", e.load_input_j, err) ||
+        proto_message_set_value(reply, "dissipated_energy_j", e.rayleigh_j + e.numerical_j, err) ||
+        proto_message_set_value(reply, "rayleigh_dissipation_j", e.rayleigh_j, err) ||
+        proto_message_set_value(reply, "numerical_dissipation_j", e.numerical_j, err) ||
         proto_message_set_value(reply, "newton_iterations", s->stats.iterations, err) ||
         proto_message_set_value(reply, "residual_norm", s->stats.residual_norm, err))
         return -1;

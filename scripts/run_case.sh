@@ -16,8 +16,9 @@
 # --fem-program/--dem-program replace a solver by another participant command taking the same
 # arguments (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py").
 # Exit status: 0 when all three programs succeeded; 3 (the coupler's) when the run finished
-# but accepted unconverged steps (results NOT reliable; 0 with coupler.json
-# "accept_unconverged": true, still reported as not reliable); otherwise non-zero with a
+# but accepted unconverged steps or created energy (results NOT reliable; 0 with coupler.json
+# "accept_unconverged" / "accept_energy_growth": true, still reported as not reliable);
+# otherwise non-zero with a
 # message naming the ones that failed. Ctrl-C stops the coupler cleanly (it shuts the
 # solvers down).
 set -u
@@ -199,7 +200,8 @@ wait_exit "$fem_pid"; fem_rc=$?
 wait_exit "$dem_pid"; dem_rc=$?
 cpl_pid=""; fem_pid=""; dem_pid=""
 
-# coupler exit 3: it finished, but accepted unconverged steps (not a failure of a program)
+# coupler exit 3: it finished, but accepted unconverged steps or created energy (not a
+# failure of a program)
 failed=()
 [ "$cpl_rc" -ne 0 ] && [ "$cpl_rc" -ne 3 ] && failed+=("coupler (exit $cpl_rc, see $out/coupler.log)")
 [ "$fem_rc" -ne 0 ] && failed+=("fem (exit $fem_rc, see $out/fem.log)")
@@ -210,7 +212,7 @@ if [ ${#failed[@]} -gt 0 ]; then
   [ $interrupted -eq 1 ] && exit 130
   exit 1
 fi
-# the coupler's verdict (the last line of its summary) also when accept_unconverged let it
+# the coupler's verdict (the last line of its summary) also when an accept_* key let it
 # exit 0: such a run is never reported as done
 if [ "$cpl_rc" -eq 3 ] || grep -q "results are NOT reliable" coupler.log; then
   echo "run_case: finished, but the results are NOT reliable; results in $out" >&2

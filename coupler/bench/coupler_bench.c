@@ -231,7 +231,7 @@ int main(int argc, char **argv)
     if (cpl_history_open(&history, dir, &s, 1, &err)) goto out;
     int run_rc = cpl_loop_create(&loop, &s, mesh.n_nodes, u0, v0, &err) ||
                  cpl_loop_run(loop, &pf, &pd, &obs, NULL, NULL, &err);
-    cpl_history_close(&history, loop ? cpl_loop_timing(loop) : NULL, NULL);
+    cpl_history_close(&history, loop ? cpl_loop_timing(loop) : NULL, NULL, NULL);
     if (run_rc) goto out;
     const cpl_timing *t = cpl_loop_timing(loop);
     /* per participant: 2 array-less commands per step (begin, accept) + the solves */

@@ -14,7 +14,9 @@
 #  - strong 1e-2 keeps contact: contact-free time in W < 5 % of W (measured 0.2 %) and peak u_A
 #    within 2 % (measured -0.70 %).
 #  - weak 1e-2 jumps: contact-free time in W > 25 % of W (measured 64 %), contact lost and
-#    regained, and a force on return > 2x the reference's maximum (measured 3.35x).
+#    regained, and a force on return > 2x the reference's maximum (measured 3.35x); it creates
+#    energy, so the coupler's energy guard fires (the run opts in with accept_energy_growth
+#    and the warning is checked).
 . tests/e2e_lib.sh
 case_dir=cases/cable_impact
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
@@ -23,12 +25,17 @@ T=1.2
 "$PY" scripts/analysis/reference_explicit.py $T 2e-5 1.0 --case cable_impact --swap x \
   --save "$NC_TMP/ref.npz" > "$NC_TMP/ref.log" 2>&1 || { tail "$NC_TMP/ref.log"; fail "reference_explicit.py failed"; }
 
-run() {   # name scheme dt
-  run_case "$1" "$case_dir" --set coupler.scheme=$2 --set coupler.dt=$3 --set coupler.end_time=$T
+run() {   # name scheme dt [run_case.sh arguments]
+  local name=$1 scheme=$2 dt=$3
+  shift 3
+  run_case "$name" "$case_dir" --set coupler.scheme=$scheme --set coupler.dt=$dt \
+    --set coupler.end_time=$T "$@"
 }
 run weak_dt2e-4 weak 2e-4
-run weak_dt1e-2 weak 1e-2
+run weak_dt1e-2 weak 1e-2 --set coupler.accept_energy_growth=true
 run strong_dt1e-2 strong 1e-2
+grep -q "^warning: step [0-9]* (t = .* s): the run has created .* J of energy" \
+  "$NC_TMP/weak_dt1e-2/coupler.log" || fail "weak_dt1e-2: no energy-created warning"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys

@@ -45,6 +45,7 @@ void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, do
     p->nd = nd;
     p->mp = vec(nd); p->kc = vec(nd); p->g = vec(nd);
     p->x0 = vec(nd); p->y0 = vec(nd); p->x = vec(nd); p->y = vec(nd);
+    p->w0 = vec(nd); p->w = vec(nd);
     p->fail_step = -1;
     p->fail.dt_above_s = INFINITY;
     p->stiff_factor = 1.0;
@@ -58,6 +59,7 @@ void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, do
 void tm_particles_free(tm_particles *p)
 {
     free(p->mp); free(p->kc); free(p->g); free(p->x0); free(p->y0); free(p->x); free(p->y);
+    free(p->w0); free(p->w);
     memset(p, 0, sizeof *p);
 }
 
@@ -135,10 +137,28 @@ static void structure_solve(tm_structure *s, const double *F, double dt)
     free(b);
 }
 
+/* The exact energies of the structure's backward-Euler step (see the header). */
+static void structure_energy(const tm_structure *s, const double *F, cpl_energy_report *e)
+{
+    size_t nd = s->nd;
+    double T = 0, U = 0, W = 0, D = 0;
+    for (size_t i = 0; i < nd; i++) {
+        double du = s->u[i] - s->u0[i], dv = s->v[i] - s->v0[i];
+        T += 0.5 * s->m[i] * s->v[i] * s->v[i];
+        W += F[i] * du;
+        D += 0.5 * s->m[i] * dv * dv;
+        for (size_t j = 0; j < nd; j++) {
+            U += 0.5 * s->u[i] * s->K[i * nd + j] * s->u[j];
+            D += 0.5 * du * s->K[i * nd + j] * (s->u[j] - s->u0[j]);
+        }
+    }
+    *e = (cpl_energy_report){1, T, U, 0.0, W, 0.0, D};
+}
+
 static int s_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
                    double *out0, double *out1, cpl_solve_info *info, nc_error *err)
 {
-    (void)in1; (void)info;
+    (void)in1;
     tm_structure *s = ctx;
     if (!s->open) return nc_error_set(err, 1, "refused: no step begun (test)");
     if (call->step == s->fail_step && call->iteration == s->fail_iteration)
@@ -147,6 +167,7 @@ static int s_solve(void *ctx, const cpl_call *call, const double *in0, const dou
     s->solves++;
     if (call->dt_s > s->dt_seen_max) s->dt_seen_max = call->dt_s;
     structure_solve(s, in0, call->dt_s);   /* restores the start state implicitly */
+    structure_energy(s, in0, &info->energy);
     memcpy(out0, s->u, s->nd * sizeof(double));
     memcpy(out1, s->v, s->nd * sizeof(double));
     return 0;
@@ -193,6 +214,8 @@ static int p_solve(void *ctx, const cpl_call *call, const double *in0, const dou
     double dt = call->dt_s;
     double f = tm_overlaps(call->time_s, dt, p->stiff_from_s, p->stiff_until_s)
                    ? p->stiff_factor : 1.0;
+    cpl_energy_report *e = &info->energy;
+    *e = (cpl_energy_report){1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
     for (size_t i = 0; i < p->nd; i++) {
         double kc = f * p->kc[i];
         double x1 = (p->mp[i] * (p->x0[i] + dt * p->y0[i]) +
@@ -200,7 +223,14 @@ static int p_solve(void *ctx, const cpl_call *call, const double *in0, const dou
                     (p->mp[i] + dt * dt * kc);
         p->y[i] = (x1 - p->x0[i]) / dt;
         p->x[i] = x1;
+        p->w[i] = in0[i];
         out0[i] = kc * (x1 - in0[i]);
+        double s1 = x1 - in0[i], ds = s1 - (p->x0[i] - p->w0[i]), dy = p->y[i] - p->y0[i];
+        e->kinetic_j += 0.5 * p->mp[i] * p->y[i] * p->y[i];
+        e->elastic_j += 0.5 * kc * s1 * s1;
+        e->potential_j -= p->mp[i] * p->g[i] * x1;
+        e->interface_work_j -= kc * s1 * (in0[i] - p->w0[i]);
+        e->dissipated_j += 0.5 * p->mp[i] * dy * dy + 0.5 * kc * ds * ds;
     }
     info->near_interface = call->time_s + call->dt_s < p->far_until_s ? 0 : 1;
     info->contacts = 1;
@@ -213,6 +243,7 @@ static int p_accept(void *ctx, const cpl_call *call, nc_error *err)
     tm_particles *p = ctx;
     memcpy(p->x0, p->x, p->nd * sizeof(double));
     memcpy(p->y0, p->y, p->nd * sizeof(double));
+    memcpy(p->w0, p->w, p->nd * sizeof(double));
     return 0;
 }
 

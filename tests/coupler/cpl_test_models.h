@@ -5,7 +5,14 @@
  * Particles ("DEM"): one particle per dof, mass mp, bilateral linear contact spring kc to the
  * wall, body acceleration g, backward Euler with the wall at its end-of-step position w:
  *   (mp + Δt² kc) x1 = mp (x0 + Δt y0) + Δt² (kc w + mp g),  force on the wall kc (x1 − w).
- * Both restore their start-of-step state on every solve, like the real solvers. The
+ * Both restore their start-of-step state on every solve, like the real solvers, and report
+ * their exact discrete energies (cpl_energy_report): backward Euler dissipates exactly
+ *   structure: ½ Δv·M Δv + ½ Δu·K Δu, interface work F·Δu, kinetic ½ v·M v, elastic ½ u·K u;
+ *   particles: ½ mp Δy² + ½ kc Δs² (s = x − w, the spring's stretch), interface work
+ *   −kc s1 Δw (the wall's work on the particles, Δw from the wall of the last accepted step to
+ *   this one), kinetic ½ mp y², elastic ½ kc s², potential −mp g x;
+ * so each side's balance closes to round-off (with the stiff window the spring energy jumps
+ * where kc changes). The
  * structure refuses SOLVE and ACCEPT_STEP outside a begun step, like the serve loop.
  * Step rejection tests: either can fail a solve with CPL_ERR_STEP_FAILED while its step
  * [t, t + Δt) overlaps a time window and Δt is above a limit (tm_fail_window), and the
@@ -43,6 +50,7 @@ typedef struct tm_particles {
     size_t nd;
     double *mp, *kc, *g;
     double *x0, *y0, *x, *y;
+    double *w0, *w;           /* wall at the start of the step (last accepted input), current */
     long solves;
     double far_until_s;       /* report near_interface = 0 while t + Δt < this */
     long fail_step;

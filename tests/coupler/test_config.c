@@ -48,6 +48,10 @@ static void test_minimal_and_defaults(void **state)
     assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-3 / 64.0, 0.0);
     assert_int_equal(c.loop.grow_after, 4);
     assert_int_equal(c.accept_unconverged, 0);
+    /* energy guard: 1 % of the input energy + 1e-9 J, not accepted */
+    assert_near(c.loop.energy.tol_rel, 0.01, 0.0);
+    assert_near(c.loop.energy.tol_abs_j, 1e-9, 0.0);
+    assert_int_equal(c.accept_energy_growth, 0);
 }
 
 static void test_full_file(void **state)
@@ -67,6 +71,7 @@ static void test_full_file(void **state)
         " \"timeouts\": {\"connect\": 5, \"reply\": 60, \"shutdown\": 2},"
         " \"step_control\": {\"dt_min\": 1e-4, \"grow_after\": 10},"
         " \"accept_unconverged\": true,"
+        " \"energy_tolerance\": 0.05, \"energy_tolerance_abs\": 1e-3, \"accept_energy_growth\": true,"
         " \"output\": {\"iterations\": false, \"progress_interval\": 1}}";
     cpl_config c;
     nc_error err;
@@ -91,6 +96,9 @@ static void test_full_file(void **state)
     assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-4, 0.0);
     assert_int_equal(c.loop.grow_after, 10);
     assert_int_equal(c.accept_unconverged, 1);
+    assert_near(c.loop.energy.tol_rel, 0.05, 0.0);
+    assert_near(c.loop.energy.tol_abs_j, 1e-3, 0.0);
+    assert_int_equal(c.accept_energy_growth, 1);
 }
 
 static void expect_error(const char *text, const char *fragment)
@@ -132,6 +140,10 @@ static void test_bad_input_messages(void **state)
                  " \"step_control\": {\"dt_mn\": 0.01}}", "dt_mn: unknown key");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"accept_unconverged\": 1}", "accept_unconverged");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"energy_tolerance\": -0.01}", "energy_tolerance");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"accept_energy_growth\": \"yes\"}", "accept_energy_growth");
 }
 
 static void test_load_missing_file(void **state)
