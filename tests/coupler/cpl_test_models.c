@@ -330,3 +330,18 @@ cpl_observer tm_recorder_observer(tm_recorder *r)
     cpl_observer o = {r, r_iteration, r_step, r_reject};
     return o;
 }
+
+cpl_loop_settings tm_loop_settings(cpl_scheme scheme, double dt, double end)
+{
+    cpl_loop_settings s;
+    cpl_loop_settings_default(&s);
+    s.scheme = scheme;
+    s.dt_s = dt;
+    s.end_time_s = end;
+    s.tol_abs = 1e-10;
+    s.max_iterations = 200;
+    return s;
+}
+
+const tm_problem TM_MILD = {1, 1.0, 100.0, 0.0, 1.0, 1000.0, -9.81};
+const tm_problem TM_HARD = {2, 0.1, 100.0, 50.0, 10.0, 1e5, -9.81};

@@ -65,6 +65,21 @@ void tm_particles_init(tm_particles *p, size_t n_nodes, double mp, double kc, do
 void tm_particles_free(tm_particles *p);
 
 /* The cpl_participant wrappers. */
+/* A coupled test problem: structure nodes, node mass, spring, link spring; particle mass,
+ * contact stiffness, gravity (the arguments of tm_structure_init / tm_particles_init). */
+typedef struct tm_problem {
+    size_t nodes;
+    double m, k, k_link, mp, kc, g;
+} tm_problem;
+/* Mild coupling: |J| ≈ 0.1 at Δt = 0.01 s. */
+extern const tm_problem TM_MILD;
+/* Light net, heavy rock, stiff contact: |J| ≈ 45 at Δt = 0.01 s (added-mass-like). */
+extern const tm_problem TM_HARD;
+
+/* Loop settings of the unit tests: default settings with the scheme, step and end time, an
+ * absolute tolerance of 1e-10 and at most 200 iterations per step. */
+cpl_loop_settings tm_loop_settings(cpl_scheme scheme, double dt, double end);
+
 cpl_participant tm_structure_participant(tm_structure *s);
 cpl_participant tm_particles_participant(tm_particles *p);
 

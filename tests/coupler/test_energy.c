@@ -16,16 +16,6 @@
 #include "cpl_test_models.h"
 #include "../../coupler/cpl_loop.h"
 
-typedef struct problem {
-    size_t nodes;
-    double m, k, k_link, mp, kc, g;
-} problem;
-
-/* Mild coupling: |J| ≈ 0.1 at Δt = 0.01 s (test_loop.c). */
-static const problem MILD = {1, 1.0, 100.0, 0.0, 1.0, 1000.0, -9.81};
-/* Light net, heavy rock, stiff contact: |J| ≈ 45 at Δt = 0.01 s (test_loop.c). */
-static const problem HARD = {2, 0.1, 100.0, 50.0, 10.0, 1e5, -9.81};
-
 typedef struct energy_log {
     long steps, above_steps, first_above;
     double max_abs_closure, max_input, last_created, max_created;
@@ -58,7 +48,7 @@ typedef struct run_out {
     double fem_kinetic_j, fem_elastic_j;   /* from the structure's final state */
 } run_out;
 
-static void run(const problem *pb, const cpl_loop_settings *s, run_out *out)
+static void run(const tm_problem *pb, const cpl_loop_settings *s, run_out *out)
 {
     memset(out, 0, sizeof *out);
     out->log.first_above = -1;
@@ -82,18 +72,6 @@ static void run(const problem *pb, const cpl_loop_settings *s, run_out *out)
     tm_particles_free(&pa);
 }
 
-static cpl_loop_settings settings(cpl_scheme scheme, double dt, double end)
-{
-    cpl_loop_settings s;
-    cpl_loop_settings_default(&s);
-    s.scheme = scheme;
-    s.dt_s = dt;
-    s.end_time_s = end;
-    s.tol_abs = 1e-10;
-    s.max_iterations = 200;
-    return s;
-}
-
 /* Converged strong coupling of the mild problem over 50 steps: the reports close the
  * balance E(n) − E(0) + Σ D − Σ mismatch to round-off (1e-12 of the input energy), the
  * interface work mismatch is below 1e-6 of the input energy (the residual 1e-10 m times
@@ -103,9 +81,9 @@ static cpl_loop_settings settings(cpl_scheme scheme, double dt, double end)
 static void test_strong_balance_closes(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.5);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.5);
     run_out r;
-    run(&MILD, &s, &r);
+    run(&TM_MILD, &s, &r);
     assert_int_equal(r.rc, 0);
     assert_int_equal(r.log.steps, 50);
     print_message("strong: input %.6e J, created %.3e J, closure %.3e J, dissipated fem %.4e J "
@@ -132,9 +110,9 @@ static void test_strong_balance_closes(void **state)
 static void test_weak_unstable_fires_guard(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.01, 0.1);
     run_out r;
-    run(&HARD, &s, &r);
+    run(&TM_HARD, &s, &r);
     assert_int_equal(r.rc, 0);                            /* the loop itself goes on */
     print_message("weak, hard: first step above the limit %ld (t = %g s), created %.3e J "
                   "there (limit %.3e J), at the end %.3e J of input %.3e J\n",
@@ -148,10 +126,10 @@ static void test_weak_unstable_fires_guard(void **state)
     assert_int_equal(r.energy.above_steps, r.log.above_steps);
     assert_below(r.log.max_abs_closure, 1e-9 * r.log.max_input);
 
-    s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     nc_error err;
     assert_int_equal(cpl_relax_settings_select(&s.relax, "iqn-ils", &err), 0);
-    run(&HARD, &s, &r);
+    run(&TM_HARD, &s, &r);
     assert_int_equal(r.rc, 0);
     print_message("strong, hard: created %.3e J of input %.3e J\n", r.log.max_created,
                   r.log.max_input);
@@ -164,15 +142,15 @@ static void test_weak_unstable_fires_guard(void **state)
 static void test_tolerance_is_relative_to_input(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.01, 0.03);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.01, 0.03);
     run_out r;
-    run(&HARD, &s, &r);
+    run(&TM_HARD, &s, &r);
     double ratio = r.log.max_created / r.log.max_input;
     s.energy.tol_rel = 2.0 * ratio;
-    run(&HARD, &s, &r);
+    run(&TM_HARD, &s, &r);
     assert_int_equal(r.energy.first_step, -1);
     s.energy.tol_rel = 0.5 * ratio;
-    run(&HARD, &s, &r);
+    run(&TM_HARD, &s, &r);
     assert_true(r.energy.first_step >= 0);
 }
 

@@ -18,16 +18,6 @@
 #include "cpl_test_models.h"
 #include "../../coupler/cpl_loop.h"
 
-typedef struct problem {
-    size_t nodes;
-    double m, k, k_link, mp, kc, g;
-} problem;
-
-/* Mild coupling: |J| ≈ 0.1 at Δt = 0.01 s. */
-static const problem MILD = {1, 1.0, 100.0, 0.0, 1.0, 1000.0, -9.81};
-/* Light net, heavy rock, stiff contact: |J| ≈ 45 at Δt = 0.01 s (added-mass-like). */
-static const problem HARD = {2, 0.1, 100.0, 50.0, 10.0, 1e5, -9.81};
-
 typedef struct run_result {
     int rc;
     nc_error err;
@@ -41,7 +31,7 @@ typedef struct run_result {
     cpl_timing timing;
 } run_result;
 
-static void run(const problem *pb, const cpl_loop_settings *s, run_result *out,
+static void run(const tm_problem *pb, const cpl_loop_settings *s, run_result *out,
                 void (*tweak)(tm_structure *, tm_particles *))
 {
     memset(out, 0, sizeof *out);
@@ -82,27 +72,15 @@ static void run(const problem *pb, const cpl_loop_settings *s, run_result *out,
     tm_particles_free(&pa_ref);
 }
 
-static cpl_loop_settings settings(cpl_scheme scheme, double dt, double end)
-{
-    cpl_loop_settings s;
-    cpl_loop_settings_default(&s);
-    s.scheme = scheme;
-    s.dt_s = dt;
-    s.end_time_s = end;
-    s.tol_abs = 1e-10;
-    s.max_iterations = 200;
-    return s;
-}
-
 /* Strong coupling with no relaxation on the mild problem equals the monolithic backward-Euler
  * solution: the interface residual 1e-10 per iteration and |J| ≈ 0.1 bound the per-step
  * error by ~1e-10, over 50 steps below 1e-8 (observed ~1e-12). */
 static void test_strong_matches_monolithic(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.5);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.5);
     run_result r;
-    run(&MILD, &s, &r, NULL);
+    run(&TM_MILD, &s, &r, NULL);
     assert_int_equal(r.rc, 0);
     assert_int_equal(r.rec.steps, 50);
     assert_below(1e-3, r.u_mono_scale);          /* a real response, not a trivial zero */
@@ -118,9 +96,9 @@ static void test_weak_lags_first_order(void **state)
 {
     (void)state;
     /* soft contact (ω Δt ≈ 0.03): the asymptotic first-order regime */
-    const problem soft = {1, 1.0, 100.0, 0.0, 1.0, 100.0, -9.81};
+    const tm_problem soft = {1, 1.0, 100.0, 0.0, 1.0, 100.0, -9.81};
     run_result r1, r2, r3;
-    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.002, 0.3);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.002, 0.3);
     s.predictor = CPL_PREDICT_CONSTANT;   /* the particles see the wall of the last step */
     run(&soft, &s, &r1, NULL);
     s.dt_s = 0.001;
@@ -143,7 +121,7 @@ static void test_weak_lags_first_order(void **state)
 }
 
 /* Largest |J| of the per-dof Gauss–Seidel map (K diagonal: one node, no link). */
-static double max_abs_J(const problem *pb, double dt)
+static double max_abs_J(const tm_problem *pb, double dt)
 {
     tm_structure st;
     tm_particles pa;
@@ -161,9 +139,9 @@ static double max_abs_J(const problem *pb, double dt)
 }
 
 /* Structure mass chosen so that max |J| is exactly `target`. */
-static problem problem_with_J(double target, double dt)
+static tm_problem problem_with_J(double target, double dt)
 {
-    problem pb = {1, 1.0, 100.0, 0.0, 5.0, 2e4, -9.81};
+    tm_problem pb = {1, 1.0, 100.0, 0.0, 5.0, 2e4, -9.81};
     double j1 = max_abs_J(&pb, dt);                /* J ∝ 1 / (m + Δt² k) */
     double c = j1 * (pb.m + dt * dt * pb.k);
     pb.m = c / target - dt * dt * pb.k;
@@ -177,9 +155,9 @@ static void test_alpha_one_diverges_where_theory_says(void **state)
 {
     (void)state;
     const double dt = 0.01;
-    problem ok = problem_with_J(0.8, dt), bad = problem_with_J(1.25, dt);
+    tm_problem ok = problem_with_J(0.8, dt), bad = problem_with_J(1.25, dt);
     assert_near(max_abs_J(&ok, dt), 0.8, 1e-12);
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, dt, 0.05);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, dt, 0.05);
     s.max_iterations = 400;
     run_result r;
     run(&ok, &s, &r, NULL);
@@ -210,10 +188,10 @@ static void set(cpl_loop_settings *s, const char *key, double value)
     if (cpl_relax_settings_set(&s->relax, key, value, &err)) fail_msg("%s", err.message);
 }
 
-static long total_iterations(const problem *pb, const char *method, double alpha,
+static long total_iterations(const tm_problem *pb, const char *method, double alpha,
                              cpl_relaxed_quantity q, double *u_err)
 {
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.2);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.2);
     use_method(&s, method);
     s.relax.alpha = alpha;
     set(&s, "first_iteration_cap", 0.5);
@@ -237,14 +215,14 @@ static void test_aitken_fewer_iterations_than_constant(void **state)
 {
     (void)state;
     double e_const, e_aitken;
-    long n_const = total_iterations(&HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e_const);
-    long n_aitken = total_iterations(&HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e_aitken);
+    long n_const = total_iterations(&TM_HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e_const);
+    long n_aitken = total_iterations(&TM_HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e_aitken);
     print_message("force relaxation, 20 steps: constant %ld, aitken %ld iterations\n", n_const,
                   n_aitken);
     assert_true(n_aitken < n_const);
     assert_below(e_const, 1e-7);
     assert_below(e_aitken, 1e-7);
-    problem p08 = problem_with_J(0.8, 0.01);
+    tm_problem p08 = problem_with_J(0.8, 0.01);
     n_const = total_iterations(&p08, "constant", 0.5, CPL_RELAXED_DISPLACEMENT_VELOCITY,
                                &e_const);
     n_aitken = total_iterations(&p08, "aitken", 0.5, CPL_RELAXED_DISPLACEMENT_VELOCITY,
@@ -264,7 +242,7 @@ static void test_iqn_bound_on_linear_problem(void **state)
 {
     (void)state;
     for (int mode = 0; mode < 2; mode++) {
-        cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+        cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
         use_method(&s, "iqn-ils");
         s.relax.alpha = 0.02;
         set(&s, "reuse_steps", 0);
@@ -272,7 +250,7 @@ static void test_iqn_bound_on_linear_problem(void **state)
         s.relaxed = mode ? CPL_RELAXED_FORCE : CPL_RELAXED_DISPLACEMENT_VELOCITY;
         s.tol_abs = 1e-9;
         run_result r;
-        run(&HARD, &s, &r, NULL);
+        run(&TM_HARD, &s, &r, NULL);
         assert_int_equal(r.rc, 0);
         int bound = mode ? 6 + 3 : 12 + 2, worst = 0;
         for (long i = 0; i < r.rec.steps; i++) {
@@ -292,10 +270,10 @@ static void test_force_vs_displacement_relaxation(void **state)
 {
     (void)state;
     double e1, e2, e3;
-    long n_disp = total_iterations(&HARD, "aitken", 0.02,
+    long n_disp = total_iterations(&TM_HARD, "aitken", 0.02,
                                    CPL_RELAXED_DISPLACEMENT_VELOCITY, &e1);
-    long n_force = total_iterations(&HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e2);
-    long n_force_const = total_iterations(&HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e3);
+    long n_force = total_iterations(&TM_HARD, "aitken", 0.02, CPL_RELAXED_FORCE, &e2);
+    long n_force_const = total_iterations(&TM_HARD, "constant", 0.02, CPL_RELAXED_FORCE, &e3);
     print_message("aitken: displacement %ld, force %ld iterations; constant force %ld\n",
                   n_disp, n_force, n_force_const);
     assert_below(e1, 1e-7);
@@ -315,11 +293,11 @@ static void far_until(tm_structure *s, tm_particles *p)
 static void test_far_step_option(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.001, 0.2);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.001, 0.2);
     s.far_step = 1;
     s.far_step_factor = 10.0;
     run_result r;
-    run(&MILD, &s, &r, far_until);
+    run(&TM_MILD, &s, &r, far_until);
     assert_int_equal(r.rc, 0);
     assert_near(r.rec.dt[0], 0.001, 1e-15);   /* nothing known yet: nominal */
     assert_near(r.rec.dt[1], 0.01, 1e-15);
@@ -341,14 +319,14 @@ static void no_gravity(tm_structure *s, tm_particles *p)
 static void test_skip_fem_without_contact(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     s.skip_fem_without_contact = 1;
     run_result r;
-    run(&MILD, &s, &r, no_gravity);
+    run(&TM_MILD, &s, &r, no_gravity);
     assert_int_equal(r.rc, 0);
     assert_int_equal(r.fem_solves, 0);
     assert_int_equal(r.fem_begins, 0);
-    run(&MILD, &s, &r, NULL);
+    run(&TM_MILD, &s, &r, NULL);
     assert_true(r.fem_solves >= 10);
     assert_int_equal(r.fem_begins, 10);
     assert_below(r.u_err, 1e-8);   /* still the monolithic answer */
@@ -357,12 +335,12 @@ static void test_skip_fem_without_contact(void **state)
 static void test_max_iterations_stop_policy(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     s.max_iterations = 5;
     s.on_max_iterations = CPL_MAXIT_STOP;
     s.dt_min_s = s.dt_s;   /* the policy at the nominal Δt: no step rejection */
     run_result r;
-    run(&HARD, &s, &r, NULL);   /* α = 1 on |J| ≈ 45 cannot converge */
+    run(&TM_HARD, &s, &r, NULL);   /* α = 1 on |J| ≈ 45 cannot converge */
     assert_int_equal(r.rc, -1);
     assert_int_equal(r.err.code, CPL_ERR_NOT_CONVERGED);
     assert_non_null(strstr(r.err.message, "step 0"));
@@ -379,11 +357,11 @@ static void fem_fails(tm_structure *s, tm_particles *p)
 static void test_participant_error_names_where(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     use_method(&s, "aitken");
     s.relax.alpha = 0.02;
     run_result r;
-    run(&HARD, &s, &r, fem_fails);
+    run(&TM_HARD, &s, &r, fem_fails);
     assert_int_equal(r.rc, -1);
     assert_non_null(r.failure.participant);
     assert_string_equal(r.failure.participant->name, "fem");
@@ -403,7 +381,7 @@ static void test_interrupt_flag(void **state)
     tm_structure_init(&st, 1, 1.0, 100.0, 0.0);
     tm_particles_init(&pa, 1, 1.0, 1000.0, -9.81);
     cpl_participant fem = tm_structure_participant(&st), dem = tm_particles_participant(&pa);
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     cpl_loop *loop;
     nc_error err;
     cpl_failure failure;
@@ -421,9 +399,9 @@ static void test_interrupt_flag(void **state)
 /* ---- step rejection ------------------------------------------------------------------ */
 
 /* Largest |J| with the contact stiffness scaled by `factor`. */
-static double max_abs_J_kc(const problem *pb, double dt, double factor)
+static double max_abs_J_kc(const tm_problem *pb, double dt, double factor)
 {
-    problem stiff = *pb;
+    tm_problem stiff = *pb;
     stiff.kc *= factor;
     return max_abs_J(&stiff, dt);
 }
@@ -435,7 +413,7 @@ typedef struct segment {
 
 /* The same participants run segment after segment with fixed steps (no rejection possible:
  * dt_min = dt), each loop starting from the interface state the previous one ended with. */
-static void run_segments(const problem *pb, const cpl_loop_settings *base, const segment *seg,
+static void run_segments(const tm_problem *pb, const cpl_loop_settings *base, const segment *seg,
                          int n_seg, void (*tweak)(tm_structure *, tm_particles *),
                          double u_end[12], double v_end[12], long *steps)
 {
@@ -526,7 +504,7 @@ static void no_gravity_dem_fails_in_window(tm_structure *s, tm_particles *p)
  * the two do the same arithmetic (observed 1e-16; tolerance 1e-12 m, 1e-10 m/s for |u| ≈
  * 0.06 m); strong also equals the monolithic solution with the same steps (1e-8, as
  * test_strong_matches_monolithic). */
-static void check_window_run(const problem *pb, const cpl_loop_settings *s, const run_result *r,
+static void check_window_run(const tm_problem *pb, const cpl_loop_settings *s, const run_result *r,
                              void (*tweak)(tm_structure *, tm_particles *),
                              cpl_reject_reason reason)
 {
@@ -576,10 +554,10 @@ static void test_rejection_on_failed_solve(void **state)
 {
     (void)state;
     for (int weak = 0; weak < 2; weak++) {
-        cpl_loop_settings s = settings(weak ? CPL_SCHEME_WEAK : CPL_SCHEME_STRONG, 0.01, 0.155);
+        cpl_loop_settings s = tm_loop_settings(weak ? CPL_SCHEME_WEAK : CPL_SCHEME_STRONG, 0.01, 0.155);
         run_result r;
-        run(&MILD, &s, &r, fem_fails_in_window);
-        check_window_run(&MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
+        run(&TM_MILD, &s, &r, fem_fails_in_window);
+        check_window_run(&TM_MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
         /* every try of a step is begun: 20 accepted steps + 2 rejected tries */
         assert_int_equal(r.fem_begins, 22);
         assert_int_equal(r.fem_accepts, 20);
@@ -592,10 +570,10 @@ static void test_rejection_on_failed_solve(void **state)
 static void test_rejection_on_divergence(void **state)
 {
     (void)state;
-    problem pb = problem_with_J(0.6, 0.01);
+    tm_problem pb = problem_with_J(0.6, 0.01);
     assert_below(1.1, max_abs_J_kc(&pb, 0.01, 3.0));
     assert_below(max_abs_J_kc(&pb, 0.005, 3.0), 0.9);
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.155);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.155);
     run_result r;
     run(&pb, &s, &r, stiff_in_window);
     check_window_run(&pb, &s, &r, stiff_in_window, CPL_REJECT_NOT_CONVERGED);
@@ -610,9 +588,9 @@ static void test_rejection_on_divergence(void **state)
 static void test_never_converges_policy_at_dt_min(void **state)
 {
     (void)state;
-    const problem never = {1, 1.0, 100.0, 0.0, 10.0, 1e12, -9.81};
+    const tm_problem never = {1, 1.0, 100.0, 0.0, 10.0, 1e12, -9.81};
     assert_below(9.0, max_abs_J(&never, 0.01 / 64.0));
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.01);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.01);
     s.max_iterations = 4;
     s.max_steps = 3;
     run_result r;
@@ -664,9 +642,9 @@ static void fem_always_fails(tm_structure *s, tm_particles *p)
 static void test_failed_solve_at_dt_min_ends_run(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     run_result r;
-    run(&MILD, &s, &r, fem_always_fails);
+    run(&TM_MILD, &s, &r, fem_always_fails);
     assert_int_equal(r.rc, -1);
     assert_int_equal(r.err.code, CPL_ERR_STEP_FAILED);
     assert_non_null(r.failure.participant);
@@ -684,10 +662,10 @@ static void test_failed_solve_at_dt_min_ends_run(void **state)
 static void test_rejection_with_skip_fem(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.155);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.155);
     s.skip_fem_without_contact = 1;
     run_result r;
-    run(&MILD, &s, &r, no_gravity_dem_fails_in_window);
+    run(&TM_MILD, &s, &r, no_gravity_dem_fails_in_window);
     if (r.rc) fail_msg("%s", r.err.message);
     expect_schedule(&r.rec, WINDOW_SCHEDULE, 3);
     assert_int_equal(r.timing.rejected_attempts, 2);
@@ -695,8 +673,8 @@ static void test_rejection_with_skip_fem(void **state)
     assert_int_equal(r.fem_solves, 0);
     assert_int_equal(r.fem_accepts, 0);
 
-    run(&MILD, &s, &r, fem_fails_in_window);
-    check_window_run(&MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
+    run(&TM_MILD, &s, &r, fem_fails_in_window);
+    check_window_run(&TM_MILD, &s, &r, fem_fails_in_window, CPL_REJECT_STEP_FAILED);
     assert_int_equal(r.fem_begins, 22);
     assert_int_equal(r.fem_accepts, 20);
 }
@@ -712,11 +690,11 @@ static void far_until_fem_fails_near(tm_structure *s, tm_particles *p)
 static void test_rejected_far_step_retries_nominal(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_WEAK, 0.001, 0.2);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.001, 0.2);
     s.far_step = 1;
     s.far_step_factor = 10.0;
     run_result r;
-    run(&MILD, &s, &r, far_until_fem_fails_near);
+    run(&TM_MILD, &s, &r, far_until_fem_fails_near);
     if (r.rc) fail_msg("%s", r.err.message);
     assert_below(0, r.rec.rejections);
     for (long i = 0; i < r.rec.rejections && i < 64; i++) {
@@ -732,17 +710,17 @@ static void test_rejected_far_step_retries_nominal(void **state)
 static void test_settings_check(void **state)
 {
     (void)state;
-    cpl_loop_settings s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     nc_error err;
     s.tol_abs = 0.0;
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
     assert_non_null(strstr(err.message, "coupler.json: tolerance"));
-    s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     use_method(&s, "aitken");
     set(&s, "alpha_min", 1.0);
     set(&s, "alpha_max", 0.5);
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
-    s = settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
     s.dt_min_s = 0.02;
     assert_int_equal(cpl_loop_settings_check(&s, "coupler.json", &err), -1);
     assert_non_null(strstr(err.message, "step_control.dt_min"));
