@@ -14,7 +14,7 @@ void cpl_config_default(cpl_config *c)
     memset(c, 0, sizeof *c);
     cpl_loop_settings_default(&c->loop);
     c->connect_timeout_s = 30.0;
-    c->reply_timeout_s = 300.0;
+    c->reply_timeout_s = 60.0;   /* below the participants' idle timeout (300 s) */
     c->shutdown_timeout_s = 5.0;
     c->write_iterations = 1;
     c->progress_interval_s = 10.0;
@@ -137,7 +137,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
         "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
-        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "timeouts", "output", "comment", NULL};
+        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
+        "verify_restore", "timeouts", "output", "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -174,6 +175,10 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                                  INFINITY, &s->energy.tol_abs_j, err) ||
         nc_json_bool_opt(root, where, "accept_energy_growth", c->accept_energy_growth,
                          &c->accept_energy_growth, err) ||
+        nc_json_bool_opt(root, where, "interface_jacobian", s->interface_jacobian,
+                         &s->interface_jacobian, err) ||
+        nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,
+                         err) ||
         parse_timeouts(root, where, c, err) ||
         parse_output(root, where, c, err))
         return -1;

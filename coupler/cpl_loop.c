@@ -30,6 +30,10 @@ struct cpl_loop {
     double *f_in;           /* FEM input */
     double *u_out, *v_out;  /* FEM output */
     double *x_in, *x_out, *r;
+    double *check0, *check1;    /* restore verification: the repeated solve's outputs */
+    int verified_fem, verified_dem;
+    int use_jacobian;       /* interface-Jacobian coupling in this run */
+    cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
     cpl_timing timing;
     cpl_energy energy;
 };
@@ -56,6 +60,40 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->dt_min_s = 0.0;   /* dt_s / 64 */
     s->grow_after = 4;
     cpl_energy_settings_default(&s->energy);
+    s->interface_jacobian = 1;
+    s->verify_restore = 1;
+}
+
+int cpl_jacobian_set(cpl_jacobian *j, size_t n, const int32_t *nodes, const double *stiffness,
+                     const double *damping, nc_error *err)
+{
+    if (n > j->capacity) {
+        size_t cap = n > 2 * j->capacity ? n : 2 * j->capacity;
+        int32_t *nn = realloc(j->nodes, 2 * cap * sizeof *nn);
+        if (nn) j->nodes = nn;
+        double *k = nn ? realloc(j->stiffness, 9 * cap * sizeof *k) : NULL;
+        if (k) j->stiffness = k;
+        double *c = k ? realloc(j->damping, 9 * cap * sizeof *c) : NULL;
+        if (c) j->damping = c;
+        if (!c) return nc_error_set(err, 1, "interface Jacobian: out of memory for %zu blocks", n);
+        j->capacity = cap;
+    }
+    j->n_blocks = n;
+    if (n) {
+        memcpy(j->nodes, nodes, 2 * n * sizeof *nodes);
+        memcpy(j->stiffness, stiffness, 9 * n * sizeof *stiffness);
+        if (damping) memcpy(j->damping, damping, 9 * n * sizeof *damping);
+    }
+    j->has_damping = damping != NULL;
+    return 0;
+}
+
+void cpl_jacobian_free(cpl_jacobian *j)
+{
+    free(j->nodes);
+    free(j->stiffness);
+    free(j->damping);
+    memset(j, 0, sizeof *j);
 }
 
 double cpl_loop_settings_dt_min(const cpl_loop_settings *s)
@@ -113,7 +151,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->time_s = s->start_time_s;
     L->last_near = -1;
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
-                          &L->u_out, &L->v_out, &L->r};
+                          &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -156,6 +194,9 @@ void cpl_loop_free(cpl_loop *L)
     free(L->r);
     free(L->x_in);
     free(L->x_out);
+    free(L->check0);
+    free(L->check1);
+    cpl_jacobian_free(&L->jac);
     free(L);
 }
 
@@ -175,6 +216,7 @@ const double *cpl_loop_velocity(const cpl_loop *L) { return L->v; }
 const double *cpl_loop_force(const cpl_loop *L) { return L->f; }
 double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
 const cpl_energy *cpl_loop_energy(const cpl_loop *L) { return &L->energy; }
+int cpl_loop_uses_jacobian(const cpl_loop *L) { return L->use_jacobian; }
 
 /* ---- calls into the participants: timing, interruption, error context ----------------- */
 
@@ -239,6 +281,10 @@ static int do_accept(run_ctx *c, const cpl_participant *p, const cpl_call *call)
     return rc ? fail(c, p, call, "accept_step") : 0;
 }
 
+static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *call,
+                          const double *in0, const double *in1, const double *out0,
+                          const double *out1);
+
 static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
                     const double *in0, const double *in1, double *out0, double *out1,
                     cpl_solve_info *info)
@@ -254,6 +300,7 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
     *wait_of(c, p) += nc_clock_now_s() - t0;
     if (rc) return fail(c, p, call, "solve");
     size_t n = c->L->n3;
+    if (verify_restore(c, p, call, in0, in1, out0, out1)) return -1;
     const double *outs[2] = {out0, out1};
     for (int o = 0; o < 2; o++)
         if (outs[o])
@@ -272,6 +319,45 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
         t->dem_solves++;
         if (isfinite(info->solver_time_s))
             t->solver_dem_s = (isnan(t->solver_dem_s) ? 0.0 : t->solver_dem_s) + info->solver_time_s;
+    }
+    return 0;
+}
+
+/* Strong coupling repeats a step from its saved start: a participant that does not restore
+ * would converge to nonsense without a sign. So the first solve of each participant is sent
+ * twice with the same input (the second SOLVE of a step restores first, protocol/README.md
+ * §3) and the two answers must be identical. */
+static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *call,
+                          const double *in0, const double *in1, const double *out0,
+                          const double *out1)
+{
+    cpl_loop *L = c->L;
+    int *verified = p == c->fem ? &L->verified_fem : &L->verified_dem;
+    if (L->s.scheme != CPL_SCHEME_STRONG || !L->s.verify_restore || *verified) return 0;
+    *verified = 1;
+    cpl_solve_info again = {1, INFINITY, 0.0, NAN, cpl_energy_report_none()};
+    /* the repeated solve fills a scratch Jacobian so the one of the first answer stays */
+    cpl_call repeat = *call;
+    cpl_jacobian scratch = {0};
+    if (repeat.jacobian_out) repeat.jacobian_out = &scratch;
+    double t0 = nc_clock_now_s();
+    int rc = p->solve(p->ctx, &repeat, in0, in1, L->check0, out1 ? L->check1 : NULL, &again, c->err);
+    *wait_of(c, p) += nc_clock_now_s() - t0;
+    cpl_jacobian_free(&scratch);
+    if (rc) return fail(c, p, call, "solve (repeated to verify restore)");
+    const double *outs[2] = {out0, out1}, *checks[2] = {L->check0, L->check1};
+    for (int o = 0; o < 2; o++) {
+        if (!outs[o]) continue;
+        for (size_t i = 0; i < L->n3; i++)
+            if (memcmp(&outs[o][i], &checks[o][i], sizeof(double)) != 0) {
+                nc_error_set(c->err, CPL_ERR_PARTICIPANT,
+                             "does not restore its start-of-step state: the same solve sent twice "
+                             "gave %.17g and %.17g at node %zu, component %zu; strong coupling "
+                             "needs a participant that repeats a step exactly (or set "
+                             "\"verify_restore\": false to skip this check)",
+                             outs[o][i], checks[o][i], i / 3, i % 3);
+                return fail(c, p, call, "solve");
+            }
     }
     return 0;
 }
@@ -415,9 +501,18 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         call->iteration = k;
         t->iterations = k;
         L->timing.iterations++;
-        /* DEM with the current interface position and velocity -> contact forces */
+        /* DEM with the current interface position and velocity -> contact forces (and their
+         * linearisation, which the FEM then solves with: interface-Jacobian coupling) */
+        call->jacobian_out = L->use_jacobian ? &L->jac : NULL;
+        call->jacobian_in = NULL;
         if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
             return try_failed(c, t);
+        call->jacobian_out = NULL;
+        if (L->use_jacobian) {
+            call->jacobian_in = &L->jac;
+            call->jacobian_u = L->u_in;
+            call->jacobian_v = L->v_in;
+        }
         if (!force_mode) {
             /* weak, or algorithm 2: forces go to the structure unrelaxed, eq. (39) */
             int solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved, &t->fem_info);
@@ -466,6 +561,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             memcpy(L->v_in, L->v_out, n3 * sizeof(double));
         }
     }
+    call->jacobian_in = NULL;
     t->outcome = converged ? TRY_CONVERGED : TRY_UNCONVERGED;
     return 0;
 }
@@ -592,7 +688,8 @@ static int advance_step(run_ctx *c)
                                .residual = t.residual,
                                .near_interface = t.dem_info.near_interface,
                                .min_gap_m = t.dem_info.min_gap_m, .rejected = rejected,
-                               .energy = energy};
+                               .energy = energy,
+                               .jacobian_blocks = L->use_jacobian ? (int)L->jac.n_blocks : -1};
         cpl_total_force(L->f_dem, n3 / 3, rec.contact_force);
         rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");
@@ -608,6 +705,7 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     if (!failure) failure = &dummy;
     memset(failure, 0, sizeof *failure);
     run_ctx c = {L, fem, dem, observer, stop, failure, err, 0};
+    L->use_jacobian = L->s.interface_jacobian && fem->can_jacobian && dem->can_jacobian;
     double t0 = nc_clock_now_s();
     int rc = 0;
     const double eps = 1e-9 * L->s.dt_s;

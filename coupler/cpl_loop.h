@@ -31,17 +31,39 @@
 
 #include <signal.h>
 #include <stddef.h>
+#include <stdint.h>
 #include "cpl_energy.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
 
+/* An interface linearisation of the DEM's force (interface-Jacobian coupling): 3x3 blocks
+ * between interface nodes, block b maps the motion of node nodes[2b+1] to the force on node
+ * nodes[2b] (row-major), protocol/README.md §3.1. */
+typedef struct cpl_jacobian {
+    size_t n_blocks, capacity;
+    int32_t *nodes;         /* [2 n_blocks] (force node, motion node) */
+    double *stiffness;      /* [9 n_blocks] K = -dF/du, N/m */
+    double *damping;        /* [9 n_blocks] C = -dF/du̇, N s/m (valid when has_damping) */
+    int has_damping;
+} cpl_jacobian;
+
+/* Copies n blocks into j (damping may be NULL: C = 0); 0 or -1 (out of memory). */
+int cpl_jacobian_set(cpl_jacobian *j, size_t n, const int32_t *nodes, const double *stiffness,
+                     const double *damping, nc_error *err);
+void cpl_jacobian_free(cpl_jacobian *j);
+
 /* What a participant is asked to do: step, iteration (1-based; 0 outside solve), the
- * start time and size of the step. */
+ * start time and size of the step; with interface-Jacobian coupling, what to linearise. */
 typedef struct cpl_call {
     long step;
     int iteration;
     double time_s;
     double dt_s;
+    cpl_jacobian *jacobian_out;         /* DEM solve: fill with the linearisation of the
+                                           returned force (NULL: not wanted) */
+    const cpl_jacobian *jacobian_in;    /* FEM solve: solve with the force linearised about
+                                           jacobian_u, jacobian_v (NULL: constant force) */
+    const double *jacobian_u, *jacobian_v;   /* n × 3: where the DEM evaluated the force */
 } cpl_call;
 
 /* Extra information a participant returns with a solve. */
@@ -64,6 +86,7 @@ typedef struct cpl_participant {
     int (*solve)(void *ctx, const cpl_call *call, const double *in0, const double *in1,
                  double *out0, double *out1, cpl_solve_info *info, nc_error *err);
     int (*accept)(void *ctx, const cpl_call *call, nc_error *err);
+    int can_jacobian;       /* DEM: can return the linearisation; FEM: can solve with it */
 } cpl_participant;
 
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
@@ -92,6 +115,10 @@ typedef struct cpl_loop_settings {
                                        >= dt_s: no retries) */
     int grow_after;                 /* converged steps in a row before a reduced Δt doubles */
     cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
+    int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
+                                       both participants can (default 1) */
+    int verify_restore;             /* strong: solve each participant's first step twice with
+                                       the same input and require identical results (default 1) */
 } cpl_loop_settings;
 
 /* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */
@@ -136,6 +163,8 @@ const char *cpl_reject_reason_text(cpl_reject_reason reason);
 
 typedef struct cpl_step_record {
     long step;
+    int jacobian_blocks;            /* blocks of the linearisation of the last iteration
+                                       (-1: interface-Jacobian coupling not in use) */
     double time_s;                  /* end time of the step */
     double dt_s;
     int iterations;
@@ -208,5 +237,8 @@ const double *cpl_loop_force(const cpl_loop *loop);
 double cpl_loop_time(const cpl_loop *loop);
 /* The energy balance and guard of the accepted steps so far. */
 const cpl_energy *cpl_loop_energy(const cpl_loop *loop);
+/* 1 when the run uses interface-Jacobian coupling (set by cpl_loop_run: the setting is on
+ * and both participants can). */
+int cpl_loop_uses_jacobian(const cpl_loop *loop);
 
 #endif

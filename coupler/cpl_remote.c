@@ -22,23 +22,33 @@ int cpl_remote_open(cpl_remote *r, cpl_remote_kind kind, const char *endpoint,
     r->kind = kind;
     snprintf(r->name, sizeof r->name, "%s", kind == CPL_REMOTE_FEM ? "fem" : "dem");
     snprintf(r->endpoint, sizeof r->endpoint, "%s", endpoint);
-    /* HELLO on a short-timeout connection: a participant that is not there fails fast */
+    /* one HELLO within the connect timeout (a participant that is not there fails fast),
+     * then the reply timeout for the run */
     proto_options o;
     options_ms(&o, connect_timeout_s);
-    proto_peer *probe = NULL;
-    if (proto_peer_open(&probe, r->name, endpoint, &o, err)) return -1;
-    int rc = proto_peer_hello(probe, &r->reply, err);
-    proto_peer_close(probe);
-    if (rc) return nc_error_prefix(err, "%s: handshake failed", r->name);
-    snprintf(r->peer_role, sizeof r->peer_role, "%s", r->reply.role);
-    snprintf(r->peer_program, sizeof r->peer_program, "%s", r->reply.name);
-    options_ms(&o, reply_timeout_s);
     if (proto_peer_open(&r->peer, r->name, endpoint, &o, err)) return -1;
     if (proto_peer_hello(r->peer, &r->reply, err)) {
         cpl_remote_close(r);
         return nc_error_prefix(err, "%s: handshake failed", r->name);
     }
+    options_ms(&o, reply_timeout_s);
+    proto_peer_set_timeout(r->peer, o.timeout_ms);
+    snprintf(r->peer_role, sizeof r->peer_role, "%s", r->reply.role);
+    snprintf(r->peer_program, sizeof r->peer_program, "%s", r->reply.name);
+    snprintf(r->capabilities, sizeof r->capabilities, "%s", r->reply.text);
+    r->version = proto_peer_version(r->peer);
+    snprintf(r->session, sizeof r->session, "%s", proto_peer_session(r->peer));
+    r->idle_timeout_s = proto_message_value(&r->reply, "idle_timeout_s", 0.0);
     r->alive = 1;
+    /* the side that stalls must be the one reported: a participant that gives up waiting
+     * before the coupler does would be blamed for the other's stall (protocol/README.md §6) */
+    if (r->idle_timeout_s > 0.0 && !(r->idle_timeout_s > reply_timeout_s)) {
+        nc_error_set(err, 1, "%s: its idle timeout (%.1f s) must be longer than the coupler's "
+                     "reply timeout (%.1f s): raise the participant's --idle-timeout or lower "
+                     "timeouts.reply in coupler.json", r->name, r->idle_timeout_s,
+                     reply_timeout_s);
+        return -1;
+    }
     return 0;
 }
 
@@ -46,9 +56,11 @@ int cpl_remote_open(cpl_remote *r, cpl_remote_kind kind, const char *endpoint,
 static int request(cpl_remote *r, nc_error *err)
 {
     if (proto_peer_request(r->peer, &r->request, &r->reply, err) == 0) return 0;
-    /* an error reply means it is alive and keeps serving; anything else (timeout, closed
-     * connection, garbage) means it cannot be trusted to answer SHUTDOWN */
-    r->alive = err && err->code == PROTO_ERR_PEER;
+    /* an error reply or a malformed reply means it is there and answering (so it gets
+     * SHUTDOWN); a timeout or a closed connection means it cannot be trusted to answer */
+    int code = err ? err->code : 0;
+    r->alive = code == PROTO_ERR_PEER || code == PROTO_ERR_STEP_FAILED || code == PROTO_ERR_DECODE;
+    if (code == PROTO_ERR_STEP_FAILED) err->code = CPL_ERR_STEP_FAILED;   /* the loop retries */
     return -1;
 }
 
@@ -150,6 +162,43 @@ static void read_energy(const proto_message *reply, cpl_energy_report *e)
                isfinite(e->dissipated_j);
 }
 
+/* The FEM's SOLVE: the linearisation and the point it was taken at (§3.1). */
+static int add_jacobian(cpl_remote *r, const cpl_call *call, nc_error *err)
+{
+    const cpl_jacobian *j = call->jacobian_in;
+    const size_t n = r->n_nodes;
+    if (proto_message_add_i32(&r->request, "jacobian_nodes", j->nodes, j->n_blocks, 2, err) ||
+        proto_message_add_f64(&r->request, "jacobian_stiffness", j->stiffness, j->n_blocks, 9, err) ||
+        (j->has_damping &&
+         proto_message_add_f64(&r->request, "jacobian_damping", j->damping, j->n_blocks, 9, err)) ||
+        proto_message_add_f64(&r->request, "jacobian_displacement", call->jacobian_u, n, 3, err) ||
+        proto_message_add_f64(&r->request, "jacobian_velocity", call->jacobian_v, n, 3, err))
+        return -1;
+    return 0;
+}
+
+/* The DEM's reply: the linearisation it was asked for, node indices checked. */
+static int read_jacobian(cpl_remote *r, cpl_jacobian *j, nc_error *err)
+{
+    const int32_t *nodes;
+    const double *K, *C = NULL;
+    size_t b = 0;
+    r->alive = 1;   /* whatever is wrong below, it answered */
+    if (proto_message_get_i32(&r->reply, "jacobian_nodes", 0, 2, &nodes, &b, err) ||
+        proto_message_get_f64(&r->reply, "jacobian_stiffness", b, 9, &K, NULL, err))
+        return nc_error_prefix(err, "asked for the interface Jacobian");
+    for (size_t i = 0; i < r->reply.n_arrays; i++)
+        if (strcmp(r->reply.arrays[i].name, "jacobian_damping") == 0 &&
+            proto_message_get_f64(&r->reply, "jacobian_damping", b, 9, &C, NULL, err))
+            return -1;
+    for (size_t k = 0; k < 2 * b; k++)
+        if (nodes[k] < 0 || (size_t)nodes[k] >= r->n_nodes)
+            return nc_error_set(err, CPL_ERR_PARTICIPANT, "jacobian_nodes row %zu: node %d is "
+                                "not an interface node (0..%zu)", k / 2, (int)nodes[k],
+                                r->n_nodes - 1);
+    return cpl_jacobian_set(j, b, nodes, K, C, err);
+}
+
 static int remote_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
                         double *out0, double *out1, cpl_solve_info *info, nc_error *err)
 {
@@ -157,13 +206,16 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
     command(r, PROTO_MSG_SOLVE, call);
     const size_t n = r->n_nodes;
     if (r->kind == CPL_REMOTE_FEM) {
-        if (proto_message_add_f64(&r->request, "force", in0, n, 3, err) || request(r, err) ||
+        if (proto_message_add_f64(&r->request, "force", in0, n, 3, err) ||
+            (call->jacobian_in && add_jacobian(r, call, err)) || request(r, err) ||
             copy_array(r, "displacement", out0, err) || copy_array(r, "velocity", out1, err))
             return -1;
     } else {
         if (proto_message_add_f64(&r->request, "displacement", in0, n, 3, err) ||
-            proto_message_add_f64(&r->request, "velocity", in1, n, 3, err) || request(r, err) ||
-            copy_array(r, "force", out0, err))
+            proto_message_add_f64(&r->request, "velocity", in1, n, 3, err) ||
+            (call->jacobian_out && proto_message_set_value(&r->request, "jacobian", 1.0, err)) ||
+            request(r, err) || copy_array(r, "force", out0, err) ||
+            (call->jacobian_out && read_jacobian(r, call->jacobian_out, err)))
             return -1;
         info->near_interface = proto_message_value(&r->reply, "near_interface", 1.0) != 0.0;
         info->min_gap_m = proto_message_value(&r->reply, "min_gap_m", INFINITY);
@@ -176,7 +228,8 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
 
 cpl_participant cpl_remote_participant(cpl_remote *r)
 {
-    cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept};
+    cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept,
+                         r->version >= 2 && proto_has_capability(r->capabilities, "jacobian")};
     return p;
 }
 
@@ -186,6 +239,8 @@ int cpl_remote_shutdown(cpl_remote *r, double timeout_s, nc_error *err)
     options_ms(&o, timeout_s);
     proto_peer *peer = NULL;
     if (proto_peer_open(&peer, r->name, r->endpoint, &o, err)) return -1;
+    /* the same coupler on a second connection: its session and version */
+    proto_peer_join(peer, r->session, r->version);
     proto_message_init(&r->request, PROTO_MSG_SHUTDOWN);
     r->request.step = -1;
     int rc = proto_peer_request(peer, &r->request, &r->reply, err);

@@ -4,6 +4,12 @@
  * from the FEM to the DEM (INTERFACE to the FEM, its arrays to the DEM). The loop then drives
  * BEGIN_STEP / SOLVE / ACCEPT_STEP through cpl_remote_participant(). SHUTDOWN at the end, or
  * after a failure, through a fresh short-timeout connection so a hung peer cannot block exit.
+ * Errors: a participant's error reply marked retryable becomes CPL_ERR_STEP_FAILED (the loop
+ * retries the step with a smaller dt); a malformed reply leaves the participant marked alive
+ * (it answered, wrongly) so that it still gets SHUTDOWN.
+ * Interface-Jacobian coupling (version 2, capability "jacobian" on both sides): a DEM SOLVE
+ * asks for the linearisation with the value "jacobian" 1, and the FEM's SOLVE carries it with
+ * the point it was taken at (protocol/README.md §3.1).
  * Replies may carry the value "solve_time_s" (the participant's own compute time for the
  * request); the coupler then splits waiting time into solver and exchange time.
  */
@@ -22,13 +28,18 @@ typedef struct cpl_remote {
     char endpoint[1024];
     char peer_role[PROTO_NAME_MAX];   /* what the participant said in HELLO */
     char peer_program[PROTO_NAME_MAX];
+    char capabilities[PROTO_TEXT_MAX];/* its capability words */
+    int version;                      /* protocol version agreed in HELLO */
+    char session[PROTO_NAME_MAX];     /* this coupler's token with it (version 2) */
+    double idle_timeout_s;            /* what it said in HELLO (0: none or not said) */
     proto_peer *peer;
     proto_message request, reply;
     size_t n_nodes;
     int alive;                        /* 0 once it is known to be gone */
 } cpl_remote;
 
-/* Connects and shakes hands: HELLO must be answered within connect_timeout_s. */
+/* Connects and shakes hands: HELLO must be answered within connect_timeout_s; later
+ * requests wait up to reply_timeout_s. */
 int cpl_remote_open(cpl_remote *r, cpl_remote_kind kind, const char *endpoint,
                     double connect_timeout_s, double reply_timeout_s, nc_error *err);
 /* INTERFACE to the FEM: fills the mesh; *u0 / *v0 get the initial interface state when the

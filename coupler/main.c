@@ -310,8 +310,22 @@ int main(int argc, char **argv)
         goto fail;
     a.dem_open = 1;
     if (!a.quiet)
-        cpl_progress_message(&a.progress, "coupler: fem = %s (%s), dem = %s (%s)",
-                             a.fem.peer_program, fem_ep, a.dem.peer_program, dem_ep);
+        cpl_progress_message(&a.progress, "coupler: fem = %s (%s, protocol %d), dem = %s (%s, "
+                             "protocol %d)", a.fem.peer_program, fem_ep, a.fem.version,
+                             a.dem.peer_program, dem_ep, a.dem.version);
+    /* strong coupling repeats steps: a participant that cannot restore would silently give
+     * an unconverged answer (the loop also verifies it on the first step) */
+    if (a.cfg.loop.scheme == CPL_SCHEME_STRONG)
+        for (int k = 0; k < 2; k++) {
+            const cpl_remote *r = k ? &a.dem : &a.fem;
+            if (!proto_has_capability(r->capabilities, "restore")) {
+                nc_error_set(&err, 1, "%s (%s) does not announce the capability 'restore' "
+                             "(capabilities: '%s'); strong coupling repeats steps and needs it: "
+                             "use \"scheme\": \"weak\" with this participant", r->name,
+                             r->peer_program, r->capabilities);
+                goto fail;
+            }
+        }
 
     /* conforming interface (section 4.4): the FEM's interface mesh is the DEM's wall */
     if (cpl_remote_interface_fem(&a.fem, &a.mesh, &u0, &v0, &err) ||
@@ -328,6 +342,13 @@ int main(int argc, char **argv)
     history_open = 1;
 
     cpl_participant fem = cpl_remote_participant(&a.fem), dem = cpl_remote_participant(&a.dem);
+    if (!a.quiet)
+        cpl_progress_message(&a.progress, "coupler: interface Jacobian %s",
+                             !a.cfg.loop.interface_jacobian ? "off (interface_jacobian false)"
+                             : fem.can_jacobian && dem.can_jacobian
+                                 ? "on: the FEM solves with the DEM's contact linearisation"
+                                 : "not available (a participant lacks the capability "
+                                   "'jacobian'): plain exchange");
     cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject};
     if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of

@@ -1,10 +1,12 @@
 /* dem_participant — the DEM's serve-loop handlers (dem_participant.h). */
 #include "dem_participant.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "dem_energy.h"
+#include "dem_net_jacobian.h"
 #include "nc_file.h"
 #include "proto_serve.h"
 
@@ -16,6 +18,7 @@ typedef struct participant {
     size_t force_cap;
     double next_out_s;      /* next output time */
     double e_start_j;       /* mechanical energy at BEGIN_STEP (dem_energy.h) */
+    dem_net_jacobian jac;   /* the linearisation of the last solve, when asked for */
 } participant;
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -70,7 +73,17 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
         proto_message_get_f64(cmd, "velocity", n, 3, &vel, NULL, err))
         return -1;
     dem_coupled_info info;
-    if (dem_sim_solve_coupled(s, cmd->dt_s, disp, vel, c->force, &info, err)) return -1;
+    /* the coupler asks for the force's linearisation with the value "jacobian" 1
+     * (interface-Jacobian coupling, protocol/README.md §3.1) */
+    int want_jacobian = proto_message_value(cmd, "jacobian", 0.0) != 0.0;
+    if (dem_sim_solve_coupled_jacobian(s, cmd->dt_s, disp, vel, c->force, &info,
+                                       want_jacobian ? &c->jac : NULL, err))
+        return -1;
+    /* C = -dF/du̇ is zero (dem_net_jacobian.h), so only the stiffness blocks are sent */
+    if (want_jacobian &&
+        (proto_message_add_i32(reply, "jacobian_nodes", c->jac.nodes, c->jac.n_blocks, 2, err) ||
+         proto_message_add_f64(reply, "jacobian_stiffness", c->jac.K, c->jac.n_blocks, 9, err)))
+        return -1;
     /* the energy values of protocol/README.md §3: elastic = contact springs, potential =
      * gravity, interface work = the net wall's work on the particles, no external loads */
     dem_step_energy e;
@@ -96,11 +109,13 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     (void)reply;
     participant *c = ctx;
     dem_sim *s = c->s;
-    if (s->time_s < c->next_out_s - 1e-12) return 0;
+    if (s->time_s < c->next_out_s - 1e-6 * s->model.prm.output_interval_s) return 0;
     int rc = dem_output_write(c->out, s, c->force, err);
+    /* the next multiple of the interval (not a running sum, which drifts off the FEM's
+     * output times) */
     double interval = s->model.prm.output_interval_s;
     if (interval > 0.0)
-        while (c->next_out_s <= s->time_s + 1e-12) c->next_out_s += interval;
+        c->next_out_s = (floor(s->time_s / interval + 1e-9) + 1.0) * interval;
     else c->next_out_s = s->time_s;
     return rc;
 }
@@ -122,7 +137,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     proto_options_default(&popt);
     popt.idle_timeout_ms = opt->idle_timeout_ms;
     proto_participant *p;
-    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore", &popt, err))
+    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore jacobian", &popt, err))
         return -1;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err)) {
         proto_participant_close(p);
@@ -134,6 +149,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
         fflush(opt->progress);
     }
     participant c = {.s = s, .out = out, .opt = opt, .next_out_s = s->model.prm.output_interval_s};
+    dem_net_jacobian_init(&c.jac);
     const proto_serve_handlers handlers = {
         .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
         .solve = on_solve, .accept_step = on_accept, .report = on_report};
@@ -156,6 +172,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
         rc = 0;
     }
     proto_participant_close(p);
+    dem_net_jacobian_free(&c.jac);
     free(c.force);
     return rc;
 }

@@ -488,7 +488,7 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     }
     s->stats.iterations = it - 1;
     s->stats.residual_norm = rnorm;
-    return nc_error_set(err, 3, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m)",
+    return nc_error_set(err, FEM_ERR_NEWTON, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m)",
                         set->max_iterations, rnorm, tol, dunorm);
 }
 

@@ -22,6 +22,9 @@
 #include "fem_model.h"
 #include "fem_sparse.h"
 
+/* nc_error code of a step whose Newton iterations did not converge (a smaller step may). */
+#define FEM_ERR_NEWTON 3
+
 typedef struct fem_state {
     double time_s;
     long step;

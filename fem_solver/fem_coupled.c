@@ -4,6 +4,10 @@
  * when), SOLVE takes the interface force and replies displacement + velocity, ACCEPT_STEP
  * writes monitor and output rows when due. A run ended inside a solved but not accepted step
  * writes the last accepted state. See fem_run.h.
+ * Interface-Jacobian coupling (capability "jacobian", protocol/README.md §3.1): a SOLVE that
+ * carries the DEM's linearisation solves with F(u, v) = force - K (u - u^k) - C (v - v^k)
+ * (fem_analysis_set_linearisation); one without it, with the constant force. A Newton failure
+ * is answered as retryable: the coupler may try the step again with a smaller dt.
  */
 #include "fem_run.h"
 #include "fem_output.h"
@@ -23,6 +27,9 @@ typedef struct coupled {
     fem_run_summary *sum;
     int32_t *node_ids;
     double *iface_X, *iface_u, *iface_v;
+    double *lin_u, *lin_v;    /* [ndof] the linearisation point on the model's dofs */
+    int *lin_nodes;           /* [2 blocks] model node numbers of the Jacobian's blocks */
+    size_t lin_cap;
     long written_step;
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
 } coupled;
@@ -54,6 +61,46 @@ static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
     return fem_analysis_restore(&c->s, err);
 }
 
+/* The linearisation of the coupling force that `cmd` carries (or none): interface node
+ * indices become model nodes, the point u^k, v^k goes onto the model's dofs. */
+static int set_linearisation(coupled *c, const proto_message *cmd, nc_error *err)
+{
+    const fem_model *m = c->m;
+    fem_analysis *s = &c->s;
+    if (!proto_message_find(cmd, "jacobian_nodes")) {
+        fem_analysis_clear_linearisation(s);
+        return 0;
+    }
+    size_t n = (size_t)m->n_iface_nodes, b = 0;
+    const int32_t *nodes;
+    const double *K, *C = NULL, *u_k, *v_k;
+    if (proto_message_get_i32(cmd, "jacobian_nodes", 0, 2, &nodes, &b, err) ||
+        proto_message_get_f64(cmd, "jacobian_stiffness", b, 9, &K, NULL, err) ||
+        (proto_message_find(cmd, "jacobian_damping") &&
+         proto_message_get_f64(cmd, "jacobian_damping", b, 9, &C, NULL, err)) ||
+        proto_message_get_f64(cmd, "jacobian_displacement", n, 3, &u_k, NULL, err) ||
+        proto_message_get_f64(cmd, "jacobian_velocity", n, 3, &v_k, NULL, err))
+        return -1;
+    if (b > c->lin_cap) {
+        int *grown = realloc(c->lin_nodes, 2 * b * sizeof *grown);
+        if (!grown) return nc_error_set(err, 1, "out of memory for %zu Jacobian blocks", b);
+        c->lin_nodes = grown;
+        c->lin_cap = b;
+    }
+    for (size_t k = 0; k < 2 * b; k++) {
+        if (nodes[k] < 0 || (size_t)nodes[k] >= n)
+            return nc_error_set(err, 1, "jacobian_nodes row %zu: %d is not an interface node "
+                                "(0..%zu)", k / 2, (int)nodes[k], n - 1);
+        c->lin_nodes[k] = m->iface_nodes[nodes[k]];
+    }
+    for (size_t i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++) {
+            c->lin_u[3 * m->iface_nodes[i] + d] = u_k[3 * i + d];
+            c->lin_v[3 * m->iface_nodes[i] + d] = v_k[3 * i + d];
+        }
+    return fem_analysis_set_linearisation(s, c->lin_u, c->lin_v, (int)b, c->lin_nodes, K, C, err);
+}
+
 /* Solves the step with the interface force of `cmd`; fills the reply arrays. */
 static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
@@ -67,6 +114,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
     memset(s->f_coupling, 0, (size_t)s->ndof * sizeof(double));
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) s->f_coupling[3 * m->iface_nodes[i] + d] = force[3 * i + d];
+    if (set_linearisation(c, cmd, err)) return -1;
     double dt = cmd->dt_s;
     if (m->settings.type == FEM_STATIC) {
         /* quasi-static coupling: equilibrium under the loads, velocity from the increment */
@@ -112,6 +160,8 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
     coupled *c = ctx;
     if (solve(c, cmd, reply, err)) {
         c->sum->failed_solves++;
+        /* Newton did not converge: a smaller step may (the coupler decides) */
+        if (err && err->code == FEM_ERR_NEWTON) err->code = PROTO_ERR_STEP_FAILED;
         return -1;
     }
     c->sum->newton_iterations += c->s.stats.iterations;
@@ -161,7 +211,9 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->iface_X = malloc(3 * (n + 1) * sizeof(double));
     c->iface_u = calloc(3 * (n + 1), sizeof(double));
     c->iface_v = calloc(3 * (n + 1), sizeof(double));
-    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v) {
+    c->lin_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
+    c->lin_v = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
+    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->lin_u || !c->lin_v) {
         nc_error_set(err, 1, "out of memory");
         goto done;
     }
@@ -177,7 +229,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     proto_options po;
     proto_options_default(&po);
     po.idle_timeout_ms = opt->idle_timeout_ms;
-    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore", &po, err))
+    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore jacobian", &po, err))
         goto done;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err))
         goto done;
@@ -214,6 +266,7 @@ done:
     fem_output_close(&c->out);
     fem_analysis_free(&c->s);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
+    free(c->lin_u); free(c->lin_v); free(c->lin_nodes);
     free(c);
     sum.wall_s = nc_clock_now_s() - t0;
     if (summary) *summary = sum;

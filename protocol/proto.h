@@ -20,7 +20,8 @@
 #include <stdint.h>
 #include "nc_error.h"
 
-#define PROTO_VERSION 1
+#define PROTO_VERSION 2          /* the newest version this library speaks */
+#define PROTO_VERSION_MIN 1      /* the oldest one it still serves (negotiated in hello) */
 #define PROTO_MAX_ARRAYS 16
 #define PROTO_MAX_VALUES 16
 #define PROTO_NAME_MAX 64
@@ -38,7 +39,10 @@ enum {
     PROTO_ERR_TRANSPORT = 14,/* ZeroMQ failure */
     PROTO_ERR_IDLE = 15,     /* participant: no command within the idle time */
     PROTO_ERR_USAGE = 16,    /* wrong use of the API (missing array, bad shape, ...) */
-    PROTO_ERR_DISCONNECTED = 17 /* peer closed its connection (process exited?) */
+    PROTO_ERR_DISCONNECTED = 17,/* peer closed its connection (process exited?) */
+    PROTO_ERR_STEP_FAILED = 18, /* a handler's step failed but may succeed with a smaller dt
+                                   (sent as a retryable error); the peer's error reply said so */
+    PROTO_ERR_SESSION = 19      /* command from another coupler, or before hello (version 2) */
 };
 
 typedef enum {
@@ -80,6 +84,10 @@ typedef struct proto_message {
     char role[PROTO_NAME_MAX];     /* hello: "coupler", "fem", "dem" or any other word */
     char name[PROTO_NAME_MAX];     /* hello: program name, e.g. "netcouple fem_solver" */
     char text[PROTO_TEXT_MAX];     /* error reason, or capabilities (space separated) */
+    char session[PROTO_NAME_MAX];  /* version 2: the coupler's token from hello, echoed */
+    int retryable;                 /* error reply: a smaller step may succeed (version 2) */
+    int offered_version;           /* hello command: newest version the coupler speaks (0: the
+                                      header's version only) */
     size_t n_arrays;
     proto_array arrays[PROTO_MAX_ARRAYS];
     size_t n_values;
@@ -113,6 +121,10 @@ int proto_message_get_f64(const proto_message *m, const char *name, size_t expec
 int proto_message_get_i32(const proto_message *m, const char *name, size_t expected_rows,
                           size_t expected_cols, const int32_t **data, size_t *rows,
                           nc_error *err);
+/* The array called `name`, or NULL. */
+const proto_array *proto_message_find(const proto_message *m, const char *name);
+/* 1 if the space-separated word list `capabilities` holds `word`. */
+int proto_has_capability(const char *capabilities, const char *word);
 /* Named scalar: returns fallback when absent. */
 double proto_message_value(const proto_message *m, const char *name, double fallback);
 int proto_message_has_value(const proto_message *m, const char *name);
@@ -166,6 +178,11 @@ int proto_participant_receive(proto_participant *p, proto_message *command, nc_e
 int proto_participant_reply(proto_participant *p, proto_message *reply, nc_error *err);
 /* Replies with an error message: the command failed for `reason`. */
 int proto_participant_reply_error(proto_participant *p, const char *reason, nc_error *err);
+/* The same, marked retryable (version 2): the step may succeed with a smaller dt. */
+int proto_participant_reply_failure(proto_participant *p, const char *reason, int retryable,
+                                    nc_error *err);
+/* The version agreed in hello (0 before the first hello). */
+int proto_participant_version(const proto_participant *p);
 void proto_participant_close(proto_participant *p);
 
 /* Coupler side: one peer (a participant) reached at `endpoint`. */
@@ -173,10 +190,23 @@ typedef struct proto_peer proto_peer;
 
 int proto_peer_open(proto_peer **peer, const char *peer_name, const char *endpoint,
                     const proto_options *options, nc_error *err);
-/* Handshake: sends HELLO, checks version, fills role/name/capabilities of the participant. */
+/* Handshake: sends HELLO offering versions PROTO_VERSION_MIN..PROTO_VERSION with this peer's
+ * session token, agrees on the participant's version (its reply's), fills role/name/
+ * capabilities. Later requests carry the agreed version and the token. */
 int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err);
+/* The version agreed in hello (0 before it). */
+int proto_peer_version(const proto_peer *peer);
+/* This coupler's session token (sent with every command). */
+const char *proto_peer_session(const proto_peer *peer);
+/* Uses `session` instead of the peer's own token (a second connection of the same coupler,
+ * e.g. for SHUTDOWN), and `version` as agreed (no hello on this connection). */
+void proto_peer_join(proto_peer *peer, const char *session, int version);
+/* Changes the reply timeout of later requests. */
+void proto_peer_set_timeout(proto_peer *peer, int timeout_ms);
 /* Sends `request`, waits up to timeout_ms for the reply. An error reply from the peer
- * returns -1 with PROTO_ERR_PEER and the peer's reason; a timeout returns PROTO_ERR_TIMEOUT
+ * returns -1 with PROTO_ERR_PEER and the peer's reason (PROTO_ERR_STEP_FAILED when it is
+ * marked retryable); a reply that does not answer the request (not a reply, another type;
+ * version 2: another step, iteration or session) returns PROTO_ERR_DECODE; a timeout returns PROTO_ERR_TIMEOUT
  * with a message naming the peer, its endpoint and the last message sent; a peer whose
  * connection closed (before or during the request) returns PROTO_ERR_DISCONNECTED at once. */
 int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,

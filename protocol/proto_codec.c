@@ -110,11 +110,19 @@ int proto_encode_header(const proto_message *m, char **json, size_t *length, nc_
         m->is_reply ? "true" : "false", m->step, m->iteration,
         isfinite(m->time_s) ? m->time_s : 0.0, isfinite(m->dt_s) ? m->dt_s : 0.0,
         m->type == PROTO_MSG_ERROR ? "error" : "ok");
-    const char *texts[3][2] = {{"role", m->role}, {"name", m->name}, {"text", m->text}};
-    for (int t = 0; t < 3; t++) {
+    const char *texts[4][2] = {{"role", m->role}, {"name", m->name}, {"text", m->text},
+                               {"session", m->session}};
+    for (int t = 0; t < 4; t++) {
         if (!texts[t][1][0]) continue;
         put(&b, ",\"%s\":", texts[t][0]);
         put_string(&b, texts[t][1]);
+    }
+    if (m->retryable) put(&b, ",\"retryable\":true");
+    if (m->offered_version > 0) {
+        put(&b, ",\"versions\":[");
+        for (int v = PROTO_VERSION_MIN; v <= m->offered_version; v++)
+            put(&b, "%s%d", v > PROTO_VERSION_MIN ? "," : "", v);
+        put(&b, "]");
     }
     put(&b, ",\"arrays\":[");
     for (size_t i = 0; i < m->n_arrays; i++) {
@@ -207,11 +215,11 @@ static int decode_header(proto_message *m, cJSON *root, nc_error *err)
     if (!version) return nc_error_set(err, PROTO_ERR_DECODE, "header has no 'version'");
     if (!cJSON_IsNumber(version) || version->valuedouble != floor(version->valuedouble))
         return nc_error_set(err, PROTO_ERR_DECODE, "header field 'version': expected a whole number");
-    if (version->valuedouble != PROTO_VERSION)
+    if (version->valuedouble < PROTO_VERSION_MIN || version->valuedouble > PROTO_VERSION)
         return nc_error_set(err, PROTO_ERR_VERSION,
-                            "protocol version mismatch: message has version %.0f, this side speaks %d",
-                            version->valuedouble, PROTO_VERSION);
-    m->version = PROTO_VERSION;
+                            "protocol version mismatch: message has version %.0f, this side speaks "
+                            "%d to %d", version->valuedouble, PROTO_VERSION_MIN, PROTO_VERSION);
+    m->version = (int)version->valuedouble;
 
     const cJSON *reply = cJSON_GetObjectItemCaseSensitive(root, "reply");
     if (reply && !cJSON_IsBool(reply))
@@ -235,6 +243,25 @@ static int decode_header(proto_message *m, cJSON *root, nc_error *err)
     if (get_text(root, "role", m->role, sizeof m->role, err)) return -1;
     if (get_text(root, "name", m->name, sizeof m->name, err)) return -1;
     if (get_text(root, "text", m->text, sizeof m->text, err)) return -1;
+    if (get_text(root, "session", m->session, sizeof m->session, err)) return -1;
+    const cJSON *retryable = cJSON_GetObjectItemCaseSensitive(root, "retryable");
+    if (retryable && !cJSON_IsBool(retryable))
+        return nc_error_set(err, PROTO_ERR_DECODE, "header field 'retryable': expected true or false");
+    m->retryable = retryable ? cJSON_IsTrue(retryable) : 0;
+    /* hello: the versions the coupler speaks; the newest is what a participant may choose */
+    const cJSON *versions = cJSON_GetObjectItemCaseSensitive(root, "versions");
+    if (versions) {
+        if (!cJSON_IsArray(versions))
+            return nc_error_set(err, PROTO_ERR_DECODE, "header field 'versions': expected a list");
+        const cJSON *v;
+        cJSON_ArrayForEach(v, versions) {
+            if (!cJSON_IsNumber(v) || v->valuedouble != floor(v->valuedouble) ||
+                v->valuedouble < 1 || v->valuedouble > 1e6)
+                return nc_error_set(err, PROTO_ERR_DECODE,
+                                    "header field 'versions': expected whole numbers >= 1");
+            if (v->valuedouble > m->offered_version) m->offered_version = (int)v->valuedouble;
+        }
+    }
 
     const cJSON *values = cJSON_GetObjectItemCaseSensitive(root, "values");
     if (values) {

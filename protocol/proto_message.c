@@ -166,3 +166,22 @@ int proto_message_has_value(const proto_message *m, const char *name)
         if (strcmp(m->values[i].name, name) == 0) return 1;
     return 0;
 }
+
+int proto_has_capability(const char *capabilities, const char *word)
+{
+    size_t length = strlen(word);
+    if (!capabilities || length == 0) return 0;
+    for (const char *c = capabilities; (c = strstr(c, word)) != NULL; c += length) {
+        int starts = c == capabilities || c[-1] == ' ';
+        int ends = c[length] == '\0' || c[length] == ' ';
+        if (starts && ends) return 1;
+    }
+    return 0;
+}
+
+const proto_array *proto_message_find(const proto_message *m, const char *name)
+{
+    for (size_t i = 0; i < m->n_arrays; i++)
+        if (strcmp(m->arrays[i].name, name) == 0) return &m->arrays[i];
+    return NULL;
+}

@@ -25,15 +25,20 @@ static void describe(const proto_message *cmd, char *out, size_t size)
 /* Answers the current command with an error naming it and `reason`; -1 only when the reply
  * cannot be sent. */
 static int reply_failure(proto_participant *p, const proto_serve_handlers *h, void *ctx,
-                         const proto_message *cmd, const char *reason, proto_serve_summary *sum,
+                         const proto_message *cmd, const nc_error *why, proto_serve_summary *sum,
                          nc_error *err)
 {
+    const char *reason = why->message;
     char what[128], text[PROTO_TEXT_MAX];
     describe(cmd, what, sizeof what);
     snprintf(text, sizeof text, "%s: %s", what, reason);
-    sum->failed++;
+    /* a retryable failure is the coupler's to handle (it retries with a smaller step); it
+     * is not an error of this participant's run */
+    if (why->code == PROTO_ERR_STEP_FAILED) sum->retryable++;
+    else sum->failed++;
     if (h->report) h->report(ctx, text);
-    return proto_participant_reply_error(p, text, err);
+    /* a handler's PROTO_ERR_STEP_FAILED: the coupler may retry the step with a smaller dt */
+    return proto_participant_reply_failure(p, text, why->code == PROTO_ERR_STEP_FAILED, err);
 }
 
 /* Runs one command: 0 with `reply` filled, -1 with the reason in e. */
@@ -103,6 +108,11 @@ int proto_serve(proto_participant *p, const proto_serve_handlers *h, void *ctx,
         nc_error_clear(&e);
         if (proto_participant_receive(p, &cmd, &e)) {
             if (stop && *stop) { rc = 1; break; }   /* the signal interrupted the wait */
+            if (e.code == PROTO_ERR_SESSION) {
+                sum.refused++;                       /* another coupler: refused, not ours */
+                if (h->report) h->report(ctx, e.message);
+                continue;
+            }
             if (e.code == PROTO_ERR_DECODE || e.code == PROTO_ERR_VERSION) {
                 sum.rejected++;                      /* already answered with an error */
                 if (h->report) h->report(ctx, e.message);
@@ -115,7 +125,7 @@ int proto_serve(proto_participant *p, const proto_serve_handlers *h, void *ctx,
         sum.commands++;
         proto_message_init(&reply, cmd.type);
         int failed = dispatch(h, ctx, &cmd, &reply, &st, &sum, &e);
-        if (failed ? reply_failure(p, h, ctx, &cmd, e.message, &sum, err)
+        if (failed ? reply_failure(p, h, ctx, &cmd, &e, &sum, err)
                    : proto_participant_reply(p, &reply, err)) {
             rc = -1;
             break;

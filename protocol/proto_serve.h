@@ -8,7 +8,8 @@
  *                state, every further SOLVE of the same step calls restore_state first;
  *   ACCEPT_STEP  refused outside a begun step or when its last SOLVE failed; closes the step.
  * A handler that fails, and a command refused by the loop, get an error reply naming the
- * command, step and iteration with the reason; serving continues. HELLO and malformed
+ * command, step and iteration with the reason (marked retryable when the handler's error
+ * code is PROTO_ERR_STEP_FAILED); serving continues. HELLO and malformed
  * commands are answered inside proto_participant_receive() (counted in `rejected`).
  * The loop never prints: every error reply it sends is passed to handlers->report.
  */
@@ -40,7 +41,11 @@ typedef struct proto_serve_summary {
     long solves;            /* SOLVE handler calls */
     long restores;          /* restore_state calls */
     long failed;            /* error replies: handler failures and refused commands */
+    long retryable;         /* error replies marked retryable (PROTO_ERR_STEP_FAILED): the
+                               coupler retries the step; not counted in failed */
     long rejected;          /* malformed commands (answered with an error by the receive) */
+    long refused;           /* commands of another coupler's session, or before hello
+                               (version 2): refused, and not an error of this run */
     int step_open;          /* the loop ended inside a begun, not accepted step ... */
     int step_solved;        /* ... which was solved (the state is not the saved one) */
 } proto_serve_summary;

@@ -32,6 +32,8 @@ struct proto_participant {
     char capabilities[PROTO_TEXT_MAX];
     proto_options options;
     int awaiting_reply;
+    int version;                 /* agreed in hello; 0 before it */
+    char session[PROTO_NAME_MAX];/* the coupler's token (version 2) */
     proto_message last_command;  /* header fields only (arrays are not kept) */
     proto_message hello_reply;
     frame_buffer buffer;
@@ -46,6 +48,8 @@ struct proto_peer {
     char name[PROTO_NAME_MAX];
     char endpoint[256];
     char last_sent[160];
+    int version;          /* agreed in hello; 0 before it */
+    char session[PROTO_NAME_MAX];
     proto_options options;
     frame_buffer buffer;
 };
@@ -220,11 +224,21 @@ const char *proto_participant_endpoint(const proto_participant *p)
 static int participant_send(proto_participant *p, proto_message *reply, nc_error *err)
 {
     reply->is_reply = 1;
+    reply->version = p->version ? p->version : PROTO_VERSION_MIN;
+    snprintf(reply->session, sizeof reply->session, "%s", p->version >= 2 ? p->session : "");
     p->awaiting_reply = 0;
     return send_message(p->socket, reply, "the coupler", err);
 }
 
+int proto_participant_version(const proto_participant *p) { return p->version; }
+
 int proto_participant_reply_error(proto_participant *p, const char *reason, nc_error *err)
+{
+    return proto_participant_reply_failure(p, reason, 0, err);
+}
+
+int proto_participant_reply_failure(proto_participant *p, const char *reason, int retryable,
+                                    nc_error *err)
 {
     if (!p->awaiting_reply)
         return nc_error_set(err, PROTO_ERR_USAGE, "reply without a pending command");
@@ -238,7 +252,71 @@ int proto_participant_reply_error(proto_participant *p, const char *reason, nc_e
     snprintf(m.role, sizeof m.role, "%s", p->role);
     snprintf(m.name, sizeof m.name, "%s", p->name);
     snprintf(m.text, sizeof m.text, "%s", reason ? reason : "unspecified error");
+    m.retryable = retryable != 0;
     return participant_send(p, &m, err);
+}
+
+/* Refuses the current command with `reason` (an error reply) and returns -1 with `code`. */
+static int refuse(proto_participant *p, int code, const char *reason, nc_error *err)
+{
+    proto_participant_reply_error(p, reason, NULL);
+    return nc_error_set(err, code, "%s", reason);
+}
+
+/* HELLO: the version is the newest both sides speak; version 2 takes the coupler's session
+ * token, and a participant already serving one session refuses a second coupler. */
+static int answer_hello(proto_participant *p, const proto_message *hello, nc_error *err)
+{
+    if (p->version >= 2 && strcmp(hello->session, p->session) != 0) {
+        char reason[PROTO_TEXT_MAX];
+        snprintf(reason, sizeof reason, "%s: refused hello: this participant already serves "
+                 "a coupler (session %s); one coupler per participant", p->role, p->session);
+        proto_participant_reply_error(p, reason, NULL);
+        return 0;   /* keep serving the coupler it has */
+    }
+    int offered = hello->offered_version > 0 ? hello->offered_version : hello->version;
+    int version = offered < PROTO_VERSION ? offered : PROTO_VERSION;
+    if (version >= 2 && !hello->session[0]) {
+        proto_participant_reply_error(p, "refused hello: version 2 needs a session token", NULL);
+        return 0;
+    }
+    p->version = version;
+    snprintf(p->session, sizeof p->session, "%s", version >= 2 ? hello->session : "");
+    proto_message *r = &p->hello_reply;
+    proto_message_init(r, PROTO_MSG_HELLO);
+    snprintf(r->role, sizeof r->role, "%s", p->role);
+    snprintf(r->name, sizeof r->name, "%s", p->name);
+    snprintf(r->text, sizeof r->text, "%s", p->capabilities);
+    /* the coupler checks that its reply timeout is shorter than this (protocol/README.md §6) */
+    proto_message_set_value(r, "idle_timeout_s",
+                            p->options.idle_timeout_ms > 0 ? p->options.idle_timeout_ms / 1000.0 : 0.0,
+                            NULL);
+    return participant_send(p, r, err);
+}
+
+/* Version 2: a command must carry the agreed version and the session token of hello. */
+static int check_session(proto_participant *p, const proto_message *command, nc_error *err)
+{
+    char reason[PROTO_TEXT_MAX];
+    if (p->version == 0) {
+        if (command->version < 2) return 0;   /* a version-1 coupler may skip hello */
+        snprintf(reason, sizeof reason, "%s: refused %s: no hello yet (version 2 starts with "
+                 "hello)", p->role, proto_type_name(command->type));
+        return refuse(p, PROTO_ERR_SESSION, reason, err);
+    }
+    if (p->version >= 2 && strcmp(command->session, p->session) != 0) {
+        snprintf(reason, sizeof reason, "%s: refused %s from another coupler (session '%s'; "
+                 "this participant serves session %s)", p->role, proto_type_name(command->type),
+                 command->session, p->session);
+        return refuse(p, PROTO_ERR_SESSION, reason, err);
+    }
+    if (command->version != p->version) {
+        snprintf(reason, sizeof reason, "%s: refused %s of version %d after agreeing on version "
+                 "%d in hello", p->role, proto_type_name(command->type), command->version,
+                 p->version);
+        return refuse(p, PROTO_ERR_VERSION, reason, err);
+    }
+    return 0;
 }
 
 int proto_participant_receive(proto_participant *p, proto_message *command, nc_error *err)
@@ -285,15 +363,10 @@ int proto_participant_receive(proto_participant *p, proto_message *command, nc_e
                                 proto_type_name(command->type));
         }
         if (command->type == PROTO_MSG_HELLO) {
-            proto_message *r = &p->hello_reply;
-            proto_message_init(r, PROTO_MSG_HELLO);
-            snprintf(r->role, sizeof r->role, "%s", p->role);
-            snprintf(r->name, sizeof r->name, "%s", p->name);
-            snprintf(r->text, sizeof r->text, "%s", p->capabilities);
-            if (participant_send(p, r, err)) return -1;
+            if (answer_hello(p, command, err)) return -1;
             continue;
         }
-        return 0;
+        return check_session(p, command, err);
     }
 }
 
@@ -320,6 +393,22 @@ void proto_participant_close(proto_participant *p)
 
 /* ---- coupler side (peer) ---------------------------------------------------------------- */
 
+/* A session token: 16 hex digits from the system's random source (time, process and address
+ * when it cannot be read); it tells this coupler's commands from another's. */
+static void make_session(char *out, size_t size, const void *salt)
+{
+    uint64_t x = 0;
+    FILE *f = fopen("/dev/urandom", "rb");
+    if (!f || fread(&x, sizeof x, 1, f) != 1) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        x = ((uint64_t)ts.tv_sec * 1000000007u) ^ (uint64_t)ts.tv_nsec ^ (uint64_t)(uintptr_t)salt;
+        x ^= (uint64_t)clock() << 32;
+    }
+    if (f) fclose(f);
+    snprintf(out, size, "%016llx", (unsigned long long)x);
+}
+
 int proto_peer_open(proto_peer **out, const char *peer_name, const char *endpoint,
                     const proto_options *options, nc_error *err)
 {
@@ -331,6 +420,7 @@ int proto_peer_open(proto_peer **out, const char *peer_name, const char *endpoin
     snprintf(peer->name, sizeof peer->name, "%s", peer_name);
     snprintf(peer->endpoint, sizeof peer->endpoint, "%s", endpoint);
     snprintf(peer->last_sent, sizeof peer->last_sent, "nothing yet");
+    make_session(peer->session, sizeof peer->session, peer);
     buffer_init(&peer->buffer);
     peer->context = zmq_ctx_new();
     peer->socket = peer->context ? zmq_socket(peer->context, ZMQ_REQ) : NULL;
@@ -368,6 +458,22 @@ int proto_peer_open(proto_peer **out, const char *peer_name, const char *endpoin
 }
 
 const char *proto_peer_name(const proto_peer *peer) { return peer->name; }
+int proto_peer_version(const proto_peer *peer) { return peer->version; }
+const char *proto_peer_session(const proto_peer *peer) { return peer->session; }
+
+void proto_peer_join(proto_peer *peer, const char *session, int version)
+{
+    snprintf(peer->session, sizeof peer->session, "%s", session);
+    peer->version = version;
+}
+
+void proto_peer_set_timeout(proto_peer *peer, int timeout_ms)
+{
+    peer->options.timeout_ms = timeout_ms;
+    zmq_setsockopt(peer->socket, ZMQ_SNDTIMEO, &timeout_ms, sizeof timeout_ms);
+    int slice = timeout_ms < PEER_WAIT_SLICE_MS ? timeout_ms : PEER_WAIT_SLICE_MS;
+    zmq_setsockopt(peer->socket, ZMQ_RCVTIMEO, &slice, sizeof slice);
+}
 const char *proto_peer_endpoint(const proto_peer *peer) { return peer->endpoint; }
 
 /* Reads pending monitor events; returns 1 if the peer's connection was closed. */
@@ -399,6 +505,32 @@ static int peer_lost(proto_peer *peer)
     return lost;
 }
 
+/* A reply must answer the request: marked as a reply, of its type (or an error); in version
+ * 2 also of its step, iteration and session, so a stale or foreign reply is caught. */
+static int check_reply(const proto_peer *peer, const char *label, const proto_message *request,
+                       const proto_message *reply, nc_error *err)
+{
+    if (!reply->is_reply)
+        return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: not marked as a "
+                            "reply (\"reply\": true)", label, peer->last_sent);
+    int v2 = peer->version >= 2 && request->type != PROTO_MSG_HELLO;
+    if (v2 && strcmp(reply->session, peer->session) != 0)
+        return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: session '%s' "
+                            "instead of %s", label, peer->last_sent, reply->session, peer->session);
+    if (v2 && (reply->step != request->step || reply->iteration != request->iteration))
+        return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: it answers step "
+                            "%ld, iteration %d (a stale reply?)", label, peer->last_sent,
+                            reply->step, reply->iteration);
+    if (reply->type == PROTO_MSG_ERROR)
+        return nc_error_set(err, reply->retryable ? PROTO_ERR_STEP_FAILED : PROTO_ERR_PEER,
+                            "%s reported an error for %s: %s", label, peer->last_sent,
+                            reply->text[0] ? reply->text : "(no reason given)");
+    if (reply->type != request->type)
+        return nc_error_set(err, PROTO_ERR_DECODE, "%s answered %s with '%s'", label,
+                            peer->last_sent, proto_type_name(reply->type));
+    return 0;
+}
+
 int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
                        nc_error *err)
 {
@@ -410,7 +542,18 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
         return nc_error_set(err, PROTO_ERR_DISCONNECTED,
                             "%s closed the connection before %s (did the process exit?)", label,
                             peer->last_sent);
-    if (send_message(peer->socket, request, label, err)) {
+    /* the header goes out with the agreed version and this coupler's token */
+    proto_message *header = malloc(sizeof *header);
+    if (!header) return nc_error_set(err, PROTO_ERR_TRANSPORT, "%s: out of memory", label);
+    *header = *request;
+    if (request->type != PROTO_MSG_HELLO) {
+        header->version = peer->version ? peer->version : PROTO_VERSION_MIN;
+        snprintf(header->session, sizeof header->session, "%s",
+                 header->version >= 2 ? peer->session : "");
+    }
+    int sent = send_message(peer->socket, header, label, err);
+    free(header);
+    if (sent) {
         if (err && err->code == PROTO_ERR_TIMEOUT)
             return nc_error_set(err, PROTO_ERR_TIMEOUT,
                                 "%s: not reachable within %.1f s (is it running?); last message: %s",
@@ -439,13 +582,7 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
             return nc_error_set(err, PROTO_ERR_TIMEOUT, "%s did not answer within %.1f s; last message: %s",
                                 label, peer->options.timeout_ms / 1000.0, peer->last_sent);
     }
-    if (reply->type == PROTO_MSG_ERROR)
-        return nc_error_set(err, PROTO_ERR_PEER, "%s reported an error for %s: %s", label,
-                            peer->last_sent, reply->text[0] ? reply->text : "(no reason given)");
-    if (reply->type != request->type)
-        return nc_error_set(err, PROTO_ERR_DECODE, "%s answered %s with '%s'", label,
-                            peer->last_sent, proto_type_name(reply->type));
-    return 0;
+    return check_reply(peer, label, request, reply, err);
 }
 
 int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err)
@@ -453,9 +590,21 @@ int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err)
     proto_message hello;
     memset(&hello, 0, sizeof hello);
     proto_message_init(&hello, PROTO_MSG_HELLO);
+    /* sent as the oldest version, so a version-1 participant reads it; `versions` offers the
+     * newer ones and the reply's version is the one agreed */
+    hello.version = PROTO_VERSION_MIN;
+    hello.offered_version = PROTO_VERSION;
+    snprintf(hello.session, sizeof hello.session, "%s", peer->session);
     snprintf(hello.role, sizeof hello.role, "coupler");
     snprintf(hello.name, sizeof hello.name, "netcouple coupler");
-    return proto_peer_request(peer, &hello, reply, err);
+    peer->version = 0;
+    if (proto_peer_request(peer, &hello, reply, err)) return -1;
+    if (reply->version >= 2 && strcmp(reply->session, peer->session) != 0)
+        return nc_error_set(err, PROTO_ERR_DECODE, "participant '%s' at %s answered hello with "
+                            "session '%s' instead of %s", peer->name, peer->endpoint,
+                            reply->session, peer->session);
+    peer->version = reply->version;
+    return 0;
 }
 
 void proto_peer_close(proto_peer *peer)

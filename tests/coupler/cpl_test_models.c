@@ -187,7 +187,7 @@ static int s_accept(void *ctx, const cpl_call *call, nc_error *err)
 
 cpl_participant tm_structure_participant(tm_structure *s)
 {
-    cpl_participant p = {"fem", s, s_begin, s_solve, s_accept};
+    cpl_participant p = {"fem", s, s_begin, s_solve, s_accept, 0};
     return p;
 }
 
@@ -249,7 +249,7 @@ static int p_accept(void *ctx, const cpl_call *call, nc_error *err)
 
 cpl_participant tm_particles_participant(tm_particles *p)
 {
-    cpl_participant q = {"dem", p, p_begin, p_solve, p_accept};
+    cpl_participant q = {"dem", p, p_begin, p_solve, p_accept, 0};
     return q;
 }
 

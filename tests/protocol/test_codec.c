@@ -146,7 +146,7 @@ static void test_malformed_headers(void **state)
     expect_reject("{\"type\":\"explode\",\"version\":1}", NULL, NULL, 0, "unknown message type 'explode'", PROTO_ERR_DECODE);
     expect_reject("{\"type\":7,\"version\":1}", NULL, NULL, 0, "'type'", PROTO_ERR_DECODE);
     expect_reject("{\"type\":\"solve\"}", NULL, NULL, 0, "no 'version'", PROTO_ERR_DECODE);
-    expect_reject("{\"type\":\"solve\",\"version\":2}", NULL, NULL, 0, "version mismatch", PROTO_ERR_VERSION);
+    expect_reject("{\"type\":\"solve\",\"version\":3}", NULL, NULL, 0, "version mismatch", PROTO_ERR_VERSION);
     expect_reject("{\"type\":\"solve\",\"version\":1,\"step\":1.5}", NULL, NULL, 0, "'step'", PROTO_ERR_DECODE);
     expect_reject("{\"type\":\"solve\",\"version\":1,\"step\":\"3\"}", NULL, NULL, 0, "'step'", PROTO_ERR_DECODE);
     expect_reject("{\"type\":\"solve\",\"version\":1,\"iteration\":-2}", NULL, NULL, 0, "'iteration'", PROTO_ERR_DECODE);

@@ -364,7 +364,7 @@ static void test_participant_rejects_garbage(void **state)
         zmq_connect(socket, endpoint);
         const char *bad[4] = {
             "not json at all",
-            "{\"type\":\"hello\",\"version\":2}",
+            "{\"type\":\"hello\",\"version\":3}",
             "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"force\",\"dtype\":\"f64\",\"shape\":[1,3]}]}",
             "{\"type\":\"solve\",\"version\":1,\"arrays\":[{\"name\":\"force\",\"dtype\":\"f64\",\"shape\":[1,3]}]}",
         };
