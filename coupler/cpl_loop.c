@@ -96,6 +96,12 @@ void cpl_jacobian_free(cpl_jacobian *j)
     memset(j, 0, sizeof *j);
 }
 
+int cpl_loop_settings_jacobian_applies(const cpl_loop_settings *s)
+{
+    return s->interface_jacobian &&
+           !(s->scheme == CPL_SCHEME_STRONG && s->relaxed == CPL_RELAXED_FORCE);
+}
+
 double cpl_loop_settings_dt_min(const cpl_loop_settings *s)
 {
     return s->dt_min_s > 0.0 ? s->dt_min_s : s->dt_s / CPL_DT_MIN_DIVISOR;
@@ -705,7 +711,11 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     if (!failure) failure = &dummy;
     memset(failure, 0, sizeof *failure);
     run_ctx c = {L, fem, dem, observer, stop, failure, err, 0};
-    L->use_jacobian = L->s.interface_jacobian && fem->can_jacobian && dem->can_jacobian;
+    /* not with relaxed forces: the FEM's answer then depends on the linearisation point as
+     * well as on the relaxed force, and a secant model of the force map alone misleads
+     * (coupler/README.md, "Interface Jacobian") */
+    L->use_jacobian = cpl_loop_settings_jacobian_applies(&L->s) && fem->can_jacobian &&
+                      dem->can_jacobian;
     double t0 = nc_clock_now_s();
     int rc = 0;
     const double eps = 1e-9 * L->s.dt_s;

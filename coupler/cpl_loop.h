@@ -126,6 +126,8 @@ typedef struct cpl_loop_settings {
 double cpl_loop_settings_dt_min(const cpl_loop_settings *s);
 
 void cpl_loop_settings_default(cpl_loop_settings *s);
+/* 1 when interface_jacobian is on and the scheme can use it (not strong with relaxed forces). */
+int cpl_loop_settings_jacobian_applies(const cpl_loop_settings *s);
 /* Checks ranges and consistency; `where` names the source (e.g. "coupler.json"). */
 int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_error *err);
 

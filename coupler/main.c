@@ -172,6 +172,9 @@ static void print_timing(app *a)
     fprintf(o, "coupler: %ld steps, %ld iterations (%.2f per step), %ld unconverged steps\n",
             t->steps, t->iterations, t->steps ? (double)t->iterations / (double)t->steps : 0.0,
             t->unconverged_steps);
+    fprintf(o, "coupler: interface Jacobian %s\n",
+            cpl_loop_uses_jacobian(a->loop) ? "on: the FEM solved with the DEM's contact linearisation"
+                                            : "off: plain exchange of forces and displacements");
     fprintf(o, "coupler: wall time %.3f s: waiting for fem %.3f s (%.1f%%), for dem %.3f s "
             "(%.1f%%), coupler itself %.3f s (%.1f%%)\n", t->total_s, t->wait_fem_s,
             t->total_s > 0 ? 100.0 * t->wait_fem_s / t->total_s : 0.0, t->wait_dem_s,
@@ -345,6 +348,9 @@ int main(int argc, char **argv)
     if (!a.quiet)
         cpl_progress_message(&a.progress, "coupler: interface Jacobian %s",
                              !a.cfg.loop.interface_jacobian ? "off (interface_jacobian false)"
+                             : !cpl_loop_settings_jacobian_applies(&a.cfg.loop)
+                                 ? "not used with relaxed_quantity \"force\" (it needs the "
+                                   "displacement-velocity residual)"
                              : fem.can_jacobian && dem.can_jacobian
                                  ? "on: the FEM solves with the DEM's contact linearisation"
                                  : "not available (a participant lacks the capability "
