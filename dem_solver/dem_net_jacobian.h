@@ -37,10 +37,12 @@
  *    torques); its other contacts (spheres, planes, meshes) keep their forces. For a
  *    particle that touches only the net this is the exact derivative of the real step
  *    (granite case: 7e-10 of max |K|). Particles touching more net nodes, and clusters, stay
- *    frozen, so every block stays within one element, as fem_analysis_set_linearisation
- *    requires.
+ *    frozen, so every block stays within one element (what a structure with a fixed
+ *    element pattern can take).
  *  - DEM_JAC_RESPOND: every free sphere responds; a particle touching several edges then
- *    gives blocks between nodes that share no element (the FEM rejects those).
+ *    gives blocks between nodes that share no element. fem_solver grows its pattern by such
+ *    pairs (fem_analysis_set_linearisation), so the participant (dem_participant.c) uses
+ *    this mode.
  * Why not the particles' mutual response: it couples every particle of a heap (a solve per
  * step instead of a sweep over the net contacts). The contact set is the one of the actual
  * run (K is a derivative: a contact that starts or ends exactly at u^{n+1} has a kink).

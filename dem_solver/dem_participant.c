@@ -150,6 +150,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     }
     participant c = {.s = s, .out = out, .opt = opt, .next_out_s = s->model.prm.output_interval_s};
     dem_net_jacobian_init(&c.jac);
+    c.jac.particle_response = DEM_JAC_RESPOND;   /* the FEM grows its pattern for the pairs */
     const proto_serve_handlers handlers = {
         .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
         .solve = on_solve, .accept_step = on_accept, .report = on_report};

@@ -60,6 +60,68 @@ static void state_copy(fem_state *dst, const fem_state *src, int ndof)
     memcpy(dst->fc, src->fc, bytes);
 }
 
+/* The matrix pattern: the elements' couplings and the extra node pairs (each a 2-node
+ * pseudo-element without values of its own). s->slot covers both; assembly uses the
+ * elements' part. Any factorisation (also the saved one) belongs to the old pattern and is
+ * dropped: the next solve factorises afresh. */
+static int build_pattern(fem_analysis *s, nc_error *err)
+{
+    const fem_model *m = s->m;
+    size_t ne = (size_t)m->n_elements + (size_t)s->n_pairs;
+    int *elem_eq = malloc(6 * ne * sizeof *elem_eq);
+    int *slot = malloc(36 * ne * sizeof *slot);
+    if (!elem_eq || !slot) {
+        free(elem_eq);
+        free(slot);
+        return nc_error_set(err, 1, "out of memory for the matrix pattern");
+    }
+    for (size_t e = 0; e < ne; e++) {
+        int a = e < (size_t)m->n_elements ? m->conn[2 * e] : s->pairs[2 * (e - m->n_elements)];
+        int b = e < (size_t)m->n_elements ? m->conn[2 * e + 1] : s->pairs[2 * (e - m->n_elements) + 1];
+        for (int c = 0; c < 3; c++) {
+            elem_eq[6 * e + c] = s->eq[3 * a + c];
+            elem_eq[6 * e + 3 + c] = s->eq[3 * b + c];
+        }
+    }
+    fem_sparse_free(&s->K);
+    memset(&s->K, 0, sizeof s->K);
+    int rc = fem_sparse_build(&s->K, s->neq, (int)ne, elem_eq, slot, m->settings.factorization, err);
+    free(elem_eq);
+    free(s->slot);
+    s->slot = slot;
+    return rc;
+}
+
+/* Adds to the pattern the node pairs of the blocks that have no slot yet. */
+static int grow_pattern(fem_analysis *s, int n_blocks, const int *block_nodes, nc_error *err)
+{
+    int added = 0;
+    for (int b = 0; b < n_blocks; b++) {
+        int i = block_nodes[2 * b], j = block_nodes[2 * b + 1];
+        if (i < 0 || j < 0 || i >= s->m->n_nodes || j >= s->m->n_nodes)
+            continue;   /* fem_ijac_set names the block */
+        if (i == j || fem_ijac_pair_stored(&s->K, s->eq, i, j)) continue;
+        int lo = i < j ? i : j, hi = i < j ? j : i, known = 0;
+        for (int p = s->n_pairs - added; p < s->n_pairs && !known; p++)
+            known = s->pairs[2 * p] == lo && s->pairs[2 * p + 1] == hi;
+        if (known) continue;
+        if (s->n_pairs == s->cap_pairs) {
+            int cap = s->cap_pairs ? 2 * s->cap_pairs : 64;
+            int *grown = realloc(s->pairs, 2 * (size_t)cap * sizeof *grown);
+            if (!grown) return nc_error_set(err, 1, "out of memory for %d node pairs", cap);
+            s->pairs = grown;
+            s->cap_pairs = cap;
+        }
+        s->pairs[2 * s->n_pairs] = lo;
+        s->pairs[2 * s->n_pairs + 1] = hi;
+        s->n_pairs++;
+        added++;
+    }
+    if (!added) return 0;
+    s->stats.pattern_growths++;
+    return build_pattern(s, err);
+}
+
 int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
 {
     memset(s, 0, sizeof *s);
@@ -68,7 +130,6 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
     size_t nd = (size_t)s->ndof, ne = (size_t)m->n_elements;
     s->eq = malloc(nd * sizeof *s->eq);
     s->dof_of_eq = malloc(nd * sizeof *s->dof_of_eq);
-    s->slot = malloc(36 * ne * sizeof *s->slot);
     int *elem_eq = malloc(6 * ne * sizeof *elem_eq);
     s->f_model = calloc(nd, sizeof(double));
     s->f_coupling = calloc(nd, sizeof(double));
@@ -87,7 +148,7 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
     s->mass_y = calloc(nd, sizeof(double));
     s->a_unshifted = calloc(nd, sizeof(double));
     if (!s->mass_diag || !s->mass_x || !s->mass_y || !s->a_unshifted ||
-        !s->eq || !s->dof_of_eq || !s->slot || !elem_eq || !s->f_model || !s->f_coupling ||
+        !s->eq || !s->dof_of_eq || !elem_eq || !s->f_model || !s->f_coupling ||
         !s->r || !s->w || !s->rhs || !s->du || !s->u0 || !s->cg_r || !s->cg_z ||
         !s->cg_p || !s->cg_q || !s->axial || state_alloc(&s->cur, s->ndof) ||
         state_alloc(&s->start, s->ndof) || state_alloc(&s->saved, s->ndof)) {
@@ -114,10 +175,8 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
             if (q >= 0) s->mass_diag[q] += m11;
         }
     }
-    int rc = fem_sparse_build(&s->K, s->neq, m->n_elements, elem_eq, s->slot,
-                              m->settings.factorization, err);
     free(elem_eq);
-    if (rc) return nc_error_prefix(err, "%s", m->source);
+    if (build_pattern(s, err)) return nc_error_prefix(err, "%s", m->source);
     /* model loads at full scale: point loads + self-weight (half of rho A L g per node, which
      * is also the consistent load of a linear element) */
     memcpy(s->f_model, m->f_point, nd * sizeof(double));
@@ -139,7 +198,8 @@ void fem_analysis_free(fem_analysis *s)
     fem_sparse_free(&s->K);
     fem_ijac_free(&s->lin);
     state_free(&s->cur); state_free(&s->start); state_free(&s->saved);
-    free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->f_model); free(s->f_coupling);
+    free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->pairs);
+    free(s->f_model); free(s->f_coupling);
     free(s->r); free(s->w); free(s->rhs); free(s->du); free(s->u0);
     free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
     free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
@@ -694,7 +754,9 @@ int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const d
                                    const double *C_blocks, nc_error *err)
 {
     s->lin_serial++;
-    if (fem_ijac_set(&s->lin, s->ndof, s->eq, &s->K, u_ref, v_ref, n_blocks, block_nodes,
+    /* a particle touching nodes of different elements couples them: grow the pattern */
+    if (grow_pattern(s, n_blocks, block_nodes, err) ||
+        fem_ijac_set(&s->lin, s->ndof, s->eq, &s->K, u_ref, v_ref, n_blocks, block_nodes,
                      K_blocks, C_blocks, err))
         return nc_error_prefix(err, "%s", s->m->source);
     return 0;

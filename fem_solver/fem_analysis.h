@@ -40,6 +40,7 @@ typedef struct fem_stats {
     double increment_norm;     /* last increment max-norm (m) */
     int slack_elements;        /* slack cables at the solution */
     long assemblies, factorizations, lu_factorizations, solves, line_search_cuts;
+    long pattern_growths;  /* times an interface linearisation added node pairs to the pattern */
     long pcg_solves, pcg_iterations, pcg_failures;
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
 } fem_stats;
@@ -69,6 +70,10 @@ typedef struct fem_analysis {
     double saved_factor_cm, saved_factor_ck;
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
     long lin_serial;       /* counts set/clear calls: which linearisation a factor holds */
+    int n_pairs, cap_pairs;/* node pairs in the pattern that share no element: added when a
+                              linearisation couples them (a particle touching several
+                              elements), so the pattern only grows */
+    int *pairs;            /* [2 n_pairs] */
     long factor_lin, saved_factor_lin;
     fem_stats stats;
 } fem_analysis;

@@ -18,6 +18,16 @@ static int pattern_slot(const fem_sparse *A, int r, int c)
     return -1;
 }
 
+int fem_ijac_pair_stored(const fem_sparse *A, const int *eq, int ni, int nj)
+{
+    for (int e = 0; e < 9; e++) {
+        int p = eq[3 * ni + e / 3], q = eq[3 * nj + e % 3];
+        if (p >= 0 && q >= 0 && (p <= q ? pattern_slot(A, p, q) : pattern_slot(A, q, p)) < 0)
+            return 0;
+    }
+    return 1;
+}
+
 static int reserve(fem_ijac *j, int ndof, int n_blocks)
 {
     if (!j->u_ref || j->ndof != ndof) {
@@ -72,7 +82,7 @@ int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, cons
             if (p >= 0 && q >= 0) {
                 slot = p <= q ? pattern_slot(A, p, q) : pattern_slot(A, q, p);
                 if (slot < 0)
-                    return nc_error_set(err, 1, "interface linearisation: block %d couples nodes %d and %d, which share no element (the sparse pattern is fixed; contact blocks must couple the nodes of one element)",
+                    return nc_error_set(err, 1, "interface linearisation: block %d couples nodes %d and %d, which have no entry in the sparse pattern (fem_analysis_set_linearisation adds them)",
                                         b, ni, nj);
             }
             j->slot[9 * b + e] = slot;

@@ -11,11 +11,12 @@
  * direction of node i, column = motion direction of node j). Repeated (i, j) blocks are
  * summed, so a contact detector can append one block set per contact. u^k, v^k are full
  * dof vectors (3 n_nodes). fem_ijac_set() copies everything and maps every block entry to
- * its value slot in the FEM's fixed pattern once; afterwards fem_ijac_force() and
+ * its value slot in the FEM's pattern once; afterwards fem_ijac_force() and
  * fem_ijac_scatter() allocate nothing. Entries on supported dofs act in the residual (the
- * supports' motion is known) but have no matrix entry. A block between two distinct free
- * nodes that share no element has no slot in the pattern and is rejected: contact blocks of
- * a sphere on an edge or a vertex always fall on one element's nodes.
+ * supports' motion is known) but have no matrix entry. A block between two free nodes
+ * without a slot in the pattern is rejected: fem_analysis_set_linearisation() first grows
+ * the pattern by such pairs (a rock touching several elements couples their nodes through
+ * its own motion).
  * The matrix receives the symmetric part (K + K^T)/2 (the pattern is a symmetric upper
  * triangle): the residual stays exact, so an unsymmetric K only slows Newton down to linear
  * convergence, it does not change the solution.
@@ -43,6 +44,8 @@ typedef struct fem_ijac {
 int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, const double *u_ref,
                  const double *v_ref, int n_blocks, const int *block_nodes,
                  const double *K_blocks, const double *C_blocks, nc_error *err);
+/* 1 when every free-dof entry of the block (ni, nj) has a slot in A's pattern. */
+int fem_ijac_pair_stored(const fem_sparse *A, const int *eq, int ni, int nj);
 /* Back to no linearisation (keeps the memory for the next set). */
 void fem_ijac_clear(fem_ijac *j);
 /* j->df = -K (u - u^k) - C (v - v^k) on all dofs; v == NULL leaves the damping term out

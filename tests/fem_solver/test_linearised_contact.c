@@ -643,30 +643,66 @@ static void test_static(void **state)
     fem_model_free(&m);
 }
 
-static void test_rejects_unconnected_blocks(void **state)
+/* A particle touching nodes of different elements couples them: the pattern grows by the
+ * pair, once, and the step is the plain step under F(u, v) of its solution (as for edge
+ * blocks); a repeated step after a restore is bit-identical. Out-of-range nodes are
+ * rejected; blocks on supported nodes act only in the residual. */
+static void test_grows_pattern_for_unconnected_blocks(void **state)
 {
     (void)state;
     fem_model m;
-    net_model(&m, FEM_NEWMARK, 1, 0);
-    fem_analysis s;
+    net_model(&m, FEM_BOSSAK, 0, 0);
+    fem_analysis s, p;
     nc_error err;
     assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&p, &m, &err), 0);
     size_t bytes = (size_t)s.ndof * sizeof(double);
-    double *z = calloc(1, bytes), K[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    /* the centre and its diagonal neighbour share no element */
-    int far[2] = {NET_CENTRE, NET_CENTRE + NET_N + 1};
-    assert_int_equal(fem_analysis_set_linearisation(&s, z, z, 1, far, K, NULL, &err), -1);
-    assert_non_null(strstr(err.message, "share no element"));
-    assert_int_equal(s.lin.active, 0);
+    /* a spring of 5e4 N/m between the centre and its diagonal neighbour (no shared element) */
+    const int a = NET_CENTRE, b = NET_CENTRE + NET_N + 1;
+    int nodes[8] = {a, a, a, b, b, a, b, b};
+    double K[36] = {0};
+    for (int k = 0; k < 4; k++)
+        for (int c = 0; c < 3; c++) K[9 * k + 4 * c] = (k == 0 || k == 3 ? 5e4 : -5e4);
+    double *uref = calloc(1, bytes), *vref = calloc(1, bytes), *u1 = malloc(bytes);
+    edge_force(&s, 1500.0);
+    edge_force(&p, 1500.0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&p, &err), 0);
+    const int nnz_before = s.K.nnz;
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, 4, nodes, K, NULL, &err), 0);
+    assert_int_equal(s.stats.pattern_growths, 1);
+    assert_true(s.K.nnz > nnz_before);
+    assert_int_equal(fem_analysis_save(&s, &err), 0);
+    assert_int_equal(fem_analysis_step(&s, NET_DT, &err), 0);
+    memcpy(u1, s.cur.u, bytes);
+    /* the same blocks again: no further growth */
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, 4, nodes, K, NULL, &err), 0);
+    assert_int_equal(s.stats.pattern_growths, 1);
+    /* the plain step under F(u, v) of the linearised solution reproduces it */
+    memcpy(p.f_coupling, s.cur.fc, bytes);
+    assert_int_equal(fem_analysis_step(&p, NET_DT, &err), 0);
+    double umax = 0;
+    for (int i = 0; i < s.ndof; i++) umax = fmax(umax, fabs(s.cur.u[i]));
+    for (int i = 0; i < s.ndof; i++) assert_near(p.cur.u[i], s.cur.u[i], 1e-9 * umax + 1e-9);
+    /* the spring acted: it pulls the centre towards its neighbour */
+    double fz = s.cur.fc[3 * a + 2] - s.f_coupling[3 * a + 2];
+    assert_near(fz, -5e4 * (s.cur.u[3 * a + 2] - s.cur.u[3 * b + 2]), 1e-9 * fabs(fz) + 1e-9);
+    assert_below(1.0, fabs(fz));
+    /* repeated from the saved state (whose factorisation belonged to the old pattern) */
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    assert_int_equal(fem_analysis_step(&s, NET_DT, &err), 0);
+    assert_memory_equal(s.cur.u, u1, bytes);
+    /* a node outside the model is still an error; supported nodes act in the residual only */
     int out[2] = {NET_CENTRE, NET_N * NET_N};
-    assert_int_equal(fem_analysis_set_linearisation(&s, z, z, 1, out, K, NULL, &err), -1);
-    /* blocks on supported nodes are accepted (they act only in the residual) */
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, 1, out, K, NULL, &err), -1);
+    assert_int_equal(s.lin.active, 0);
     int support[2] = {0, 1};
-    assert_int_equal(fem_analysis_set_linearisation(&s, z, z, 1, support, K, NULL, &err), 0);
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, 1, support, K, NULL, &err), 0);
     fem_analysis_clear_linearisation(&s);
     assert_int_equal(s.lin.active, 0);
-    free(z);
+    free(uref); free(vref); free(u1);
     fem_analysis_free(&s);
+    fem_analysis_free(&p);
     fem_model_free(&m);
 }
 
@@ -683,7 +719,7 @@ int main(void)
         cmocka_unit_test(test_restore_bitwise),
         cmocka_unit_test(test_unsymmetric),
         cmocka_unit_test(test_static),
-        cmocka_unit_test(test_rejects_unconnected_blocks),
+        cmocka_unit_test(test_grows_pattern_for_unconnected_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
