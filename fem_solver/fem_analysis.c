@@ -272,8 +272,13 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
         if (c_m != 0.0 || w) fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
         if (w)
             for (int c = 0; c < 3; c++) {
-                s->r[k + c] -= m11 * w[k + c] + m12 * w[l + c];
-                s->r[l + c] -= m12 * w[k + c] + m11 * w[l + c];
+                double ik = m11 * w[k + c] + m12 * w[l + c], il = m12 * w[k + c] + m11 * w[l + c];
+                s->r[k + c] -= ik;
+                s->r[l + c] -= il;
+                /* inertia belongs to the force scale: a node kicked by a rock carries
+                 * inertial forces far above the loads, and the residual's rounding floor
+                 * (m eps(u) / (beta dt^2)) grows with them */
+                scale2 += ik * ik + il * il;
             }
         if (matrix) {
             /* 6x6 element matrix [c_k Kb + c_m m11 I, -c_k Kb + c_m m12 I; ...], scattered
