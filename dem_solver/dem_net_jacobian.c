@@ -139,6 +139,7 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
 typedef struct particle {
     int32_t i;
     int n_nodes, respond, has_edge;
+    int overflow;             /* touches more than DEM_JAC_MAX_NODES nodes: left out of K */
     int32_t node[DEM_JAC_MAX_NODES];
     double dx[3], dv[3], dw[3];               /* state - recorded state */
     double Dx[3][NCOL], Dv[3][NCOL], Dw[3][NCOL];
@@ -425,14 +426,16 @@ static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, part
     const dem_net *net = &s->model.net;
     size_t nr = jac->n_rec, np = 0;
     const dem_jac_record **order = malloc((nr + 1) * sizeof *order);
-    particle *pts = calloc(nr + 1, sizeof *pts);
-    if (!order || !pts) {
-        free(order);
-        free(pts);
-        return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
-    }
+    if (!order) return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
     for (size_t x = 0; x < nr; x++) order[x] = &jac->rec[x];
     qsort(order, nr, sizeof *order, rec_cmp);
+    size_t distinct = 0;   /* one particle struct (tangent columns) per particle, not per record */
+    for (size_t x = 0; x < nr; x++) distinct += x == 0 || order[x]->i != order[x - 1]->i;
+    particle *pts = calloc(distinct + 1, sizeof *pts);
+    if (!pts) {
+        free(order);
+        return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+    }
     for (size_t x = 0; x < nr; x++) {
         const dem_jac_record *r = order[x];
         if (np == 0 || pts[np - 1].i != r->i) {
@@ -448,13 +451,12 @@ static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, part
         int32_t nodes[2] = {edge ? net->edges[2 * (size_t)r->j] : r->j,
                             edge ? net->edges[2 * (size_t)r->j + 1] : r->j};
         for (int k = 0; k < (edge ? 2 : 1); k++) {
-            if (local_index(pt, nodes[k]) >= 0) continue;
+            if (pt->overflow || local_index(pt, nodes[k]) >= 0) continue;
             if (pt->n_nodes == DEM_JAC_MAX_NODES) {
-                free(order);
-                free(pts);
-                return nc_error_set(err, 1, "dem: interface Jacobian: particle %d touches more "
-                                            "than %d net nodes in one step", s->model.sph.id[r->i],
-                                    DEM_JAC_MAX_NODES);
+                /* its force stays exact; its share of K is left out (counted in n_dropped) */
+                pt->overflow = 1;
+                pt->respond = 0;
+                continue;
             }
             pt->node[pt->n_nodes++] = nodes[k];
         }
@@ -495,6 +497,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
         rc = -1;
         goto done;
     }
+    jac->n_dropped = 0;
+    for (size_t k = 0; k < npt; k++) jac->n_dropped += pts[k].overflow;
     size_t max_blocks = 0; /* each record: its 1 or 2 nodes times its particle's nodes */
     for (size_t x = 0; x < jac->n_rec; x++) max_blocks += 2 * (size_t)pts[slot[x]].n_nodes;
     if (want_K && !(blocks = malloc((max_blocks + 1) * sizeof *blocks))) {
@@ -511,7 +515,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             particle *pt = &pts[slot[x]];
             const dem_jac_state *in = r->sub > 0 && r->link >= 0 ? &state[r->link] : NULL;
             double f[3], tq[3], df[3][NCOL] = {{0}}, dtq[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
-            contact(s, jac, r, end, in, pt, want_K, f, tq, df, dtq, &t, dt, &state[x]);
+            contact(s, jac, r, end, in, pt, want_K && !pt->overflow, f, tq, df, dtq, &t, dt,
+                    &state[x]);
             if (base) {
                 memcpy(r->f_base, f, sizeof f);
                 memcpy(r->t_base, tq, sizeof tq);
@@ -538,7 +543,7 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             } else {
                 for (int d = 0; d < 3; d++) force[3 * (size_t)r->j + (size_t)d] -= f[d];
             }
-            if (!want_K || wgt == 0.0) continue;
+            if (!want_K || wgt == 0.0 || pt->overflow) continue;
             /* F_a = -(1-t) f, F_b = -t f; K = -weight dF; columns: the particle's nodes
              * (frozen: only this contact's nodes carry a derivative) */
             int nodes[2] = {na, nb}, nrow = edge ? 2 : 1;

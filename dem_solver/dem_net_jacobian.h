@@ -50,7 +50,8 @@
  * Cost: off (dem_sim_solve_coupled, or jac NULL): nothing — the step runs exactly as
  * before. On: a record per net contact and sub-step during the step (the particle state at
  * the contact pass, the incoming history) and afterwards one sweep over those records with
- * a tangent of 3 columns per node the particle touches (at most DEM_JAC_MAX_NODES): linear
+ * a tangent of 3 columns per node the particle touches (at most DEM_JAC_MAX_NODES; a
+ * particle touching more is left out of K and counted in n_dropped): linear
  * in the number of net contacts times sub-steps, plus sorts of the records and blocks. The
  * results of the step are bit-identical with the option on.
  */
@@ -86,7 +87,7 @@ enum {
 };
 
 /* Most net nodes one particle may touch in one step (the columns of its tangents). */
-#define DEM_JAC_MAX_NODES 8
+#define DEM_JAC_MAX_NODES 32
 
 /* Per-record state of a replay: outgoing history and its tangent. */
 typedef struct dem_jac_state {
@@ -98,6 +99,8 @@ typedef struct dem_net_jacobian {
     /* option, set by the caller after init (default DEM_JAC_RESPOND_LOCAL) */
     int particle_response;     /* DEM_JAC_FROZEN / _RESPOND_LOCAL / _RESPOND (above) */
     /* result of the last solve */
+    size_t n_dropped;          /* particles touching more than DEM_JAC_MAX_NODES nodes: their
+                                  forces are exact, their share of K is left out */
     size_t n_blocks, cap_blocks;
     int32_t *nodes;            /* 2 n_blocks: (force node i, motion node j) */
     double *K;                 /* 9 n_blocks, N/m */

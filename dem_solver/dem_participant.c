@@ -82,7 +82,8 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
     /* C = -dF/du̇ is zero (dem_net_jacobian.h), so only the stiffness blocks are sent */
     if (want_jacobian &&
         (proto_message_add_i32(reply, "jacobian_nodes", c->jac.nodes, c->jac.n_blocks, 2, err) ||
-         proto_message_add_f64(reply, "jacobian_stiffness", c->jac.K, c->jac.n_blocks, 9, err)))
+         proto_message_add_f64(reply, "jacobian_stiffness", c->jac.K, c->jac.n_blocks, 9, err) ||
+         proto_message_set_value(reply, "jacobian_dropped_particles", (double)c->jac.n_dropped, err)))
         return -1;
     /* the energy values of protocol/README.md §3: elastic = contact springs, potential =
      * gravity, interface work = the net wall's work on the particles, no external loads */
