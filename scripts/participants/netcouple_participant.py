@@ -6,33 +6,60 @@ with REQ and sends commands; every command gets exactly one reply. A message is 
 the raw little-endian bytes of the arrays come first, one frame per array, and the LAST frame
 is a UTF-8 JSON header
 
-    {"type": "solve", "version": 1, "reply": true, "step": 3, "iteration": 1,
-     "time": 0.003, "dt": 0.001, "status": "ok",
+    {"type": "solve", "version": 2, "reply": true, "step": 3, "iteration": 1,
+     "time": 0.003, "dt": 0.001, "status": "ok", "session": "3f2a...",
      "arrays": [{"name": "force", "dtype": "f64", "shape": [n, 3]}],
      "values": {"near_interface": 1}, "role": "fem", "name": "...", "text": "..."}
 
 whose "arrays" list describes the array frames in order.
 Types: hello, interface, begin_step, solve, accept_step, shutdown; an error reply has
-type "error", status "error" and the reason in "text".
+type "error", status "error" and the reason in "text" ("retryable": true when a smaller step
+may succeed).
+
+Versions: the coupler sends hello as version 1 with "versions": [1, 2] and a "session"
+token; this module answers with the newest version both speak (min(2, newest offered)) and,
+in version 2, echoes the session. Every later command of version 2 must carry that session:
+a command of another session ("from another coupler"), a version-2 command before hello and
+a second hello with another session are refused (an error reply; not an error of this run).
+A version-1 coupler (hello without "versions", or no hello at all) is served in version 1.
+Every reply echoes the command's step and iteration.
 
 Usage: subclass nothing — pass a handler object with methods interface(cmd),
 begin_step(cmd), solve(cmd), accept_step(cmd), each returning (arrays, values) where arrays
 is a list of (name, numpy array) and values a dict; raise ParticipantError(reason) to reply
-with an error and keep serving. serve() returns on SHUTDOWN; serve_until_shutdown() wraps it
-with the exit codes and clean-up of a participant program.
+with an error and keep serving, ParticipantError(reason, retryable=True) when the step may
+succeed with a smaller dt (the coupler then retries it). serve() returns on SHUTDOWN;
+serve_until_shutdown() wraps it with the exit codes and clean-up of a participant program:
+0 after SHUTDOWN when every command was answered normally, 1 when any command (a malformed
+one included) was answered with an error other than a retryable failure or a refusal of
+another coupler (protocol/README.md §6), 1 after the idle timeout, 130 on Ctrl-C.
 """
 import json
+import math
 import os
 import sys
 
 import numpy as np
 import zmq
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2        # the newest version this module speaks
+PROTOCOL_VERSION_MIN = 1    # the oldest one it still serves
+TYPES = ("hello", "interface", "begin_step", "solve", "accept_step", "shutdown", "error")
+DTYPES = {"f64": "<f8", "i32": "<i4"}
 
 
 class ParticipantError(Exception):
-    """A command that cannot be done: replied as an error, the participant keeps serving."""
+    """A command that cannot be done: replied as an error, the participant keeps serving.
+    retryable=True: the step may succeed with a smaller dt (sent as "retryable": true)."""
+
+    def __init__(self, reason, retryable=False):
+        super().__init__(reason)
+        self.retryable = retryable
+
+
+class Refused(Exception):
+    """A command of another coupler, or a version-2 command before hello: refused with an
+    error reply, but not an error of this participant's run."""
 
 
 class IdleTimeout(Exception):
@@ -45,12 +72,20 @@ class Command:
     def __init__(self, header, arrays):
         self.header = header
         self.type = header["type"]
+        self.version = header["version"]
         self.step = header.get("step", -1)
         self.iteration = header.get("iteration", 0)
         self.time = header.get("time", 0.0)
         self.dt = header.get("dt", 0.0)
+        self.session = header.get("session", "")
+        self.is_reply = header.get("reply", False)
         self.values = header.get("values", {})
         self.arrays = arrays
+
+    def offered_version(self):
+        """hello: the newest version the coupler offers ("versions", else "version")."""
+        versions = self.header.get("versions")
+        return max(versions) if versions else self.version
 
     def array(self, name, shape=None):
         if name not in self.arrays:
@@ -62,30 +97,107 @@ class Command:
         return a
 
 
+def _whole(header, key, low, default):
+    v = header.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+            or v != int(v) or v < low:
+        raise ParticipantError("header field '%s': expected a whole number >= %d" % (key, low))
+    return int(v)
+
+
+def _check_header(header):
+    """Type-checks the header fields this module reads (as the C library does)."""
+    if not isinstance(header, dict):
+        raise ParticipantError("header is not a JSON object")
+    if header.get("type") not in TYPES:
+        raise ParticipantError("unknown message type %r" % (header.get("type"),))
+    if "version" not in header:
+        raise ParticipantError("header has no 'version'")
+    version = header["version"] = _whole(header, "version", 0, 0)
+    if not PROTOCOL_VERSION_MIN <= version <= PROTOCOL_VERSION:
+        raise ParticipantError("protocol version mismatch: message has version %d, this side "
+                               "speaks %d to %d" % (version, PROTOCOL_VERSION_MIN,
+                                                    PROTOCOL_VERSION))
+    header["step"] = _whole(header, "step", -1, -1)
+    header["iteration"] = _whole(header, "iteration", 0, 0)
+    for key in ("time", "dt"):
+        v = header.get(key, 0.0)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ParticipantError("header field '%s': expected a finite number" % key)
+        header[key] = float(v)
+    for key in ("reply", "retryable"):
+        if key in header and not isinstance(header[key], bool):
+            raise ParticipantError("header field '%s': expected true or false" % key)
+    for key in ("session", "role", "name", "text"):
+        if key in header and not isinstance(header[key], str):
+            raise ParticipantError("header field '%s': expected a string" % key)
+    versions = header.get("versions")
+    if versions is not None:
+        if not isinstance(versions, list) or not all(
+                isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in versions):
+            raise ParticipantError("header field 'versions': expected a list of whole numbers >= 1")
+    values = header.get("values", {})
+    if not isinstance(values, dict) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in values.values()):
+        raise ParticipantError("header field 'values': expected an object of finite numbers")
+    if not isinstance(header.get("arrays", []), list):
+        raise ParticipantError("header field 'arrays': expected a list")
+
+
 def decode(frames):
     header = json.loads(bytes(frames[-1]).decode("utf-8"))
-    if header.get("version") != PROTOCOL_VERSION:
-        raise ParticipantError("protocol version mismatch: got %r, this side speaks %d"
-                               % (header.get("version"), PROTOCOL_VERSION))
+    _check_header(header)
     descriptors = header.get("arrays", [])
     if len(descriptors) != len(frames) - 1:
         raise ParticipantError("header describes %d arrays but the message has %d data frames"
                                % (len(descriptors), len(frames) - 1))
     arrays = {}
     for d, frame in zip(descriptors, frames[:-1]):
-        dtype = {"f64": "<f8", "i32": "<i4"}[d["dtype"]]
-        a = np.frombuffer(bytes(frame), dtype=dtype)
-        arrays[d["name"]] = a.reshape(d["shape"])
+        if not isinstance(d, dict) or not isinstance(d.get("name"), str) or not d["name"]:
+            raise ParticipantError("array descriptor %r: expected an object with a name" % (d,))
+        name = d["name"]
+        if name in arrays:
+            raise ParticipantError("array '%s' appears twice" % name)
+        if d.get("dtype") not in DTYPES:
+            raise ParticipantError("array '%s': dtype must be \"f64\" or \"i32\"" % name)
+        shape = d.get("shape")
+        if not isinstance(shape, list) or not 1 <= len(shape) <= 2 or not all(
+                isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in shape):
+            raise ParticipantError("array '%s': shape must be [rows] or [rows, columns]" % name)
+        a = np.frombuffer(bytes(frame), dtype=DTYPES[d["dtype"]])
+        if a.size != int(np.prod(shape)):
+            raise ParticipantError("array '%s': shape %s needs %d bytes, its frame has %d"
+                                   % (name, shape, int(np.prod(shape)) * a.itemsize, len(frame)))
+        if d["dtype"] == "f64" and not np.isfinite(a).all():
+            raise ParticipantError("array '%s': value %d is not finite"
+                                   % (name, int(np.argmin(np.isfinite(a)))))
+        arrays[name] = a.reshape(shape)
     return Command(header, arrays)
 
 
-def encode(msg_type, command, role, name, arrays=(), values=None, text="", error=False):
+def _counters(frames):
+    """Step, iteration and session of a message that failed to decode, when its header can
+    still be read: the error reply then answers that command (a version-2 coupler checks)."""
+    try:
+        h = json.loads(bytes(frames[-1]).decode("utf-8"))
+        step, iteration = h.get("step", -1), h.get("iteration", 0)
+        session = h.get("session", "")
+        if isinstance(step, int) and isinstance(iteration, int) and isinstance(session, str):
+            return step, iteration, session
+    except (ValueError, AttributeError, IndexError):
+        pass
+    return -1, 0, ""
+
+
+def encode(msg_type, command, role, name, arrays=(), values=None, text="", error=False,
+           version=1, session="", retryable=False, step=None, iteration=None):
     header = {
         "type": "error" if error else msg_type,
-        "version": PROTOCOL_VERSION,
+        "version": version,
         "reply": True,
-        "step": command.step if command else -1,
-        "iteration": command.iteration if command else 0,
+        "step": step if step is not None else (command.step if command else -1),
+        "iteration": iteration if iteration is not None else (command.iteration if command else 0),
         "time": command.time if command else 0.0,
         "dt": command.dt if command else 0.0,
         "status": "error" if error else "ok",
@@ -94,6 +206,10 @@ def encode(msg_type, command, role, name, arrays=(), values=None, text="", error
         "arrays": [],
         "values": {k: float(v) for k, v in (values or {}).items()},
     }
+    if session:
+        header["session"] = session
+    if error and retryable:
+        header["retryable"] = True
     if text:
         header["text"] = text[:511]
     frames = []
@@ -116,7 +232,14 @@ class Participant:
         self.role = role
         self.name = name
         self.capabilities = capabilities
+        self.idle_timeout_s = idle_timeout_s if idle_timeout_s > 0 else 0.0
         self.idle_timeout_ms = int(idle_timeout_s * 1000) if idle_timeout_s > 0 else None
+        self.version = 0        # agreed in hello; 0 before it
+        self.session = ""       # the coupler's token (version 2)
+        self.errors = 0         # error replies that are errors of this run
+        self.retryable = 0      # retryable failures (the coupler retries the step)
+        self.refused = 0        # commands of another coupler / version 2 before hello
+        self.last_error = ""
         self.context = zmq.Context()
         self.socket = self.context.socket(zmq.REP)
         self.socket.setsockopt(zmq.LINGER, 1000)
@@ -131,6 +254,64 @@ class Participant:
     def _send(self, frames):
         self.socket.send_multipart(frames)
 
+    def _reply(self, msg_type, cmd, arrays=(), values=None, text=""):
+        self._send(encode(msg_type, cmd, self.role, self.name, arrays, values, text,
+                          version=self.version or PROTOCOL_VERSION_MIN,
+                          session=self.session if self.version >= 2 else ""))
+
+    def _error(self, cmd, reason, retryable=False, counts=True, frames=None):
+        """An error reply answering cmd (or, for a command that did not decode, the step,
+        iteration and session its header names)."""
+        step = iteration = None
+        session = self.session if self.version >= 2 else ""
+        if cmd is None and frames is not None:
+            step, iteration, _ = _counters(frames)
+        if retryable:
+            self.retryable += 1
+        elif counts:
+            self.errors += 1
+            self.last_error = reason
+        self._send(encode("error", cmd, self.role, self.name, text=reason, error=True,
+                          version=self.version or PROTOCOL_VERSION_MIN, session=session,
+                          retryable=retryable, step=step, iteration=iteration))
+
+    def _hello(self, cmd):
+        """Agrees on the newest common version; version 2 takes the coupler's session, and a
+        participant serving one session refuses a second coupler."""
+        if self.version >= 2 and cmd.session != self.session:
+            self.refused += 1
+            self._error(cmd, "%s: refused hello from another coupler (session '%s'): this "
+                        "participant already serves session %s; one coupler per participant"
+                        % (self.role, cmd.session, self.session), counts=False)
+            return
+        version = min(PROTOCOL_VERSION, cmd.offered_version())
+        if version < PROTOCOL_VERSION_MIN:
+            self._error(cmd, "%s: refused hello: no common version (offered up to %d, this "
+                        "side speaks %d to %d)" % (self.role, version, PROTOCOL_VERSION_MIN,
+                                                   PROTOCOL_VERSION))
+            return
+        if version >= 2 and not cmd.session:
+            self._error(cmd, "%s: refused hello: version 2 needs a session token" % self.role)
+            return
+        self.version = version
+        self.session = cmd.session if version >= 2 else ""
+        self._reply("hello", cmd, values={"idle_timeout_s": self.idle_timeout_s},
+                    text=self.capabilities)
+
+    def _check_session(self, cmd):
+        """Raises Refused for a command this participant must not serve."""
+        if self.version == 0:
+            if cmd.version >= 2:
+                raise Refused("%s: refused %s: no hello yet (version 2 starts with hello)"
+                              % (self.role, cmd.type))
+            return
+        if self.version >= 2 and cmd.session != self.session:
+            raise Refused("%s: refused %s from another coupler (session '%s'; this participant "
+                          "serves session %s)" % (self.role, cmd.type, cmd.session, self.session))
+        if cmd.version != self.version:
+            raise ParticipantError("%s: refused %s of version %d after agreeing on version %d "
+                                   "in hello" % (self.role, cmd.type, cmd.version, self.version))
+
     def serve(self, handler):
         """Answers commands until SHUTDOWN (returns) or the idle timeout (raises IdleTimeout)."""
         poller = zmq.Poller()
@@ -143,25 +324,36 @@ class Participant:
             try:
                 cmd = decode(frames)
             except (ParticipantError, ValueError, KeyError, TypeError) as e:
-                self._send(encode("error", None, self.role, self.name,
-                                  text="%s: malformed command: %s" % (self.role, e), error=True))
+                self._error(None, "%s: malformed command: %s" % (self.role, e), frames=frames)
+                continue
+            if cmd.is_reply or cmd.type == "error":
+                self._error(cmd, "%s: expected a command, got a reply (%s)" % (self.role, cmd.type))
                 continue
             if cmd.type == "hello":
-                self._send(encode("hello", cmd, self.role, self.name, text=self.capabilities))
+                self._hello(cmd)
+                continue
+            try:
+                self._check_session(cmd)
+            except Refused as e:
+                self.refused += 1
+                self._error(cmd, str(e), counts=False)
+                continue
+            except ParticipantError as e:
+                self._error(cmd, str(e))
                 continue
             if cmd.type == "shutdown":
-                self._send(encode("shutdown", cmd, self.role, self.name))
+                self._reply("shutdown", cmd)
                 return
             method = getattr(handler, cmd.type, None)
             if method is None:
-                self._send(encode("error", cmd, self.role, self.name,
-                                  text="%s cannot do '%s'" % (self.role, cmd.type), error=True))
+                self._error(cmd, "%s cannot do '%s'" % (self.role, cmd.type))
                 continue
             try:
                 arrays, values = method(cmd)
-                self._send(encode(cmd.type, cmd, self.role, self.name, arrays, values))
+                self._reply(cmd.type, cmd, arrays, values)
             except ParticipantError as e:
-                self._send(encode("error", cmd, self.role, self.name, text=str(e), error=True))
+                self._error(cmd, "%s (step %d, iteration %d): %s"
+                            % (cmd.type, cmd.step, cmd.iteration, e), retryable=e.retryable)
 
     def close(self):
         self.socket.close()
@@ -173,12 +365,18 @@ def log(*args):
 
 
 def serve_until_shutdown(participant, handler, name, close_handler):
-    """Serves handler until SHUTDOWN and returns the process exit code: 0, 1 after an idle
-    timeout (logged under name), 130 on Ctrl-C. close_handler() and participant.close() run
-    in every case, so results written so far stay readable."""
+    """Serves handler until SHUTDOWN and returns the process exit code: 0; 1 when any command
+    was answered with an error of this run (a failed handler, a malformed or out-of-place
+    command; not a retryable failure, not a refused command of another coupler) or after an
+    idle timeout (logged under name); 130 on Ctrl-C. close_handler() and participant.close()
+    run in every case, so results written so far stay readable."""
     code = 0
     try:
         participant.serve(handler)
+        if participant.errors:
+            log("%s: %d command(s) answered with an error; the last: %s"
+                % (name, participant.errors, participant.last_error))
+            code = 1
     except IdleTimeout as e:
         log(name + ":", e)
         code = 1

@@ -3,6 +3,7 @@
 
     spring_plate.py plate.json --endpoint EP --output DIR [--endpoint-file FILE]
                     [--idle-timeout SECONDS] [--fail-at STEP:ITERATION]
+                    [--retryable-above DT] [--capabilities WORDS] [--no-restore]
 
 The interface is an n × n grid of nodes over the plate joined by line elements (so the DEM's
 net wall is a fine grid a sphere can rest on). All nodes share one vertical displacement w:
@@ -16,6 +17,12 @@ required), damping_ratio (ζ of the plate-spring, default 0), gravity (accelerat
 plate's own mass, m/s², default 0).
 Output: DIR/plate.csv with one row per accepted step: time, w, w', F_z.
 --fail-at S:K replies an error to SOLVE of step S, iteration K (to test fault handling).
+Switches for tests of the coupler's checks:
+--retryable-above DT fails every SOLVE with dt > DT as retryable (the coupler retries the
+  step with a smaller dt); --capabilities WORDS replaces the announced capabilities (default
+  "restore"; "--capabilities=" announces none); --no-restore makes every SOLVE start from
+  the state the previous SOLVE ended in instead of the start of the step (a participant that
+  forgets to restore; strong coupling must catch it).
 """
 import argparse
 import json
@@ -48,7 +55,7 @@ def load(path):
 
 
 class Plate:
-    def __init__(self, cfg, output_dir, fail_at):
+    def __init__(self, cfg, output_dir, fail_at, retryable_above=None, no_restore=False):
         self.size = float(cfg.get("size", 1.0))
         self.n = int(cfg.get("nodes_per_side", 11))
         self.center = np.array(cfg.get("center", [0.0, 0.0, 0.0]), dtype=float)
@@ -57,12 +64,13 @@ class Plate:
         self.c = 2.0 * float(cfg.get("damping_ratio", 0.0)) * math.sqrt(self.k * self.M)
         self.g = float(cfg.get("gravity", 0.0))
         self.fail_at = fail_at
+        self.retryable_above = retryable_above
+        self.no_restore = no_restore
         # committed state (start of step) and trial state (end of step)
         self.w = self.v = 0.0
         self.a = self.g          # consistent initial acceleration (no load)
         self.w1, self.v1, self.a1, self.F1 = self.w, self.v, self.a, 0.0
         self.solved = False
-        self.failed = False
         self.csv = open(os.path.join(output_dir, "plate.csv"), "w")
         self.csv.write("time,w,v,force_z\n")
         self.csv.flush()
@@ -87,9 +95,11 @@ class Plate:
 
     def solve(self, cmd):
         if self.fail_at == (cmd.step, cmd.iteration):
-            self.failed = True
             raise ParticipantError("spring_plate: requested failure at step %d iteration %d"
                                    % (cmd.step, cmd.iteration))
+        if self.retryable_above is not None and cmd.dt > self.retryable_above:
+            raise ParticipantError("spring_plate: dt = %g s is above %g s (requested retryable "
+                                   "failure)" % (cmd.dt, self.retryable_above), retryable=True)
         force = cmd.array("force", (self.nodes, 3))
         dt = cmd.dt
         if not dt > 0:
@@ -103,6 +113,8 @@ class Plate:
         v1 = 2.0 * (w1 - self.w) / dt - self.v
         a1 = 4.0 * (w1 - self.w) / dt ** 2 - 4.0 * self.v / dt - self.a
         self.w1, self.v1, self.a1, self.F1 = w1, v1, a1, F
+        if self.no_restore:   # the bug this switch stands for: the trial state is kept
+            self.w, self.v, self.a = w1, v1, a1
         self.solved = True
         u = np.zeros((self.nodes, 3))
         u[:, 2] = w1
@@ -131,18 +143,18 @@ def main():
     ap.add_argument("--endpoint-file")
     ap.add_argument("--idle-timeout", type=float, default=300.0)
     ap.add_argument("--fail-at", default=None)
+    ap.add_argument("--retryable-above", type=float, default=None)
+    ap.add_argument("--capabilities", default="restore")
+    ap.add_argument("--no-restore", action="store_true")
     args = ap.parse_args()
     cfg = load(args.input)
     os.makedirs(args.output, exist_ok=True)
     fail_at = tuple(int(x) for x in args.fail_at.split(":")) if args.fail_at else None
-    plate = Plate(cfg, args.output, fail_at)
-    p = Participant(args.endpoint, "fem", "netcouple spring_plate.py", "restore",
+    plate = Plate(cfg, args.output, fail_at, args.retryable_above, args.no_restore)
+    p = Participant(args.endpoint, "fem", "netcouple spring_plate.py", args.capabilities,
                     args.idle_timeout, args.endpoint_file)
-    code = serve_until_shutdown(p, plate, "spring_plate", plate.close)
-    # a participant that replied an error exits non-zero after SHUTDOWN (protocol rule)
-    if code == 0 and plate.failed:
-        code = 1
-    return code
+    # exits 1 after SHUTDOWN when a command was answered with an error (protocol rule)
+    return serve_until_shutdown(p, plate, "spring_plate", plate.close)
 
 
 if __name__ == "__main__":

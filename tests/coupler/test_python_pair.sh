@@ -4,7 +4,8 @@
 # Checks against the analytic answer: the ball comes to rest on the plate, whose static
 # deflection is w = -m g / k = -9.81e-3 m (1 kg, 1000 N/m); tolerance 1 % (the 30 % damped
 # system has settled to < 0.1 % after 1.5 s). Also checks the history file layout and that
-# weak, strong with Aitken on u/u̇ and strong with IQN-ILS on forces all run.
+# weak, strong with Aitken on u/u̇ and strong with IQN-ILS on forces all run, and that both
+# participants speak protocol version 2 with the coupler.
 set -u
 : "${NC_BIN:?}" "${NC_TMP:?}"
 PY=${PYTHON:-/usr/bin/python3}
@@ -59,6 +60,12 @@ check "$NC_TMP/weak" weak
 run iqn_force --set coupler.relaxation.method=iqn-ils --set coupler.relaxed_quantity=force
 check "$NC_TMP/iqn_force" strong
 grep -q '"method": "iqn-ils"' "$NC_TMP/iqn_force/coupler.json" || fail "--set not applied"
+
+# both Python participants speak protocol version 2 (the coupler's start line, not --quiet)
+scripts/run_case.sh "$case_dir" --out "$NC_TMP/version" "${participants[@]}" \
+  --set coupler.end_time=0.02 >/dev/null 2>&1 || fail "version run: $(cat "$NC_TMP/version/coupler.log")"
+grep -Eq "fem = netcouple spring_plate.py \(tcp://[^,]*, protocol 2\), dem = netcouple ball_dem.py \(tcp://[^,]*, protocol 2\)" \
+  "$NC_TMP/version/coupler.log" || fail "not protocol 2: $(head -n 2 "$NC_TMP/version/coupler.log")"
 
 # a bad --set is refused with a message naming it
 out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/bad" "${participants[@]}" \

@@ -310,11 +310,106 @@ static void test_add_array_usage_errors(void **state)
     assert_string_equal(proto_type_name(PROTO_MSG_BEGIN_STEP), "begin_step");
 }
 
+/* Version 2 header fields: session, retryable and versions survive the round trip, are absent
+ * from the header when unset, and default to "", 0 and 0 when absent. */
+static void test_round_trip_version2_fields(void **state)
+{
+    (void)state;
+    proto_message out, in;
+    memset(&out, 0, sizeof out);
+    memset(&in, 0, sizeof in);
+    nc_error err;
+    char *header;
+    size_t length;
+
+    proto_message_init(&out, PROTO_MSG_HELLO);
+    out.version = 1;
+    out.offered_version = 2;
+    snprintf(out.session, sizeof out.session, "0f1e2d3c4b5a6978");
+    assert_int_equal(proto_encode_header(&out, &header, &length, &err), 0);
+    assert_non_null(strstr(header, "\"versions\":[1,2]"));
+    assert_non_null(strstr(header, "\"session\":\"0f1e2d3c4b5a6978\""));
+    assert_null(strstr(header, "retryable"));
+    assert_int_equal(proto_decode(&in, header, length, NULL, NULL, 0, LIMIT, &err), 0);
+    free(header);
+    assert_int_equal(in.type, PROTO_MSG_HELLO);
+    assert_int_equal(in.version, 1);
+    assert_int_equal(in.offered_version, 2);
+    assert_string_equal(in.session, "0f1e2d3c4b5a6978");
+    assert_int_equal(in.retryable, 0);
+
+    proto_message_init(&out, PROTO_MSG_ERROR);
+    out.version = 2;
+    out.is_reply = 1;
+    out.step = 41;
+    out.iteration = 3;
+    out.retryable = 1;
+    snprintf(out.session, sizeof out.session, "0f1e2d3c4b5a6978");
+    snprintf(out.text, sizeof out.text, "solve (step 41, iteration 3): Newton did not converge");
+    assert_int_equal(proto_encode_header(&out, &header, &length, &err), 0);
+    assert_non_null(strstr(header, "\"retryable\":true"));
+    assert_null(strstr(header, "versions"));
+    assert_int_equal(proto_decode(&in, header, length, NULL, NULL, 0, LIMIT, &err), 0);
+    free(header);
+    assert_int_equal(in.type, PROTO_MSG_ERROR);
+    assert_int_equal(in.version, 2);
+    assert_int_equal(in.retryable, 1);
+    assert_int_equal(in.offered_version, 0);
+    assert_int_equal(in.step, 41);
+    assert_int_equal(in.iteration, 3);
+    assert_string_equal(in.session, "0f1e2d3c4b5a6978");
+
+    /* a plain version-1 message: none of them in the header, the defaults after decoding */
+    proto_message_init(&out, PROTO_MSG_BEGIN_STEP);
+    out.version = 1;
+    assert_int_equal(proto_encode_header(&out, &header, &length, &err), 0);
+    assert_null(strstr(header, "session"));
+    assert_null(strstr(header, "versions"));
+    assert_null(strstr(header, "retryable"));
+    free(header);
+    assert_int_equal(decode_text(&in, "{\"type\":\"begin_step\",\"version\":1,\"retryable\":false}",
+                                 NULL, NULL, 0, &err), 0);
+    assert_string_equal(in.session, "");
+    assert_int_equal(in.retryable, 0);
+    assert_int_equal(in.offered_version, 0);
+
+    /* the newest offered version counts, in any order; versions newer than this side speaks
+     * may be offered (hello is read as version 1) */
+    assert_int_equal(decode_text(&in, "{\"type\":\"hello\",\"version\":1,\"versions\":[3,1,2]}",
+                                 NULL, NULL, 0, &err), 0);
+    assert_int_equal(in.offered_version, 3);
+    assert_int_equal(decode_text(&in, "{\"type\":\"hello\",\"version\":1,\"versions\":[]}",
+                                 NULL, NULL, 0, &err), 0);
+    assert_int_equal(in.offered_version, 0);
+    proto_message_free(&in);
+}
+
+static void test_malformed_version2_fields(void **state)
+{
+    (void)state;
+    expect_reject("{\"type\":\"solve\",\"version\":2,\"session\":12}", NULL, NULL, 0, "'session': expected a string", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"solve\",\"version\":2,\"session\":null}", NULL, NULL, 0, "'session'", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"error\",\"version\":2,\"retryable\":1}", NULL, NULL, 0, "'retryable': expected true or false", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"error\",\"version\":2,\"retryable\":\"true\"}", NULL, NULL, 0, "'retryable'", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":2}", NULL, NULL, 0, "'versions': expected a list", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":{\"a\":2}}", NULL, NULL, 0, "'versions': expected a list", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":[1,\"2\"]}", NULL, NULL, 0, "'versions': expected whole numbers", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":[1,2.5]}", NULL, NULL, 0, "'versions': expected whole numbers", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":[0,1]}", NULL, NULL, 0, "'versions': expected whole numbers", PROTO_ERR_DECODE);
+    expect_reject("{\"type\":\"hello\",\"version\":1,\"versions\":[1,1e9]}", NULL, NULL, 0, "'versions': expected whole numbers", PROTO_ERR_DECODE);
+    char long_session[PROTO_NAME_MAX + 64];
+    snprintf(long_session, sizeof long_session, "{\"type\":\"solve\",\"version\":2,\"session\":\"%0*d\"}",
+             PROTO_NAME_MAX, 0);
+    expect_reject(long_session, NULL, NULL, 0, "'session': longer than", PROTO_ERR_DECODE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_round_trip_text_fields),
+        cmocka_unit_test(test_round_trip_version2_fields),
+        cmocka_unit_test(test_malformed_version2_fields),
         cmocka_unit_test(test_empty_array),
         cmocka_unit_test(test_malformed_headers),
         cmocka_unit_test(test_malformed_arrays),
