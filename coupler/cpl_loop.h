@@ -117,8 +117,9 @@ typedef struct cpl_loop_settings {
     cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
     int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
                                        both participants can (default 1) */
-    int verify_restore;             /* strong: solve each participant's first step twice with
-                                       the same input and require identical results (default 1) */
+    int verify_restore;             /* strong: send each participant's first solve with a
+                                       non-zero answer twice with the same input and require
+                                       identical results (default 1) */
 } cpl_loop_settings;
 
 /* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */

@@ -257,9 +257,31 @@ int proto_participant_reply_failure(proto_participant *p, const char *reason, in
 }
 
 /* Refuses the current command with `reason` (an error reply) and returns -1 with `code`. */
-static int refuse(proto_participant *p, int code, const char *reason, nc_error *err)
+/* The refusal goes back in the command's own version and session, so the coupler that sent
+ * it (another one, or one that skipped hello) reads the reason instead of a session error;
+ * and it does not learn this session's token. */
+static int refuse(proto_participant *p, const proto_message *cmd, int code, const char *reason,
+                  nc_error *err)
 {
-    proto_participant_reply_error(p, reason, NULL);
+    proto_message m;
+    memset(&m, 0, sizeof m);
+    proto_message_init(&m, PROTO_MSG_ERROR);
+    m.is_reply = 1;
+    m.version = cmd->version;
+    snprintf(m.session, sizeof m.session, "%s", cmd->session);
+    m.step = cmd->step;
+    m.iteration = cmd->iteration;
+    m.time_s = cmd->time_s;
+    m.dt_s = cmd->dt_s;
+    snprintf(m.role, sizeof m.role, "%s", p->role);
+    snprintf(m.name, sizeof m.name, "%s", p->name);
+    snprintf(m.text, sizeof m.text, "%s", reason);
+    p->awaiting_reply = 0;
+    nc_error send_error;
+    if (send_message(p->socket, &m, "the coupler", &send_error)) {
+        if (err) *err = send_error;
+        return -1;
+    }
     return nc_error_set(err, code, "%s", reason);
 }
 
@@ -267,18 +289,19 @@ static int refuse(proto_participant *p, int code, const char *reason, nc_error *
  * token, and a participant already serving one session refuses a second coupler. */
 static int answer_hello(proto_participant *p, const proto_message *hello, nc_error *err)
 {
+    char reason[PROTO_TEXT_MAX];
     if (p->version >= 2 && strcmp(hello->session, p->session) != 0) {
-        char reason[PROTO_TEXT_MAX];
-        snprintf(reason, sizeof reason, "%s: refused hello: this participant already serves "
-                 "a coupler (session %s); one coupler per participant", p->role, p->session);
-        proto_participant_reply_error(p, reason, NULL);
-        return 0;   /* keep serving the coupler it has */
+        /* keep serving the coupler it has */
+        snprintf(reason, sizeof reason, "%s: refused hello from another coupler: this "
+                 "participant already serves one; one coupler per participant", p->role);
+        return refuse(p, hello, PROTO_ERR_SESSION, reason, err);
     }
     int offered = hello->offered_version > 0 ? hello->offered_version : hello->version;
     int version = offered < PROTO_VERSION ? offered : PROTO_VERSION;
     if (version >= 2 && !hello->session[0]) {
-        proto_participant_reply_error(p, "refused hello: version 2 needs a session token", NULL);
-        return 0;
+        snprintf(reason, sizeof reason, "%s: refused hello: version 2 needs a session token",
+                 p->role);
+        return refuse(p, hello, PROTO_ERR_SESSION, reason, err);
     }
     p->version = version;
     snprintf(p->session, sizeof p->session, "%s", version >= 2 ? hello->session : "");
@@ -302,19 +325,19 @@ static int check_session(proto_participant *p, const proto_message *command, nc_
         if (command->version < 2) return 0;   /* a version-1 coupler may skip hello */
         snprintf(reason, sizeof reason, "%s: refused %s: no hello yet (version 2 starts with "
                  "hello)", p->role, proto_type_name(command->type));
-        return refuse(p, PROTO_ERR_SESSION, reason, err);
+        return refuse(p, command, PROTO_ERR_SESSION, reason, err);
     }
     if (p->version >= 2 && strcmp(command->session, p->session) != 0) {
         snprintf(reason, sizeof reason, "%s: refused %s from another coupler (session '%s'; "
                  "this participant serves session %s)", p->role, proto_type_name(command->type),
                  command->session, p->session);
-        return refuse(p, PROTO_ERR_SESSION, reason, err);
+        return refuse(p, command, PROTO_ERR_SESSION, reason, err);
     }
     if (command->version != p->version) {
         snprintf(reason, sizeof reason, "%s: refused %s of version %d after agreeing on version "
                  "%d in hello", p->role, proto_type_name(command->type), command->version,
                  p->version);
-        return refuse(p, PROTO_ERR_VERSION, reason, err);
+        return refuse(p, command, PROTO_ERR_VERSION, reason, err);
     }
     return 0;
 }
@@ -347,7 +370,9 @@ int proto_participant_receive(proto_participant *p, proto_message *command, nc_e
             }
             char reason[PROTO_TEXT_MAX];
             snprintf(reason, sizeof reason, "%s: malformed command: %s", p->role, decode_error.message);
+            /* the command could not be read: its error reply answers "step -1" (§2.2) */
             memset(&p->last_command, 0, sizeof p->last_command);
+            p->last_command.step = -1;
             proto_participant_reply_error(p, reason, NULL);
             if (err) *err = decode_error;
             return nc_error_prefix(err, "malformed command from the coupler (answered with an error)");
@@ -517,7 +542,10 @@ static int check_reply(const proto_peer *peer, const char *label, const proto_me
     if (v2 && strcmp(reply->session, peer->session) != 0)
         return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: session '%s' "
                             "instead of %s", label, peer->last_sent, reply->session, peer->session);
-    if (v2 && (reply->step != request->step || reply->iteration != request->iteration))
+    /* an error reply of step -1, iteration 0 answers a command the participant could not read
+     * (malformed): its reason matters more than the echo */
+    int unread = reply->type == PROTO_MSG_ERROR && reply->step == -1 && reply->iteration == 0;
+    if (v2 && !unread && (reply->step != request->step || reply->iteration != request->iteration))
         return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: it answers step "
                             "%ld, iteration %d (a stale reply?)", label, peer->last_sent,
                             reply->step, reply->iteration);

@@ -85,7 +85,7 @@ static double round_trip_s(int with_arrays)
     if (cpl_remote_open(&r, CPL_REMOTE_FEM, proto_participant_endpoint(e.p), 10, 10, &err) == 0) {
         r.n_nodes = NODES;
         cpl_participant p = cpl_remote_participant(&r);
-        cpl_call call = {0, 1, 0.0, 1e-3};
+        cpl_call call = {.step = 0, .iteration = 1, .time_s = 0.0, .dt_s = 1e-3};
         cpl_solve_info info;
         const int warm = 200, n = 2000;
         double t0 = 0;
