@@ -109,23 +109,24 @@ static void energy_text(char *buf, size_t size, double j)
     else snprintf(buf, size, "%.3g J", j);
 }
 
-/* "contact yes (3) | rock 12.3 m/s, 45.6 kJ kinetic | net deflection 0.312 m (max 0.48 m)" */
+/* "contact 3 | rock 12.3 m/s, 87.5 kJ | deflection 0.312 m (max 0.48 m)" */
 static void watch_text(const cpl_progress *p, char *buf, size_t size)
 {
     const cpl_progress_watch *w = &p->watch;
     int on = p->last.in_contact || (isfinite(w->contacts) && w->contacts > 0);
     char contact[48], rock[96] = "", net[96] = "";
-    if (isfinite(w->contacts)) snprintf(contact, sizeof contact, "contact %s (%.0f)",
-                                        on ? "yes" : "no", w->contacts);
-    else snprintf(contact, sizeof contact, "contact %s", on ? "yes" : "no");
+    if (!on) snprintf(contact, sizeof contact, "no contact");
+    else if (isfinite(w->contacts) && w->contacts > 0)
+        snprintf(contact, sizeof contact, "contact %.0f", w->contacts);
+    else snprintf(contact, sizeof contact, "contact");
     char speed[32] = "", energy[32] = "";
     if (isfinite(w->max_speed_m_s)) snprintf(speed, sizeof speed, "%.3g m/s", w->max_speed_m_s);
     if (isfinite(w->kinetic_energy_j)) energy_text(energy, sizeof energy, w->kinetic_energy_j);
     if (speed[0] || energy[0])
-        snprintf(rock, sizeof rock, " | rock %s%s%s%s", speed, speed[0] && energy[0] ? ", " : "",
-                 energy, energy[0] ? " kinetic" : "");
+        snprintf(rock, sizeof rock, " | rock %s%s%s", speed, speed[0] && energy[0] ? ", " : "",
+                 energy);
     if (isfinite(w->deflection_m))
-        snprintf(net, sizeof net, " | net deflection %.3g m (max %.3g m)", w->deflection_m,
+        snprintf(net, sizeof net, " | deflection %.3g m (max %.3g m)", w->deflection_m,
                  p->max_deflection_m);
     snprintf(buf, size, "%s%s%s", contact, rock, net);
 }
@@ -146,9 +147,9 @@ void cpl_progress_status(const cpl_progress *p, char *buf, size_t size)
     if (r->dt_s < p->dt_nominal_s * (1.0 - 1e-9) && r->time_s < p->sim_end - 1e-9 * p->dt_nominal_s)
         snprintf(dt, sizeof dt, ", dt %.3g s (reduced)", r->dt_s);
     watch_text(p, watch, sizeof watch);
-    snprintf(buf, size, "t = %.6g s (%.1f%%)  remaining %s  elapsed %s | %s | step %ld, "
-             "%d iterations, residual %.2e%s", r->time_s, 100.0 * done, rem, e, watch, r->step,
-             r->iterations, r->residual, dt);
+    snprintf(buf, size, "t = %.6g s (%.1f%%), %s left | %s | step %ld, %d it., res %.2e%s, "
+             "elapsed %s", r->time_s, 100.0 * done, rem, watch, r->step, r->iterations,
+             r->residual, dt, e);
 }
 
 static void clear_line(cpl_progress *p)

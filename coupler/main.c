@@ -464,8 +464,8 @@ int main(int argc, char **argv)
         }
         goto fail;
     }
+    beat(&a, "finishing");   /* first: run_case.sh then shows the final status line */
     cpl_progress_finish(&a.progress);
-    beat(&a, "finishing");
     rc = shutdown_all(&a, NULL) ? 1 : 0;
     print_timing(&a);
     status.finished = 1;
@@ -478,9 +478,9 @@ int main(int argc, char **argv)
     goto done;
 
 fail:
+    beat(&a, "stopping");
     cpl_progress_finish(&a.progress);
     fprintf(stderr, "coupler: error: %s\n", err.message);
-    beat(&a, "stopping");
     shutdown_all(&a, failure.participant);
     if (a.loop) print_timing(&a);
     rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;

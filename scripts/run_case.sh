@@ -297,7 +297,6 @@ live=0
 if [ $quiet -eq 0 ]; then
   if [ -t 1 ]; then
     # a terminal: the coupler's messages as they come, and its live status line under them
-    # (the periodic plain status lines of the log, "t = ...", are left out there)
     live=1
     columns=$(tput cols 2>/dev/null || echo 80)
     exec 3< <(exec tail -n +1 -s 0.2 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null)
@@ -309,7 +308,12 @@ if [ $quiet -eq 0 ]; then
 fi
 shown_status=""; pending=""
 log_line() {   # on a terminal: one line of the log above the status line
-  [[ $1 == "t = "* ]] && return 0
+  # the periodic status lines of the log are what the live line shows; the final one (the
+  # coupler says "finishing" or "stopping" before it) stays
+  if [[ $1 == "t = "* ]]; then
+    read_progress
+    [ "$cpl_state" = running ] || [ "$cpl_state" = connecting ] && return 0
+  fi
   [ "$status_shown" -eq 1 ] && printf '\r\033[K'
   status_shown=0
   printf '%s\n' "$1"

@@ -9,7 +9,10 @@
 #     coupler's 20 s connect timeout), named as failed;
 #  4. SIGINT to the whole job (as Ctrl-C on a terminal) and SIGTERM to run_case.sh alone ->
 #     "stopped by user", exit 130, no program left running, coupling.h5 readable;
-#  5. --help prints the usage and nothing else.
+#  5. --help prints the usage and nothing else;
+#  6. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
+#     (time, remaining time, contact, deflection) with its messages, the final status line
+#     stays, and coupler.log still holds everything without terminal control characters.
 set -u
 : "${NC_BIN:?}" "${NC_TMP:?}"
 PY=${PYTHON:-/usr/bin/python3}
@@ -21,7 +24,7 @@ set -m   # each run_case.sh in its own process group, SIGINT not ignored (as fro
 rpid=""
 cleanup() { [ -n "$rpid" ] && kill -KILL -- "-$rpid" 2>/dev/null; }
 trap cleanup EXIT
-fail() { echo "FAIL: $*"; cat "$out.out" 2>/dev/null; for f in "$out"/*.log; do echo "--- $f"; tail -n 20 "$f"; done; exit 1; }
+fail() { echo "FAIL: $*"; cat "$out.out" 2>/dev/null; for f in "$out"/{coupler,fem,dem}.log; do echo "--- $f"; tail -n 20 "$f"; done; exit 1; }
 
 launch() {   # name [run_case.sh arguments]: starts a 60 s run in the background
   out=$NC_TMP/$1; shift
@@ -126,4 +129,25 @@ grep -q "^Exit status:" "$out.out" || fail "--help: no exit status paragraph"
 grep -Eq '^(set |root=|bin=|die\(\)|#|  *-h\|--help\)|EOF)' "$out.out" && fail "--help prints source lines"
 [ "$(wc -l < "$out.out")" -lt 40 ] || fail "--help: $(wc -l < "$out.out") lines"
 echo "5 ok"
+
+# 6. the live status line on a terminal
+if command -v script >/dev/null; then
+  out=$NC_TMP/tty
+  rm -rf "$out"
+  script -qec "scripts/run_case.sh $case_dir --out $out --set coupler.end_time=1 \
+    --fem-program '$fem' --dem-program '$dem'" /dev/null > "$out.out" 2>&1 \
+    || fail "terminal run: exit status $?"
+  tr '\r' '\n' < "$out.out" | sed 's/\x1b\[K//g' > "$out.lines"
+  [ "$(grep -c "^t = [0-9.e-]* s ([0-9.]*%), [0-9:-]* left | contact [0-9]* | deflection [0-9.e-]* m (max [0-9.e-]* m)" "$out.lines")" -ge 2 ] \
+    || fail "terminal run: fewer than 2 live status lines"
+  grep -q $'\r\033\[K' "$out.out" || fail "terminal run: the status line is not rewritten in place"
+  grep -q "^t = 1 s (100.0%), 00:00 left" "$out.lines" || fail "terminal run: no final status line"
+  grep -q "^coupler: results are reliable" "$out.lines" || fail "terminal run: the coupler's messages are not shown"
+  grep -q "^run_case: done" "$out.lines" || fail "terminal run: no verdict"
+  grep -q "^t = 1 s (100.0%)" "$out/coupler.log" || fail "terminal run: coupler.log lacks the status lines"
+  grep -q $'\r' "$out/coupler.log" && fail "terminal run: terminal control characters in coupler.log"
+  echo "6 ok"
+else
+  echo "6 skipped: script(1) not installed"
+fi
 echo PASS
