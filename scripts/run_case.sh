@@ -216,7 +216,8 @@ report() {
   [ "$status_shown" -eq 1 ] && printf '\r\033[K'
   trap - EXIT
   for p in "${programs[@]}"; do
-    [ -n "${pid[$p]:-}" ] && [ "$p" != "$failed" ] && others="$others, $p ($(how "$p"))"
+    [ -n "${pid[$p]:-}" ] && { [ "$p" != "$failed" ] || [ -n "$interrupted" ]; } \
+      && others="$others, $p ($(how "$p"))"
   done
   others=${others#, }
   if [ -n "$interrupted" ]; then
@@ -271,7 +272,10 @@ now_ms; endpoint_until=$((NOW_MS + 60000))
 while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   reap
   for p in fem dem; do
-    [ -n "${rc[$p]:-}" ] && fail_first "$p" "$(how "$p") before publishing its endpoint"
+    if [ -n "${rc[$p]:-}" ]; then
+      if [ -s "$p.endpoint" ]; then fail_first "$p" "$(how "$p") before the handshake"
+      else fail_first "$p" "$(how "$p") before publishing its endpoint"; fi
+    fi
   done
   [ -n "$failed" ] || [ -n "$interrupted" ] && report
   now_ms
@@ -345,8 +349,17 @@ while :; do
   reap
   [ -n "${rc[coupler]:-}" ] && break
   if [ -n "$interrupted" ]; then
-    # the coupler shuts the solvers down cleanly on SIGTERM; everything left is stopped after
-    kill -TERM "${pid[coupler]}" 2>/dev/null
+    # the coupler shuts the solvers down cleanly on a stop signal; a Ctrl-C on the terminal
+    # has reached it already (it then says "stopping" at once), and a second signal would cut
+    # its SHUTDOWN requests short: signal it only when it has not heard one
+    for _ in 1 2 3 4 5 6; do
+      reap; read_progress
+      [ -n "${rc[coupler]:-}" ] || [ "$cpl_state" = stopping ] || [ "$cpl_state" = finishing ] && break
+      sleep 0.05
+    done
+    if [ -z "${rc[coupler]:-}" ] && [ "$cpl_state" != stopping ] && [ "$cpl_state" != finishing ]; then
+      kill -TERM "${pid[coupler]}" 2>/dev/null
+    fi
     wait_all_exit $((2 * grace_ms + 1000)) any
     report
   fi
@@ -371,9 +384,13 @@ while :; do
   done
   # the heartbeat: the progress file is rewritten every step and every second of a wait
   beat_ms=$cpl_started_ms
-  if [ -f coupler.progress ]; then beat_ms=$(ms "$(stat -c %.3Y coupler.progress 2>/dev/null || echo 0)"); fi
+  if [ -f coupler.progress ]; then
+    mtime=$(stat -c %.3Y coupler.progress 2>/dev/null)
+    # (a Ctrl-C to the whole job may also have hit stat)
+    [[ $mtime =~ ^[0-9]+([.][0-9]+)?$ ]] && beat_ms=$(ms "$mtime")
+  fi
   [ "$beat_ms" -lt "$cpl_started_ms" ] && beat_ms=$cpl_started_ms
-  if [ $((NOW_MS - beat_ms)) -gt "$stall_ms" ]; then
+  if [ -z "$interrupted" ] && [ $((NOW_MS - beat_ms)) -gt "$stall_ms" ]; then
     fail_first coupler "stalled: no heartbeat (coupler.progress) for $(( (NOW_MS - beat_ms) / 1000 )) s, limit $stall_limit s"
     report
   fi
@@ -389,7 +406,10 @@ else
   error=$(grep -m 1 "^coupler: error: " coupler.log)
   # a Ctrl-C on the terminal reaches the coupler too, maybe before run_case.sh notices
   if [[ $error =~ ^coupler:\ error:\ interrupted\ by\ SIG(INT|TERM) ]] && [ -z "$failed" ]; then
-    interrupted=${BASH_REMATCH[1]}
+    [ -n "$interrupted" ] || interrupted=${BASH_REMATCH[1]}
+  fi
+  if [ -n "$interrupted" ]; then   # it sent the solvers SHUTDOWN
+    wait_all_exit "$grace_ms" any
     report
   fi
   if [ "${rc[coupler]:-}" -gt 128 ]; then

@@ -98,7 +98,7 @@ launch early_death --dem-program tests/coupler/participants/dies_after_endpoint.
 t0=$start_s
 finish "$t0" 15
 [ "$rc" -eq 1 ] || fail "early death: exit $rc, expected 1"
-failed_line | grep -q "^run_case: failed: dem (exit 1 while the coupler was connecting, .*; stopped: fem (.*), coupler (.*)$" \
+failed_line | grep -Eq "^run_case: failed: dem \(exit 1 (while the coupler was connecting|before the handshake), .*; stopped: fem \(.*\)(, coupler \(.*\))?$" \
   || fail "early death: '$(failed_line)'"
 grep -q "exiting before the handshake" "$out.out" || fail "early death: the DEM's last lines are not shown"
 awk "BEGIN {exit !($took < 8)}" || fail "early death: noticed after $took s (limit 8 s)"

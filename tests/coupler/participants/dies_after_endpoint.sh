@@ -8,6 +8,8 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$file" ] || { echo "dies_after_endpoint: no --endpoint-file" >&2; exit 2; }
 echo "tcp://127.0.0.1:9" > "$file.tmp" && mv "$file.tmp" "$file"
+# die once the coupler is connecting: after the other participant's endpoint is out too
+for _ in $(seq 200); do [ "$(ls "$(dirname "$file")"/*.endpoint | wc -l)" -ge 2 ] && break; sleep 0.05; done
 sleep 0.3
 echo "dies_after_endpoint: exiting before the handshake, as asked" >&2
 exit 1
