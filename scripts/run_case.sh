@@ -415,7 +415,7 @@ else
   if [ "${rc[coupler]:-}" -gt 128 ]; then
     fail_first coupler "$(how coupler)"   # it could tell no one: stop the solvers now
   elif [[ $error =~ ^coupler:\ error:\ (fem|dem)[:\ ] ]]; then
-    fail_first "${BASH_REMATCH[1]}" "the coupler reports: ${error#coupler: error: }"
+    fail_first "${BASH_REMATCH[1]}" "named by the coupler's error"   # printed below
   elif [[ $error =~ ^coupler:\ error:\ (.*) ]]; then
     fail_first coupler "$(how coupler): ${BASH_REMATCH[1]}"
   else

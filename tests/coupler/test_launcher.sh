@@ -10,10 +10,13 @@
 #  4. SIGINT to the whole job (as Ctrl-C on a terminal) and SIGTERM to run_case.sh alone ->
 #     "stopped by user", exit 130, no program left running, coupling.h5 readable;
 #  5. --help prints the usage and nothing else;
-#  6. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
+#  6. the FEM replies an error (a Newton failure stand-in) -> the FEM alone is named as failed
+#     (the coupler's error names it), the coupler and the DEM as stopped;
+#  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
 #     (time, remaining time, contact, deflection) with its messages, the final status line
 #     stays, and coupler.log still holds everything without terminal control characters.
 set -u
+exec </dev/null   # script(1) below would read the test runner's list of tests from stdin
 : "${NC_BIN:?}" "${NC_TMP:?}"
 PY=${PYTHON:-/usr/bin/python3}
 [ -x "$NC_BIN/coupler" ] || { echo "SKIP: $NC_BIN/coupler not built"; exit 77; }
@@ -130,7 +133,17 @@ grep -Eq '^(set |root=|bin=|die\(\)|#|  *-h\|--help\)|EOF)' "$out.out" && fail "
 [ "$(wc -l < "$out.out")" -lt 40 ] || fail "--help: $(wc -l < "$out.out") lines"
 echo "5 ok"
 
-# 6. the live status line on a terminal
+# 6. an error reply of the FEM at step 50, iteration 2
+launch error_reply --fem-program "$fem --fail-at 50:2"
+finish "$start_s" 20
+[ "$rc" -eq 1 ] || fail "error reply: exit $rc, expected 1"
+failed_line | grep -q "^run_case: failed: fem (named by the coupler's error, see .*; stopped: dem (exit 0), coupler (exit 1)$" \
+  || fail "error reply: '$(failed_line)'"
+grep -q "coupler: error: fem: step 50 .*requested failure at step 50" "$out.out" || fail "error reply: the coupler's error is not shown"
+no_leftovers
+echo "6 ok: $(failed_line)"
+
+# 7. the live status line on a terminal
 if command -v script >/dev/null; then
   out=$NC_TMP/tty
   rm -rf "$out"
@@ -146,8 +159,8 @@ if command -v script >/dev/null; then
   grep -q "^run_case: done" "$out.lines" || fail "terminal run: no verdict"
   grep -q "^t = 1 s (100.0%)" "$out/coupler.log" || fail "terminal run: coupler.log lacks the status lines"
   grep -q $'\r' "$out/coupler.log" && fail "terminal run: terminal control characters in coupler.log"
-  echo "6 ok"
+  echo "7 ok"
 else
-  echo "6 skipped: script(1) not installed"
+  echo "7 skipped: script(1) not installed"
 fi
 echo PASS
