@@ -1,6 +1,7 @@
 /* coupler — drives a FEM and a DEM participant through the netcouple protocol.
  *
  *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
+ *           [--progress-file PATH]
  *
  * Exit codes: 0 success, 1 input/participant/coupling failure, 3 finished but with accepted
  * unconverged steps or with energy created beyond energy_tolerance (results not reliable; 0
@@ -12,9 +13,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include "cpl_config.h"
+#include "cpl_heartbeat.h"
 #include "cpl_history.h"
 #include "cpl_interface.h"
 #include "cpl_loop.h"
@@ -28,26 +31,41 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP]\n"
-            "               [--quiet]\n"
+            "               [--quiet] [--progress-file PATH]\n"
             "Couples a FEM and a DEM participant (weak or strong scheme, see coupler/README.md).\n"
             "  --output DIR        results folder (coupling.h5, iterations.log); default '.'\n"
             "  --fem-endpoint EP   override fem.endpoint of coupler.json (e.g. tcp://127.0.0.1:5555)\n"
             "  --dem-endpoint EP   override dem.endpoint\n"
-            "  --quiet             only warnings, errors and the final summary\n");
+            "  --quiet             only warnings, errors and the final summary\n"
+            "  --progress-file PATH  keep PATH up to date with the run's state and status line\n"
+            "                      (a heartbeat: rewritten every step and every second while\n"
+            "                      waiting for a participant; scripts/run_case.sh reads it)\n");
 }
 
 /* A run that finished with accepted unconverged steps or created energy (not opted in). */
 enum { EXIT_UNRELIABLE = 3 };
 
+/* A participant seen by the loop through a wrapper that marks its requests as waits for the
+ * heartbeat and keeps what the DEM's replies say for the status line. */
+typedef struct watched {
+    cpl_participant inner;
+    struct app *a;
+    cpl_remote *remote;
+} watched;
+
 typedef struct app {
     cpl_config cfg;
-    const char *config_path, *output_dir, *fem_ep_arg, *dem_ep_arg;
+    const char *config_path, *output_dir, *fem_ep_arg, *dem_ep_arg, *progress_path;
     int quiet;
     cpl_remote fem, dem;
     int fem_open, dem_open;
     cpl_mesh mesh;
     cpl_history history;
     cpl_progress progress;
+    cpl_heartbeat *heartbeat;       /* NULL without --progress-file */
+    int heartbeat_warned;
+    cpl_progress_watch watch;       /* from the DEM's last solve; deflection from the loop */
+    watched fem_w, dem_w;
     cpl_loop *loop;
     char fem_ep[1024], dem_ep[1024];   /* resolved endpoints ("" while unknown) */
     const volatile sig_atomic_t *stop_signal;   /* 0, or SIGINT / SIGTERM once received */
@@ -59,12 +77,78 @@ static int observe_iteration(void *ctx, const cpl_iteration_record *rec, nc_erro
     return cpl_history_iteration(&a->history, rec, err);
 }
 
+/* The heartbeat's state and status; a failing write is reported once and does not stop the
+ * run (the launcher then takes the coupler for stalled only if it stops writing for long). */
+static void beat(app *a, const char *state)
+{
+    if (!a->heartbeat) return;
+    char status[512];
+    cpl_progress_status(&a->progress, status, sizeof status);
+    nc_error err;
+    if (cpl_heartbeat_update(a->heartbeat, state, status, &err) && !a->heartbeat_warned++)
+        cpl_progress_message(&a->progress, "coupler: warning: %s", err.message);
+}
+
 static int observe_step(void *ctx, const cpl_step_record *rec, nc_error *err)
 {
     app *a = ctx;
     if (cpl_history_step(&a->history, rec, err)) return -1;
+    /* the largest deflection of the interface nodes in the accepted state */
+    const double *u = cpl_loop_displacement(a->loop);
+    double max2 = 0.0;
+    for (size_t i = 0; i < a->mesh.n_nodes; i++) {
+        double d2 = u[3 * i] * u[3 * i] + u[3 * i + 1] * u[3 * i + 1] + u[3 * i + 2] * u[3 * i + 2];
+        if (d2 > max2) max2 = d2;
+    }
+    a->watch.deflection_m = sqrt(max2);
+    cpl_progress_set_watch(&a->progress, &a->watch);
     cpl_progress_step(&a->progress, rec, a->cfg.loop.scheme == CPL_SCHEME_STRONG);
+    beat(a, "running");
     return 0;
+}
+
+static int watched_begin(void *ctx, const cpl_call *call, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.begin_step(w->inner.ctx, call, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
+static int watched_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                         double *out0, double *out1, cpl_solve_info *info, nc_error *err)
+{
+    watched *w = ctx;
+    app *a = w->a;
+    cpl_heartbeat_wait_begin(a->heartbeat, w->inner.name, a->cfg.reply_timeout_s);
+    int rc = w->inner.solve(w->inner.ctx, call, in0, in1, out0, out1, info, err);
+    cpl_heartbeat_wait_end(a->heartbeat);
+    if (rc == 0 && w->remote->kind == CPL_REMOTE_DEM) {
+        /* the last solve of a step is the accepted one */
+        a->watch.contacts = info->contacts;
+        a->watch.kinetic_energy_j = info->energy.kinetic_j;
+        a->watch.max_speed_m_s = proto_message_value(&w->remote->reply, "max_particle_speed_m_s",
+                                                     NAN);
+    }
+    return rc;
+}
+
+static int watched_accept(void *ctx, const cpl_call *call, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.accept(w->inner.ctx, call, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
+static cpl_participant watch_participant(app *a, watched *w, cpl_remote *r)
+{
+    *w = (watched){cpl_remote_participant(r), a, r};
+    cpl_participant p = {w->inner.name, w, watched_begin, watched_solve, watched_accept,
+                         w->inner.can_jacobian};
+    return p;
 }
 
 static int observe_reject(void *ctx, const cpl_reject_record *rec, nc_error *err)
@@ -91,6 +175,8 @@ static int parse_args(app *a, int argc, char **argv)
             a->fem_ep_arg = argv[++i];
         } else if (!strcmp(arg, "--dem-endpoint") && has_value) {
             a->dem_ep_arg = argv[++i];
+        } else if (!strcmp(arg, "--progress-file") && has_value) {
+            a->progress_path = argv[++i];
         } else if (arg[0] == '-') {
             fprintf(stderr, "coupler: unknown option or missing value: %s\n", arg);
             usage(stderr);
@@ -133,6 +219,10 @@ static int resolve_endpoint(app *a, const cpl_endpoint_config *c, const char *ar
 static int shutdown_all(app *a, const cpl_participant *failed)
 {
     int rc = 0;
+    /* after a stop signal a launcher may be stopping the participants itself (run_case.sh
+     * signals all three at once): a dead one must not hold the coupler up for long */
+    double timeout_s = a->cfg.shutdown_timeout_s;
+    if (*a->stop_signal && timeout_s > 1.0) timeout_s = 1.0;
     cpl_remote *all[2] = {&a->fem, &a->dem};
     int open[2] = {a->fem_open, a->dem_open};
     const char *known[2] = {a->fem_ep, a->dem_ep};
@@ -144,18 +234,26 @@ static int shutdown_all(app *a, const cpl_participant *failed)
             snprintf(r->name, sizeof r->name, "%s", i == 0 ? "fem" : "dem");
             snprintf(r->endpoint, sizeof r->endpoint, "%s", known[i]);
             nc_error err;
-            cpl_remote_shutdown(r, a->cfg.shutdown_timeout_s, &err);
+            cpl_heartbeat_wait_begin(a->heartbeat, r->name, timeout_s);
+            cpl_remote_shutdown(r, timeout_s, &err);
+            cpl_heartbeat_wait_end(a->heartbeat);
             proto_message_free(&r->request);
             proto_message_free(&r->reply);
             continue;
         }
-        int is_failed = failed && failed->ctx == r;
+        /* the loop knows the participant through its wrapper */
+        int is_failed = failed && (failed->ctx == r ||
+                                   (failed->ctx == &a->fem_w && r == &a->fem) ||
+                                   (failed->ctx == &a->dem_w && r == &a->dem));
         proto_peer_close(r->peer);   /* drop a possibly pending request first */
         r->peer = NULL;
         if (is_failed && !r->alive) continue;
         nc_error err;
         nc_error_clear(&err);
-        if (cpl_remote_shutdown(r, a->cfg.shutdown_timeout_s, &err)) {
+        cpl_heartbeat_wait_begin(a->heartbeat, r->name, timeout_s);
+        int failed_shutdown = cpl_remote_shutdown(r, timeout_s, &err);
+        cpl_heartbeat_wait_end(a->heartbeat);
+        if (failed_shutdown) {
             cpl_progress_message(&a->progress, "coupler: %s did not acknowledge SHUTDOWN: %s",
                                  r->name, err.message);
             rc = -1;
@@ -287,7 +385,13 @@ int main(int argc, char **argv)
     memset(&failure, 0, sizeof failure);
     cpl_run_status status = {0, 0, 0, 0, 0};
     cpl_config_default(&a.cfg);
-    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet, 10.0, 0.0, 1.0, 1.0);
+    int tty = isatty(STDOUT_FILENO);
+    cpl_progress_init(&a.progress, stdout, tty, a.quiet, 10.0, 0.0, 1.0, 1.0);
+    a.watch = (cpl_progress_watch){NAN, NAN, NAN, NAN};
+    if (a.progress_path && cpl_heartbeat_start(&a.heartbeat, a.progress_path, 1.0, &err)) {
+        fprintf(stderr, "coupler: error: %s\n", err.message);
+        return 1;
+    }
     /* endpoints given on the command line are known even if coupler.json is bad */
     if (a.fem_ep_arg) snprintf(a.fem_ep, sizeof a.fem_ep, "%s", a.fem_ep_arg);
     if (a.dem_ep_arg) snprintf(a.dem_ep, sizeof a.dem_ep, "%s", a.dem_ep_arg);
@@ -295,22 +399,30 @@ int main(int argc, char **argv)
         cpl_config_default(&a.cfg);   /* the defaults' timeouts for the shutdown below */
         goto fail;
     }
-    cpl_progress_init(&a.progress, stdout, isatty(STDOUT_FILENO), a.quiet,
-                      a.cfg.progress_interval_s, a.cfg.loop.start_time_s, a.cfg.loop.end_time_s,
-                      a.cfg.loop.dt_s);
+    cpl_progress_init(&a.progress, stdout, tty, a.quiet, a.cfg.progress_interval_s,
+                      a.cfg.loop.start_time_s, a.cfg.loop.end_time_s, a.cfg.loop.dt_s);
+    struct winsize ws;
+    if (tty && ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0) a.progress.width = ws.ws_col;
     if (nc_file_make_dirs(a.output_dir, &err)) goto fail;
 
     char *fem_ep = a.fem_ep, *dem_ep = a.dem_ep;
-    if (resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, "fem", fem_ep, sizeof a.fem_ep, &err) ||
-        resolve_endpoint(&a, &a.cfg.dem, a.dem_ep_arg, "dem", dem_ep, sizeof a.dem_ep, &err))
-        goto fail;
-    if (cpl_remote_open(&a.fem, CPL_REMOTE_FEM, fem_ep, a.cfg.connect_timeout_s,
-                        a.cfg.reply_timeout_s, &err))
-        goto fail;
+    /* start-up waits: each is bounded by the connect or reply timeout */
+    const double t_connect = a.cfg.connect_timeout_s, t_reply = a.cfg.reply_timeout_s;
+    int bad;
+    cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_connect);
+    bad = resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, "fem", fem_ep, sizeof a.fem_ep, &err);
+    cpl_heartbeat_wait_begin(a.heartbeat, "dem", t_connect);
+    bad = bad || resolve_endpoint(&a, &a.cfg.dem, a.dem_ep_arg, "dem", dem_ep, sizeof a.dem_ep,
+                                  &err);
+    cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_connect + t_reply);
+    bad = bad || cpl_remote_open(&a.fem, CPL_REMOTE_FEM, fem_ep, t_connect, t_reply, &err);
+    cpl_heartbeat_wait_end(a.heartbeat);
+    if (bad) goto fail;
     a.fem_open = 1;
-    if (cpl_remote_open(&a.dem, CPL_REMOTE_DEM, dem_ep, a.cfg.connect_timeout_s,
-                        a.cfg.reply_timeout_s, &err))
-        goto fail;
+    cpl_heartbeat_wait_begin(a.heartbeat, "dem", t_connect + t_reply);
+    bad = cpl_remote_open(&a.dem, CPL_REMOTE_DEM, dem_ep, t_connect, t_reply, &err);
+    cpl_heartbeat_wait_end(a.heartbeat);
+    if (bad) goto fail;
     a.dem_open = 1;
     if (!a.quiet)
         cpl_progress_message(&a.progress, "coupler: fem = %s (%s, protocol %d), dem = %s (%s, "
@@ -331,9 +443,12 @@ int main(int argc, char **argv)
         }
 
     /* conforming interface (section 4.4): the FEM's interface mesh is the DEM's wall */
-    if (cpl_remote_interface_fem(&a.fem, &a.mesh, &u0, &v0, &err) ||
-        cpl_remote_interface_dem(&a.dem, &a.mesh, &err))
-        goto fail;
+    cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_reply);
+    bad = cpl_remote_interface_fem(&a.fem, &a.mesh, &u0, &v0, &err);
+    cpl_heartbeat_wait_begin(a.heartbeat, "dem", t_reply);
+    bad = bad || cpl_remote_interface_dem(&a.dem, &a.mesh, &err);
+    cpl_heartbeat_wait_end(a.heartbeat);
+    if (bad) goto fail;
     if (!a.quiet)
         cpl_progress_message(&a.progress, "coupler: interface of %zu nodes, %zu elements; %s "
                              "scheme, dt %g s, end %g s", a.mesh.n_nodes, a.mesh.n_elements,
@@ -344,7 +459,9 @@ int main(int argc, char **argv)
         goto fail;
     history_open = 1;
 
-    cpl_participant fem = cpl_remote_participant(&a.fem), dem = cpl_remote_participant(&a.dem);
+    cpl_participant fem = watch_participant(&a, &a.fem_w, &a.fem);
+    cpl_participant dem = watch_participant(&a, &a.dem_w, &a.dem);
+    beat(&a, "running");
     if (!a.quiet)
         cpl_progress_message(&a.progress, "coupler: interface Jacobian %s",
                              !a.cfg.loop.interface_jacobian ? "off (interface_jacobian false)"
@@ -375,6 +492,7 @@ int main(int argc, char **argv)
         }
         goto fail;
     }
+    beat(&a, "finishing");   /* first: run_case.sh then shows the final status line */
     cpl_progress_finish(&a.progress);
     rc = shutdown_all(&a, NULL) ? 1 : 0;
     print_timing(&a);
@@ -388,6 +506,7 @@ int main(int argc, char **argv)
     goto done;
 
 fail:
+    beat(&a, "stopping");
     cpl_progress_finish(&a.progress);
     fprintf(stderr, "coupler: error: %s\n", err.message);
     shutdown_all(&a, failure.participant);
@@ -402,6 +521,7 @@ done:
                           a.loop ? cpl_loop_energy(a.loop) : NULL, &status);
     if (a.fem_open) cpl_remote_close(&a.fem);
     if (a.dem_open) cpl_remote_close(&a.dem);
+    cpl_heartbeat_stop(a.heartbeat);
     cpl_loop_free(a.loop);
     cpl_mesh_free(&a.mesh);
     free(u0);

@@ -62,6 +62,18 @@ static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
     return dem_sim_restore(c->s, err);
 }
 
+/* The fastest body's centre-of-mass speed (m/s), for the coupler's progress line. */
+static double max_body_speed(const dem_sim *s)
+{
+    const dem_bodies *b = &s->model.bod;
+    double v2 = 0.0;
+    for (size_t i = 0; i < b->n; i++) {
+        const double *v = b->vel + 3 * i;
+        v2 = fmax(v2, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    }
+    return sqrt(v2);
+}
+
 static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
     participant *c = ctx;
@@ -99,7 +111,8 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
         proto_message_set_value(reply, "near_interface", info.near_interface, err) ||
         proto_message_set_value(reply, "min_gap_m", info.min_gap_m, err) ||
         proto_message_set_value(reply, "contacts", (double)info.contacts, err) ||
-        proto_message_set_value(reply, "substeps", (double)info.substeps, err))
+        proto_message_set_value(reply, "substeps", (double)info.substeps, err) ||
+        proto_message_set_value(reply, "max_particle_speed_m_s", max_body_speed(s), err))
         return -1;
     return 0;
 }

@@ -1,26 +1,14 @@
 #!/usr/bin/env bash
 # run_case.sh — run one coupled case: fem_solver + dem_solver + coupler on localhost.
+# `run_case.sh --help` prints the usage below; README.md and coupler/README.md
+# ("scripts/run_case.sh") say more.
 #
-#   scripts/run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...]
-#                       [--fem-program CMD] [--dem-program CMD] [--quiet]
-#
-# CASE_DIR holds fem.json, dem.json, coupler.json and whatever they refer to (meshes, STL).
-# Everything is copied into DIR (default: runs/<case>-<date-time>), --set overrides are
-# applied to the copies, and all results land there: fem.h5, dem.h5, coupling.h5, their XDMF
-# files, iterations.log and one log per process (fem.log, dem.log, coupler.log).
-#   --set coupler.scheme=weak  --set coupler.relaxation.method=aitken
-#   --set dem.materials.0.restitution=0.2   (numbers index lists; VALUE is JSON if it parses
-#                                            as JSON, otherwise a string)
-# The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoint, so
-# parallel runs never collide. Programs come from $NC_BIN if set, else <repo>/bin.
-# --fem-program/--dem-program replace a solver by another participant command taking the same
-# arguments (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py").
-# Exit status: 0 when all three programs succeeded; 3 (the coupler's) when the run finished
-# but accepted unconverged steps or created energy (results NOT reliable; 0 with coupler.json
-# "accept_unconverged" / "accept_energy_growth": true, still reported as not reliable);
-# otherwise non-zero with a
-# message naming the ones that failed. Ctrl-C stops the coupler cleanly (it shuts the
-# solvers down).
+# Supervision: the three programs are polled every 0.1 s. The first one that fails is named as
+# failed, the others as stopped: a solver that exits before the coupler told it to stop (also
+# before the handshake), a coupler whose progress file (--progress-file, its heartbeat) is
+# older than the stall limit, or the coupler's own error naming a participant. Everything
+# still running is then stopped at once: SIGTERM (and SIGCONT, for a stopped process) to all,
+# SIGKILL after the grace time.
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${NC_BIN:-$root/bin}
@@ -29,9 +17,44 @@ python=/usr/bin/python3
 # (the default) steal the CPU from the process that is working (100x slower runs).
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-PASSIVE}
 
+usage() {
+  cat <<'EOF'
+usage: scripts/run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...]
+                           [--fem-program CMD] [--dem-program CMD] [--quiet]
+                           [--stall-limit SECONDS]
+Runs one coupled case: fem_solver, dem_solver and the coupler on localhost.
+
+CASE_DIR holds fem.json, dem.json, coupler.json and whatever they refer to (meshes, STL).
+Everything is copied into DIR (default: runs/<case>-<date-time>), --set overrides are applied
+to the copies, and all results land there: fem.h5, dem.h5, coupling.h5, their XDMF files,
+iterations.log, one log per program (fem.log, dem.log, coupler.log) and coupler.progress (the
+coupler's last state and status line).
+  --set FILE.KEY=VALUE    e.g. --set coupler.scheme=weak --set dem.materials.0.restitution=0.2
+                          (numbers index lists; VALUE is JSON if it parses as JSON, else a
+                          string)
+  --fem-program CMD       replace a solver by another participant taking the same arguments
+  --dem-program CMD       (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py")
+  --quiet                 print only warnings, errors and the verdict
+  --stall-limit SECONDS   stop the coupler as stalled when its heartbeat is older than this
+                          (default 75, or $NC_STALL_LIMIT_S)
+Progress: on a terminal one live status line (time, remaining wall time at the recent rate,
+contact, rock speed/energy, net deflection, iterations) under the coupler's messages;
+otherwise the coupler's log as it grows, with a plain status line every progress_interval s.
+The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoint, so
+parallel runs never collide. Programs come from $NC_BIN if set, else <repo>/bin.
+$NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
+Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
+or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged" /
+"accept_energy_growth": true, still reported as NOT reliable); 1 a program failed (named,
+the others stopped) or stalled; 2 bad arguments or case; 130 stopped by the user (Ctrl-C or
+SIGTERM), all three programs stopped, the results so far readable.
+EOF
+}
+
 die() { echo "run_case: $*" >&2; exit 2; }
 
 case_dir=""; out=""; sets=(); quiet=0
+stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}
 fem_program="$bin/fem_solver"; dem_program="$bin/dem_solver"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -40,12 +63,17 @@ while [ $# -gt 0 ]; do
     --fem-program) [ $# -ge 2 ] || die "--fem-program needs a command"; fem_program=$2; shift 2 ;;
     --dem-program) [ $# -ge 2 ] || die "--dem-program needs a command"; dem_program=$2; shift 2 ;;
     --quiet) quiet=1; shift ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    --stall-limit) [ $# -ge 2 ] || die "--stall-limit needs seconds"; stall_limit=$2; shift 2 ;;
+    -h|--help) usage; exit 0 ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) [ -z "$case_dir" ] || die "only one CASE_DIR, got '$case_dir' and '$1'"; case_dir=$1; shift ;;
   esac
 done
-[ -n "$case_dir" ] || die "usage: run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...]"
+[ -n "$case_dir" ] || die "usage: run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...] (see --help)"
+positive='^[0-9]+([.][0-9]+)?$'
+[[ $stall_limit =~ $positive ]] && [[ $stall_limit != 0 ]] \
+  || die "--stall-limit / NC_STALL_LIMIT_S: expected seconds > 0, got '$stall_limit'"
+[[ $grace =~ $positive ]] || die "NC_STOP_GRACE_S: expected seconds >= 0, got '$grace'"
 [ -d "$case_dir" ] || die "$case_dir: no such case folder"
 for f in fem.json dem.json coupler.json; do
   [ -f "$case_dir/$f" ] || die "$case_dir/$f: missing (a case folder holds fem.json, dem.json, coupler.json)"
@@ -111,25 +139,109 @@ for name, doc in docs.items():
 PY
 fi
 
-# ---- start the participants -----------------------------------------------------------
-fem_pid=""; dem_pid=""; cpl_pid=""
-cleanup() {
-  for pid in $cpl_pid $fem_pid $dem_pid; do
-    if kill -0 "$pid" 2>/dev/null; then kill -TERM "$pid" 2>/dev/null; fi
-  done
-  sleep 0.5
-  for pid in $cpl_pid $fem_pid $dem_pid; do
-    if kill -0 "$pid" 2>/dev/null; then kill -KILL "$pid" 2>/dev/null; fi
+# ---- supervision helpers ----------------------------------------------------------------
+# pid[P] and rc[P] for P in fem, dem, coupler; rc is "" while P runs.
+declare -A pid=() rc=()
+programs=(fem dem coupler)
+failed=""; failed_why=""   # the first program that failed, and how
+interrupted=""             # INT or TERM once the user stopped run_case.sh
+
+now_ms() { local t=$EPOCHREALTIME; NOW_MS=$(( ${t%[.,]*} * 1000 + 10#${t#*[.,]} / 1000 )); }
+ms() { local x=$1; [[ $x == *.* ]] || x="$x."; local f=${x#*.}000; echo $(( ${x%.*} * 1000 + 10#${f:0:3} )); }
+grace_ms=$(ms "$grace"); stall_ms=$(ms "$stall_limit")
+
+reap() {   # collects the exit status of every program that has ended
+  local p
+  for p in "${programs[@]}"; do
+    if [ -n "${pid[$p]:-}" ] && [ -z "${rc[$p]:-}" ] && ! kill -0 "${pid[$p]}" 2>/dev/null; then
+      wait "${pid[$p]}"; rc[$p]=$?
+    fi
   done
 }
-interrupted=0
-on_signal() {
-  interrupted=1
-  # the coupler shuts the solvers down itself; give it a moment
-  [ -n "$cpl_pid" ] && kill -INT "$cpl_pid" 2>/dev/null
+running() {   # names of the programs still running
+  local p out=""
+  for p in "${programs[@]}"; do
+    [ -n "${pid[$p]:-}" ] && [ -z "${rc[$p]:-}" ] && out="$out $p"
+  done
+  echo "${out# }"
 }
-trap cleanup EXIT
-trap on_signal INT TERM
+how() {   # P -> "exit 1", "exit 137 = SIGKILL" (killed, or exited so), "running"
+  local r=${rc[$1]:-}
+  if [ -z "$r" ]; then echo "running"
+  elif [ "$r" -gt 128 ] && [ "$r" -lt 160 ]; then echo "exit $r = SIG$(kill -l $((r - 128)))"
+  else echo "exit $r"; fi
+}
+fail_first() {   # P WHY: P is the first program that failed (later calls change nothing)
+  [ -n "$failed" ] && return 0
+  failed=$1; failed_why=$2
+}
+stop_all() {   # SIGTERM to every running program at once, SIGKILL after the grace time
+  local p list
+  reap; list=$(running)
+  [ -n "$list" ] || return 0
+  for p in $list; do kill -TERM "${pid[$p]}" 2>/dev/null; kill -CONT "${pid[$p]}" 2>/dev/null; done
+  now_ms; local until=$((NOW_MS + grace_ms))
+  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ]; do sleep 0.05; reap; now_ms; done
+  for p in $(running); do kill -KILL "${pid[$p]}" 2>/dev/null; done
+  for p in $(running); do wait "${pid[$p]}"; rc[$p]=$?; done
+}
+wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS milliseconds
+  now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
+  reap
+  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
+    sleep 0.05; reap; now_ms
+  done
+}
+on_signal() { interrupted=$1; }
+trap 'on_signal INT' INT
+trap 'on_signal TERM' TERM
+trap 'stop_all' EXIT   # whatever happens, no program outlives run_case.sh
+
+# the coupler's progress file: "state ...", "status ...", "waiting ..." lines
+cpl_state=""; cpl_status=""
+read_progress() {
+  local key rest
+  cpl_state=""; cpl_status=""
+  [ -f coupler.progress ] || return 0
+  while IFS=' ' read -r key rest; do
+    case "$key" in state) cpl_state=$rest ;; status) cpl_status=$rest ;; esac
+  done < coupler.progress
+}
+
+# the final report; exits
+report() {
+  local p others=""
+  stop_all
+  [ -n "${show_pid:-}" ] && { kill "$show_pid" 2>/dev/null; wait "$show_pid" 2>/dev/null; }
+  [ "$status_shown" -eq 1 ] && printf '\r\033[K'
+  trap - EXIT
+  for p in "${programs[@]}"; do
+    [ -n "${pid[$p]:-}" ] && { [ "$p" != "$failed" ] || [ -n "$interrupted" ]; } \
+      && others="$others, $p ($(how "$p"))"
+  done
+  others=${others#, }
+  if [ -n "$interrupted" ]; then
+    echo "run_case: stopped by user (SIG$interrupted)${others:+; stopped: $others}; results so far in $out" >&2
+    exit 130
+  fi
+  if [ -n "$failed" ]; then
+    echo "run_case: failed: $failed ($failed_why, see $out/$failed.log)${others:+; stopped: $others}" >&2
+    if [ -f coupler.log ] && grep -q "error" coupler.log; then grep -m 3 "error" coupler.log >&2; fi
+    if [ "$failed" != coupler ] && [ -f "$failed.log" ]; then
+      echo "run_case: last lines of $out/$failed.log:" >&2; tail -n 10 "$failed.log" >&2
+    fi
+    exit 1
+  fi
+  # the coupler's verdict (the last line of its summary) also when an accept_* key let it
+  # exit 0: such a run is never reported as done
+  if [ "${rc[coupler]:-}" -eq 3 ] || grep -q "results are NOT reliable" coupler.log; then
+    echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
+    grep "results are NOT reliable" coupler.log >&2
+    exit "${rc[coupler]:-}"
+  fi
+  echo "run_case: done, results in $out"
+  exit 0
+}
 
 # commands run inside $out: make relative paths in them absolute first
 absolute_words() {
@@ -143,81 +255,182 @@ absolute_words() {
 fem_program=$(absolute_words "$fem_program")
 dem_program=$(absolute_words "$dem_program")
 cd "$out" || die "$out: cannot enter"
+rm -f coupler.progress coupler.progress.tmp
+status_shown=0; show_pid=""
+
+# ---- start the solvers and wait for their endpoints -------------------------------------
 # shellcheck disable=SC2086   # the program may be a command with arguments
 $fem_program fem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint \
   >fem.log 2>&1 &
-fem_pid=$!
+pid[fem]=$!
 # shellcheck disable=SC2086
 $dem_program dem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint \
   >dem.log 2>&1 &
-dem_pid=$!
+pid[dem]=$!
 
-wait_endpoint() {   # name pid file
-  local waited=0
-  while [ ! -s "$3" ]; do
-    if ! kill -0 "$2" 2>/dev/null; then
-      wait "$2"; local rc=$?
-      echo "run_case: $1 exited (status $rc) before publishing its endpoint; last lines of $out/$1.log:" >&2
-      tail -n 15 "$1.log" >&2
-      exit 1
-    fi
-    sleep 0.05; waited=$((waited + 1))
-    if [ $waited -gt 1200 ]; then
-      echo "run_case: $1 did not publish its endpoint in 60 s (see $out/$1.log)" >&2; exit 1
+now_ms; endpoint_until=$((NOW_MS + 60000))
+while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
+  reap
+  for p in fem dem; do
+    if [ -n "${rc[$p]:-}" ]; then
+      if [ -s "$p.endpoint" ]; then fail_first "$p" "$(how "$p") before the handshake"
+      else fail_first "$p" "$(how "$p") before publishing its endpoint"; fi
     fi
   done
-}
-wait_endpoint fem "$fem_pid" fem.endpoint
-wait_endpoint dem "$dem_pid" dem.endpoint
+  [ -n "$failed" ] || [ -n "$interrupted" ] && report
+  now_ms
+  if [ "$NOW_MS" -gt "$endpoint_until" ]; then
+    for p in fem dem; do
+      [ -s "$p.endpoint" ] || fail_first "$p" "did not publish its endpoint in 60 s"
+    done
+    report
+  fi
+  sleep 0.05
+done
 
+# ---- the coupler, and what the user sees ----------------------------------------------------
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 : >coupler.log
 "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
-  --dem-endpoint "$(cat dem.endpoint)" $quiet_arg >coupler.log 2>&1 &
-cpl_pid=$!
+  --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg \
+  >coupler.log 2>&1 &
+pid[coupler]=$!
+now_ms; cpl_started_ms=$NOW_MS
+
+live=0
 if [ $quiet -eq 0 ]; then
-  tail -n +1 -f coupler.log --pid="$cpl_pid" 2>/dev/null &
-  tail_pid=$!
+  if [ -t 1 ]; then
+    # a terminal: the coupler's messages as they come, and its live status line under them
+    live=1
+    columns=$(tput cols 2>/dev/null || echo 80)
+    exec 3< <(exec tail -n +1 -s 0.2 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null)
+    show_pid=$!
+  else
+    tail -n +1 -s 0.2 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null &
+    show_pid=$!
+  fi
 fi
-
-# wait for the coupler (again after a signal interrupted the wait)
-while :; do
-  wait "$cpl_pid"; cpl_rc=$?
-  kill -0 "$cpl_pid" 2>/dev/null || break
-done
-[ $quiet -eq 0 ] && { sleep 0.2; kill "$tail_pid" 2>/dev/null; wait "$tail_pid" 2>/dev/null; }
-# the solvers exit after SHUTDOWN; give them time to close their files
-# (after a coupler failure the healthy ones were told to shut down too; a dead coupler could
-# not, so they get less time)
-grace=600; [ "$cpl_rc" -ne 0 ] && [ "$cpl_rc" -ne 3 ] && grace=200
-wait_exit() {   # pid -> exit status (killed after the grace time, 30 s or 10 s)
-  local i=0
-  while kill -0 "$1" 2>/dev/null && [ $i -lt $grace ]; do sleep 0.05; i=$((i + 1)); done
-  kill -0 "$1" 2>/dev/null && kill -KILL "$1" 2>/dev/null
-  wait "$1"
+shown_status=""; pending=""
+log_line() {   # on a terminal: one line of the log above the status line
+  # the periodic status lines of the log are what the live line shows; the final one (the
+  # coupler says "finishing" or "stopping" before it) stays
+  if [[ $1 == "t = "* ]]; then
+    read_progress
+    [ "$cpl_state" = running ] || [ "$cpl_state" = connecting ] && return 0
+  fi
+  [ "$status_shown" -eq 1 ] && printf '\r\033[K'
+  status_shown=0
+  printf '%s\n' "$1"
 }
-wait_exit "$fem_pid"; fem_rc=$?
-wait_exit "$dem_pid"; dem_rc=$?
-cpl_pid=""; fem_pid=""; dem_pid=""
+read_log() {   # TIMEOUT: the log lines that arrived; 1 at the end of the log
+  local line r
+  while :; do
+    IFS= read -r -t "$1" -u 3 line; r=$?
+    if [ $r -eq 0 ]; then log_line "$pending$line"; pending=""; continue; fi
+    pending="$pending$line"   # a timeout keeps a partial line
+    [ $r -gt 128 ] && return 0
+    [ -n "$pending" ] && log_line "$pending"; pending=""
+    return 1
+  done
+}
+show() {   # new log lines, then the status line (a terminal); else just a pause
+  if [ $live -eq 0 ] || [ -n "$log_ended" ]; then sleep 0.1; return 0; fi
+  read_log 0.1 || log_ended=1
+  if [ -n "$cpl_status" ] && { [ "$status_shown" -eq 0 ] || [ "$cpl_status" != "$shown_status" ]; }; then
+    printf '\r%s\033[K' "${cpl_status:0:$((columns - 1))}"
+    status_shown=1; shown_status=$cpl_status
+  fi
+}
+log_ended=""
 
-# coupler exit 3: it finished, but accepted unconverged steps or created energy (not a
-# failure of a program)
-failed=()
-[ "$cpl_rc" -ne 0 ] && [ "$cpl_rc" -ne 3 ] && failed+=("coupler (exit $cpl_rc, see $out/coupler.log)")
-[ "$fem_rc" -ne 0 ] && failed+=("fem (exit $fem_rc, see $out/fem.log)")
-[ "$dem_rc" -ne 0 ] && failed+=("dem (exit $dem_rc, see $out/dem.log)")
-if [ ${#failed[@]} -gt 0 ]; then
-  echo "run_case: failed: ${failed[*]}" >&2
-  [ "$cpl_rc" -ne 0 ] && grep -m 3 "error" coupler.log >&2
-  [ $interrupted -eq 1 ] && exit 130
-  exit 1
+# ---- supervision while the coupler runs ---------------------------------------------------
+declare -A noticed_ms=()
+while :; do
+  reap
+  [ -n "${rc[coupler]:-}" ] && break
+  if [ -n "$interrupted" ]; then
+    # the coupler shuts the solvers down cleanly on a stop signal; a Ctrl-C on the terminal
+    # has reached it already (it then says "stopping" at once), and a second signal would cut
+    # its SHUTDOWN requests short: signal it only when it has not heard one
+    for _ in 1 2 3 4 5 6; do
+      reap; read_progress
+      [ -n "${rc[coupler]:-}" ] || [ "$cpl_state" = stopping ] || [ "$cpl_state" = finishing ] && break
+      sleep 0.05
+    done
+    if [ -z "${rc[coupler]:-}" ] && [ "$cpl_state" != stopping ] && [ "$cpl_state" != finishing ]; then
+      kill -TERM "${pid[coupler]}" 2>/dev/null
+    fi
+    wait_all_exit $((2 * grace_ms + 1000)) any
+    report
+  fi
+  read_progress
+  now_ms
+  for p in fem dem; do
+    # an exit is a failure unless the coupler told it to stop (it says so in its state first)
+    if [ -n "${rc[$p]:-}" ] && [ -z "${noticed_ms[$p]:-}" ]; then
+      if [ "${rc[$p]:-}" -ne 0 ] || [ "$cpl_state" = connecting ] || [ "$cpl_state" = running ] \
+         || [ -z "$cpl_state" ]; then
+        noticed_ms[$p]=$NOW_MS
+        if [ "${rc[$p]:-}" -eq 0 ]; then fail_first "$p" "exit 0 before the coupler told it to stop"
+        else fail_first "$p" "$(how "$p") while the coupler was ${cpl_state:-starting}"; fi
+      fi
+    fi
+    # running, the coupler gets the grace time to notice by itself (its message names step
+    # and iteration); connecting, it would only notice after its connect timeout
+    if [ -n "${noticed_ms[$p]:-}" ] && { [ "$cpl_state" != running ] ||
+                                         [ $((NOW_MS - noticed_ms[$p])) -ge "$grace_ms" ]; }; then
+      report
+    fi
+  done
+  # the heartbeat: the progress file is rewritten every step and every second of a wait
+  beat_ms=$cpl_started_ms
+  if [ -f coupler.progress ]; then
+    mtime=$(stat -c %.3Y coupler.progress 2>/dev/null)
+    # (a Ctrl-C to the whole job may also have hit stat)
+    [[ $mtime =~ ^[0-9]+([.][0-9]+)?$ ]] && beat_ms=$(ms "$mtime")
+  fi
+  [ "$beat_ms" -lt "$cpl_started_ms" ] && beat_ms=$cpl_started_ms
+  if [ -z "$interrupted" ] && [ $((NOW_MS - beat_ms)) -gt "$stall_ms" ]; then
+    fail_first coupler "stalled: no heartbeat (coupler.progress) for $(( (NOW_MS - beat_ms) / 1000 )) s, limit $stall_limit s"
+    report
+  fi
+  show
+done
+
+# ---- the coupler has ended: the solvers follow --------------------------------------------
+if [ "${rc[coupler]:-}" -eq 0 ] || [ "${rc[coupler]:-}" -eq 3 ]; then
+  # after SHUTDOWN they close their files; a solver still running after 30 s has hung
+  wait_all_exit 30000
+  for p in $(running); do fail_first "$p" "did not exit within 30 s after SHUTDOWN"; done
+else
+  error=$(grep -m 1 "^coupler: error: " coupler.log)
+  # a Ctrl-C on the terminal reaches the coupler too, maybe before run_case.sh notices
+  if [[ $error =~ ^coupler:\ error:\ interrupted\ by\ SIG(INT|TERM) ]] && [ -z "$failed" ]; then
+    [ -n "$interrupted" ] || interrupted=${BASH_REMATCH[1]}
+  fi
+  if [ -n "$interrupted" ]; then   # it sent the solvers SHUTDOWN
+    wait_all_exit "$grace_ms" any
+    report
+  fi
+  if [ "${rc[coupler]:-}" -gt 128 ]; then
+    fail_first coupler "$(how coupler)"   # it could tell no one: stop the solvers now
+  elif [[ $error =~ ^coupler:\ error:\ (fem|dem)[:\ ] ]]; then
+    fail_first "${BASH_REMATCH[1]}" "named by the coupler's error"   # printed below
+  elif [[ $error =~ ^coupler:\ error:\ (.*) ]]; then
+    fail_first coupler "$(how coupler): ${BASH_REMATCH[1]}"
+  else
+    fail_first coupler "$(how coupler)"
+  fi
+  # the healthy solvers were told to shut down; they get the grace time
+  [ "${rc[coupler]:-}" -gt 128 ] || wait_all_exit "$grace_ms"
 fi
-# the coupler's verdict (the last line of its summary) also when an accept_* key let it
-# exit 0: such a run is never reported as done
-if [ "$cpl_rc" -eq 3 ] || grep -q "results are NOT reliable" coupler.log; then
-  echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
-  grep "results are NOT reliable" coupler.log >&2
-  exit "$cpl_rc"
+reap
+for p in fem dem; do
+  [ -n "${rc[$p]:-}" ] && [ "${rc[$p]:-}" -ne 0 ] && fail_first "$p" "$(how "$p")"
+done
+if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.2 s of the coupler)
+  [ -n "$log_ended" ] || read_log 1
+elif [ -n "$show_pid" ]; then
+  for i in $(seq 20); do kill -0 "$show_pid" 2>/dev/null || break; sleep 0.1; done
 fi
-echo "run_case: done, results in $out"
-exit 0
+report

@@ -1,0 +1,166 @@
+#!/usr/bin/env bash
+# scripts/run_case.sh under faults (the Python participants on plate_ball, a long run so
+# there is time to interfere):
+#  1. the coupler is killed (SIGKILL) mid-run -> run_case.sh exits 1 within a few seconds,
+#     names only the coupler as failed, the solvers as stopped, no program left running;
+#  2. the coupler stops (SIGSTOP) -> its heartbeat goes stale; with --stall-limit 2 it is
+#     stopped as stalled within the limit + grace, named alone as failed;
+#  3. a DEM that dies before the handshake -> noticed within a few seconds (not after the
+#     coupler's 20 s connect timeout), named as failed;
+#  4. SIGINT to the whole job (as Ctrl-C on a terminal) and SIGTERM to run_case.sh alone ->
+#     "stopped by user", exit 130, no program left running, coupling.h5 readable;
+#  5. --help prints the usage and nothing else;
+#  6. the FEM replies an error (a Newton failure stand-in) -> the FEM alone is named as failed
+#     (the coupler's error names it), the coupler and the DEM as stopped;
+#  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
+#     (time, remaining time, contact, deflection) with its messages, the final status line
+#     stays, and coupler.log still holds everything without terminal control characters.
+set -u
+exec </dev/null   # script(1) below would read the test runner's list of tests from stdin
+: "${NC_BIN:?}" "${NC_TMP:?}"
+PY=${PYTHON:-/usr/bin/python3}
+[ -x "$NC_BIN/coupler" ] || { echo "SKIP: $NC_BIN/coupler not built"; exit 77; }
+case_dir=tests/coupler/cases/plate_ball
+fem="$PY scripts/participants/spring_plate.py"
+dem="$PY scripts/participants/ball_dem.py"
+set -m   # each run_case.sh in its own process group, SIGINT not ignored (as from a terminal)
+rpid=""
+cleanup() { [ -n "$rpid" ] && kill -KILL -- "-$rpid" 2>/dev/null; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; cat "$out.out" 2>/dev/null; for f in "$out"/{coupler,fem,dem}.log; do echo "--- $f"; tail -n 20 "$f"; done; exit 1; }
+
+launch() {   # name [run_case.sh arguments]: starts a 60 s run in the background
+  out=$NC_TMP/$1; shift
+  rm -rf "$out"
+  scripts/run_case.sh "$case_dir" --out "$out" --quiet --set coupler.end_time=60 \
+    --fem-program "$fem" --dem-program "$dem" "$@" > "$out.out" 2>&1 &
+  rpid=$!
+  start_s=$EPOCHREALTIME
+}
+child() {   # program name -> pid of that child of run_case.sh
+  ps -o pid= -o args= --ppid "$rpid" | awk -v p="$1" '$0 ~ p {print $1; exit}'
+}
+wait_steps() {   # n: until iterations.log has n rows
+  for _ in $(seq 300); do
+    [ -f "$out/iterations.log" ] && [ "$(grep -vc '^#' "$out/iterations.log")" -ge "$1" ] && return 0
+    kill -0 "$rpid" 2>/dev/null || fail "run_case.sh ended before $1 steps"
+    sleep 0.05
+  done
+  fail "the run did not reach $1 steps"
+}
+finish() {   # seconds: waits for run_case.sh; sets rc and took (s, one decimal)
+  local t0=$1
+  for _ in $(seq $(( $2 * 20 ))); do kill -0 "$rpid" 2>/dev/null || break; sleep 0.05; done
+  kill -0 "$rpid" 2>/dev/null && fail "run_case.sh still running after $2 s"
+  wait "$rpid"; rc=$?
+  took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv[1])))" "$t0" "$EPOCHREALTIME")
+}
+no_leftovers() {   # no process of the run may survive run_case.sh
+  local left
+  left=$(ps -o pid= -o args= -g "$rpid" 2>/dev/null)
+  [ -z "$left" ] || fail "processes left after run_case.sh: $left"
+  rpid=""
+}
+h5_ok() {
+  "$PY" -c "
+import h5py
+with h5py.File('$out/coupling.h5', 'r') as f:
+    assert f['/steps/time'].shape[0] > 0" || fail "coupling.h5 not readable"
+}
+failed_line() { grep "^run_case: failed:" "$out.out"; }
+
+# 1. a dead coupler
+launch dead
+wait_steps 20
+cpl=$(child "bin/coupler"); [ -n "$cpl" ] || fail "no coupler process found"
+t0=$EPOCHREALTIME; kill -KILL "$cpl"
+finish "$t0" 10
+[ "$rc" -eq 1 ] || fail "dead coupler: exit $rc, expected 1"
+failed_line | grep -q "^run_case: failed: coupler (exit 137 = SIGKILL, .*; stopped: fem (.*), dem (.*)$" \
+  || fail "dead coupler: '$(failed_line)'"
+awk "BEGIN {exit !($took < 5)}" || fail "dead coupler: cleaned up after $took s (limit 5 s)"
+no_leftovers
+echo "1 ok ($took s): $(failed_line)"
+
+# 2. a stalled coupler
+launch stalled --stall-limit 2
+wait_steps 20
+cpl=$(child "bin/coupler")
+t0=$EPOCHREALTIME; kill -STOP "$cpl"
+finish "$t0" 15
+[ "$rc" -eq 1 ] || fail "stalled coupler: exit $rc, expected 1"
+failed_line | grep -q "^run_case: failed: coupler (stalled: no heartbeat (coupler.progress) for [0-9]* s, limit 2 s, .*; stopped: fem (.*), dem (.*)$" \
+  || fail "stalled coupler: '$(failed_line)'"
+# limit 2 s (+ up to 0.2 s of polling) + grace 3 s, and a margin for a loaded machine
+awk "BEGIN {exit !($took >= 2 && $took < 7)}" || fail "stalled coupler: stopped after $took s (expected 2..7 s)"
+no_leftovers
+echo "2 ok ($took s): $(failed_line)"
+
+# 3. a DEM that dies before the handshake
+launch early_death --dem-program tests/coupler/participants/dies_after_endpoint.sh
+t0=$start_s
+finish "$t0" 15
+[ "$rc" -eq 1 ] || fail "early death: exit $rc, expected 1"
+failed_line | grep -Eq "^run_case: failed: dem \(exit 1 (while the coupler was connecting|before the handshake), .*; stopped: fem \(.*\)(, coupler \(.*\))?$" \
+  || fail "early death: '$(failed_line)'"
+grep -q "exiting before the handshake" "$out.out" || fail "early death: the DEM's last lines are not shown"
+awk "BEGIN {exit !($took < 8)}" || fail "early death: noticed after $took s (limit 8 s)"
+no_leftovers
+echo "3 ok ($took s): $(failed_line)"
+
+# 4. the user stops the job: SIGINT to all of it, SIGTERM to run_case.sh alone
+for sig in INT TERM; do
+  launch "user_$sig"
+  wait_steps 20
+  t0=$EPOCHREALTIME
+  if [ $sig = INT ]; then kill -INT -- "-$rpid"; else kill -TERM "$rpid"; fi
+  finish "$t0" 15
+  [ "$rc" -eq 130 ] || fail "SIG$sig: exit $rc, expected 130"
+  grep -q "^run_case: stopped by user (SIG$sig)" "$out.out" || fail "SIG$sig: no 'stopped by user'"
+  grep -q "failed" "$out.out" && fail "SIG$sig: a program is reported as failed"
+  awk "BEGIN {exit !($took < 8)}" || fail "SIG$sig: stopped after $took s (limit 8 s)"
+  no_leftovers
+  h5_ok
+  echo "4 ok, SIG$sig ($took s): $(grep '^run_case:' "$out.out")"
+done
+
+# 5. --help: the usage, nothing of the script's source
+out=$NC_TMP/help
+scripts/run_case.sh --help > "$out.out" 2>&1 || fail "--help: exit status $?"
+head -n 1 "$out.out" | grep -q "^usage: scripts/run_case.sh CASE_DIR" || fail "--help: first line"
+grep -q "^Exit status:" "$out.out" || fail "--help: no exit status paragraph"
+grep -Eq '^(set |root=|bin=|die\(\)|#|  *-h\|--help\)|EOF)' "$out.out" && fail "--help prints source lines"
+[ "$(wc -l < "$out.out")" -lt 40 ] || fail "--help: $(wc -l < "$out.out") lines"
+echo "5 ok"
+
+# 6. an error reply of the FEM at step 50, iteration 2
+launch error_reply --fem-program "$fem --fail-at 50:2"
+finish "$start_s" 20
+[ "$rc" -eq 1 ] || fail "error reply: exit $rc, expected 1"
+failed_line | grep -q "^run_case: failed: fem (named by the coupler's error, see .*; stopped: dem (exit 0), coupler (exit 1)$" \
+  || fail "error reply: '$(failed_line)'"
+grep -q "coupler: error: fem: step 50 .*requested failure at step 50" "$out.out" || fail "error reply: the coupler's error is not shown"
+no_leftovers
+echo "6 ok: $(failed_line)"
+
+# 7. the live status line on a terminal
+if command -v script >/dev/null; then
+  out=$NC_TMP/tty
+  rm -rf "$out"
+  script -qec "scripts/run_case.sh $case_dir --out $out --set coupler.end_time=1 \
+    --fem-program '$fem' --dem-program '$dem'" /dev/null > "$out.out" 2>&1 \
+    || fail "terminal run: exit status $?"
+  tr '\r' '\n' < "$out.out" | sed 's/\x1b\[K//g' > "$out.lines"
+  [ "$(grep -c "^t = [0-9.e-]* s ([0-9.]*%), [0-9:-]* left | contact [0-9]* | deflection [0-9.e-]* m (max [0-9.e-]* m)" "$out.lines")" -ge 2 ] \
+    || fail "terminal run: fewer than 2 live status lines"
+  grep -q $'\r\033\[K' "$out.out" || fail "terminal run: the status line is not rewritten in place"
+  grep -q "^t = 1 s (100.0%), 00:00 left" "$out.lines" || fail "terminal run: no final status line"
+  grep -q "^coupler: results are reliable" "$out.lines" || fail "terminal run: the coupler's messages are not shown"
+  grep -q "^run_case: done" "$out.lines" || fail "terminal run: no verdict"
+  grep -q "^t = 1 s (100.0%)" "$out/coupler.log" || fail "terminal run: coupler.log lacks the status lines"
+  grep -q $'\r' "$out/coupler.log" && fail "terminal run: terminal control characters in coupler.log"
+  echo "7 ok"
+else
+  echo "7 skipped: script(1) not installed"
+fi
+echo PASS
