@@ -1,6 +1,7 @@
 /* nc_h5 — HDF5 helpers: create file, groups on demand, fixed datasets, growing series. */
 #include "nc_h5.h"
 
+#include <stdio.h>
 #include <string.h>
 
 static hid_t mem_type(nc_h5_type type)
@@ -179,4 +180,45 @@ void nc_h5_series_close(nc_h5_series *s)
         H5Dclose(s->dataset);
         s->dataset = H5I_INVALID_HID;
     }
+}
+
+int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                      const hsize_t *dims, const void *data, const char *units, nc_error *err)
+{
+    if (nc_h5_write(f, path, type, rank, dims, data, err)) return -1;
+    return nc_h5_attr_string(f, path, "units", units, err);
+}
+
+int nc_h5_series_create_units(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                              int rank, const hsize_t *row_dims, const char *units,
+                              nc_error *err)
+{
+    if (nc_h5_series_create(f, s, path, type, rank, row_dims, err)) return -1;
+    return nc_h5_attr_string(f, path, "units", units, err);
+}
+
+int nc_xdmf_row_item(char *out, size_t cap, const char *h5_file, const char *dataset,
+                     long row, int row_rank, const hsize_t *row_dims, nc_h5_type type)
+{
+    char dims[64] = "", start[64] = "", stride[64] = "1", count[64] = "1", space[80];
+    snprintf(start, sizeof start, "%ld", row);
+    snprintf(space, sizeof space, "%ld", row + 1);
+    for (int i = 0; i < row_rank; i++) {
+        size_t used = strlen(dims);
+        snprintf(dims + used, sizeof dims - used, "%s%llu", i ? " " : "", (unsigned long long)row_dims[i]);
+        used = strlen(start);
+        snprintf(start + used, sizeof start - used, " 0");
+        used = strlen(stride);
+        snprintf(stride + used, sizeof stride - used, " 1");
+        used = strlen(count);
+        snprintf(count + used, sizeof count - used, " %llu", (unsigned long long)row_dims[i]);
+        used = strlen(space);
+        snprintf(space + used, sizeof space - used, " %llu", (unsigned long long)row_dims[i]);
+    }
+    if (row_rank == 0) snprintf(dims, sizeof dims, "1");
+    return snprintf(out, cap,
+                    "<DataItem Dimensions=\"%s\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">"
+                    "%s:%s|%s:%s:%s:%s</DataItem>",
+                    dims, type == NC_H5_F64 ? "Float" : "Int", type == NC_H5_F64 ? 8 : 4, h5_file,
+                    dataset, start, stride, count, space);
 }

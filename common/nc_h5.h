@@ -50,6 +50,22 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err);
 void nc_h5_series_close(nc_h5_series *s);
 
+/* The same with a "units" string attribute on the dataset ("m", "N", "m/s", "1", ...). */
+int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                      const hsize_t *dims, const void *data, const char *units, nc_error *err);
+int nc_h5_series_create_units(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                              int rank, const hsize_t *row_dims, const char *units,
+                              nc_error *err);
+
+/* XDMF text of one row of a series: the XDMF 3 HDF DataItem whose heavy-data reference
+ * "FILE:DATASET|start:stride:count:space" selects row `row` of a dataset with row_rank
+ * further dimensions row_dims (so "Dimensions" is row_dims). ParaView's default XDMF reader
+ * (Xdmf3) reads this form; its HyperSlab DataItem it does not. The space named is
+ * (row + 1) x row_dims, which the dataset holds once the row is written, so the text of a
+ * row never changes as the series grows. Returns the length written (snprintf rules). */
+int nc_xdmf_row_item(char *out, size_t cap, const char *h5_file, const char *dataset,
+                     long row, int row_rank, const hsize_t *row_dims, nc_h5_type type);
+
 /* Turns off HDF5's own error stack printing (messages go through nc_error instead). */
 void nc_h5_quiet(void);
 
