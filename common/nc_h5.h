@@ -5,6 +5,12 @@
  * one row at a time. nc_h5_flush() after each output step keeps everything written so far
  * readable if the process is later stopped or killed (the file stays in the default,
  * pre-1.10 format, which has no "file open for writing" flag to clear after a crash).
+ *
+ * Write errors (a full disk): the message names the file, what failed and the operating
+ * system's reason ("No space left on device"); the file is then marked failed, nothing more
+ * is written to it and nc_h5_close() leaves it as the last successful flush wrote it (HDF5
+ * can neither flush nor safely close it). HDF5's exit handler is switched off for the same
+ * reason: every program closes its files itself.
  */
 #ifndef NC_H5_H
 #define NC_H5_H
@@ -16,6 +22,7 @@
 typedef struct nc_h5_file {
     hid_t file;
     char path[512];
+    int failed;         /* a write or flush failed: nothing more is written (see nc_h5_close) */
 } nc_h5_file;
 
 typedef enum { NC_H5_F64, NC_H5_I32 } nc_h5_type;
@@ -27,7 +34,7 @@ typedef struct nc_h5_series {
     int rank;
     hsize_t dims[3];
     char name[256];
-    const nc_h5_file *owner;
+    nc_h5_file *owner;
 } nc_h5_series;
 
 int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
