@@ -40,6 +40,9 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
                  nc_h5_series_create_units(h, &o->pos, "/particles/position", NC_H5_F64, 3, row, "m", err) ||
                  nc_h5_series_create_units(h, &o->vel, "/particles/velocity", NC_H5_F64, 3, row, "m/s", err) ||
                  nc_h5_series_create_units(h, &o->omega, "/particles/angular_velocity", NC_H5_F64, 3, row, "rad/s", err);
+        /* one vertex cell per sphere, so ParaView shows the centres without a filter */
+        for (size_t i = 0; i < n; i++) mat[i] = (int32_t)i;
+        rc = rc || nc_h5_write_units(h, "/particles/vertex", NC_H5_I32, 1, &n, mat, "1", err);
         free(mat);
         if (rc) return -1;
     }
@@ -124,9 +127,10 @@ static int format_step(dem_output *o, const dem_sim *s, long k, double time_s, l
         static const char *const path[] = {"/particles/velocity", "/particles/angular_velocity"};
         if (text_append(t, err, "      <Grid Name=\"step_%06ld\" GridType=\"Uniform\">\n"
                                 "        <Time Value=\"%.17g\"/>\n"
-                                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\"/>\n"
-                                "        <Geometry GeometryType=\"XYZ\">\n",
+                                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\">\n",
                         k, time_s, n) ||
+            data_item(t, err, "/particles/vertex", -1, 1, n, 0, NC_H5_I32) ||
+            text_append(t, err, "        </Topology>\n        <Geometry GeometryType=\"XYZ\">\n") ||
             data_item(t, err, "/particles/position", k, 2, n, 3, NC_H5_F64) ||
             text_append(t, err, "        </Geometry>\n"
                                 "        <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">\n") ||

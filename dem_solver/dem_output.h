@@ -3,7 +3,7 @@
  * dem.h5 (SI; every dataset carries a "units" string attribute), k = output steps:
  *   /time [k] s;
  *   /particles/id, /particles/body, /particles/material [n] i32, /particles/radius [n] m
- *   (constant through a run); /particles/position [k,n,3] m, /particles/velocity [k,n,3] m/s,
+ *   (constant through a run), /particles/vertex [n] i32 (0..n-1, the XDMF's vertex cells); /particles/position [k,n,3] m, /particles/velocity [k,n,3] m/s,
  *   /particles/angular_velocity [k,n,3] rad/s (that of the sphere's body);
  *   /clusters/position [k,c,3] m, /clusters/orientation [k,c,4] (quaternion w x y z) when
  *   there are clusters;

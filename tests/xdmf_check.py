@@ -258,7 +258,9 @@ class _Checker:
                     self.problem(where, "Polyvertex of %d cells for %d points" % (n_cells, n_points))
             else:
                 dims, conn = use(item, where + " Topology")
-                if dims is not None and npe and dims != (n_cells, npe):
+                if dims is not None and npe == 1 and dims == (n_cells,):
+                    pass   # one node per cell: a plain list of point indices
+                elif dims is not None and npe and dims != (n_cells, npe):
                     self.problem(where, "connectivity %s, expected %d cells x %d nodes per cell"
                                  % (dims, n_cells, npe))
                 elif conn is not None and n_points is not None and conn.size:

@@ -31,7 +31,8 @@ def fem(d):
 def particles(d):
     with h5py.File(d + "/dem.h5", "r") as f:
         z = f["/particles/position"][-1, :, 2]
-        spec.append(dict(file=d + "/particles.xdmf", points=f["/particles/radius"].shape[0], cells=None,
+        n = f["/particles/radius"].shape[0]
+        spec.append(dict(file=d + "/particles.xdmf", points=n, cells=n,
                          point_arrays=["angular_velocity", "id", "radius", "velocity"], cell_arrays=[],
                          times=f["/time"][:].tolist(), z_last=[float(z.min()), float(z.max())]))
 def net(d):
