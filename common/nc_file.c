@@ -54,9 +54,23 @@ FILE *nc_file_replace_open(const char *path, char *tmp, size_t tmp_size, nc_erro
 
 int nc_file_replace_commit(FILE *f, const char *tmp, const char *path, nc_error *err)
 {
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) return nc_error_set(err, 1, "%s: write failed", tmp);
-    if (rename(tmp, path) != 0) return nc_error_set(err, 1, "%s: cannot rename to %s: %s", tmp, path, strerror(errno));
+    /* the reason of a failed buffered write shows again when the buffer is flushed */
+    errno = 0;
+    int bad = fflush(f) != 0 || ferror(f);
+    int why = bad ? errno : 0;
+    if (fclose(f) != 0 && !bad) {
+        bad = 1;
+        why = errno;
+    }
+    if (bad) {
+        remove(tmp);   /* the previous version of path stays as it was */
+        return nc_error_set(err, 1, "%s: cannot write: %s", path, why ? strerror(why) : "write error");
+    }
+    if (rename(tmp, path) != 0) {
+        why = errno;
+        remove(tmp);
+        return nc_error_set(err, 1, "%s: cannot rename to %s: %s", tmp, path, strerror(why));
+    }
     return 0;
 }
 

@@ -1,6 +1,8 @@
 /* nc_h5 — HDF5 helpers: create file, groups on demand, fixed datasets, growing series. */
 #include "nc_h5.h"
 
+#include <errno.h>
+#include <stdio.h>
 #include <string.h>
 
 static hid_t mem_type(nc_h5_type type)
@@ -13,8 +15,50 @@ static hid_t file_type(nc_h5_type type)
     return type == NC_H5_F64 ? H5T_IEEE_F64LE : H5T_STD_I32LE;
 }
 
+/* HDF5's error stack of the call that just failed: the operating system's reason
+ * ("No space left on device") where the file driver reported one, else the innermost
+ * message, else errno. */
+static herr_t walk_reason(unsigned n, const H5E_error2_t *e, void *data)
+{
+    char *out = data;
+    const char *desc = e->desc ? e->desc : "";
+    const char *m = strstr(desc, "error message = '");
+    if (m) {
+        m += strlen("error message = '");
+        const char *end = strchr(m, '\'');
+        int len = end ? (int)(end - m) : (int)strlen(m);
+        snprintf(out, 200, "%.*s", len, m);
+        return 1;   /* stop: the OS reason is the best there is */
+    }
+    if (n == 0 && desc[0]) snprintf(out, 200, "%s", desc);
+    return 0;
+}
+
+static const char *reason(char *buf, int saved_errno)
+{
+    buf[0] = '\0';
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, walk_reason, buf);
+    if (!buf[0]) snprintf(buf, 200, "%s", saved_errno ? strerror(saved_errno) : "HDF5 error");
+    return buf;
+}
+
+/* Records a failed write: the message names the file, what failed and why; the file is marked
+ * failed so that nothing more is written to it. */
+static int fail(nc_h5_file *f, nc_error *err, const char *what, const char *object)
+{
+    int saved = errno;
+    char why[200];
+    reason(why, saved);
+    f->failed = 1;
+    return nc_error_set(err, 1, "%s: %s %s: %s", f->path, what, object, why);
+}
+
 void nc_h5_quiet(void)
 {
+    /* HDF5 1.10 crashes in its exit handler when it closes a file whose flush fails (a full
+     * disk): the programs close every file themselves, so the handler is not needed. Only
+     * effective before HDF5's first use, which is here (nc_h5_create calls this first). */
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
 }
 
@@ -24,24 +68,31 @@ int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err)
     memset(f, 0, sizeof *f);
     f->file = H5I_INVALID_HID;
     snprintf(f->path, sizeof f->path, "%s", path);
+    errno = 0;
     f->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    if (f->file < 0)
-        return nc_error_set(err, 1, "%s: cannot create HDF5 file (does the folder exist and is it writable?)", path);
+    if (f->file < 0) {
+        char why[200];
+        reason(why, errno);
+        return nc_error_set(err, 1, "%s: cannot create HDF5 file: %s", path, why);
+    }
     return 0;
 }
 
 int nc_h5_flush(nc_h5_file *f, nc_error *err)
 {
     if (f->file < 0) return 0;
-    if (H5Fflush(f->file, H5F_SCOPE_GLOBAL) < 0)
-        return nc_error_set(err, 1, "%s: cannot flush HDF5 file", f->path);
+    if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error", f->path);
+    errno = 0;
+    if (H5Fflush(f->file, H5F_SCOPE_GLOBAL) < 0) return fail(f, err, "cannot flush", "the file");
     return 0;
 }
 
 void nc_h5_close(nc_h5_file *f)
 {
     if (f && f->file > 0) {
-        H5Fclose(f->file);
+        /* after a failed write HDF5 cannot flush the file and would fail (or crash) closing
+         * it: it is left as the last successful flush wrote it and released by the OS */
+        if (!f->failed && H5Fclose(f->file) < 0) f->failed = 1;
         f->file = H5I_INVALID_HID;
     }
 }
@@ -56,8 +107,9 @@ static int make_parents(nc_h5_file *f, const char *path, nc_error *err)
         htri_t exists = H5Lexists(f->file, buf, H5P_DEFAULT);
         if (exists < 0) return nc_error_set(err, 1, "%s: bad HDF5 path %s", f->path, buf);
         if (!exists) {
+            errno = 0;
             hid_t group = H5Gcreate2(f->file, buf, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-            if (group < 0) return nc_error_set(err, 1, "%s: cannot create group %s", f->path, buf);
+            if (group < 0) return fail(f, err, "cannot create group", buf);
             H5Gclose(group);
         }
         *slash = '/';
@@ -69,18 +121,20 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
                 const hsize_t *dims, const void *data, nc_error *err)
 {
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not written after an earlier write error", f->path, path);
     if (make_parents(f, path, err)) return -1;
+    errno = 0;
     hid_t space = H5Screate_simple(rank, dims, NULL);
     hid_t dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, H5P_DEFAULT,
                                H5P_DEFAULT);
     int rc = 0;
     if (dataset < 0) {
-        rc = nc_error_set(err, 1, "%s: cannot create dataset %s", f->path, path);
+        rc = fail(f, err, "cannot create dataset", path);
     } else {
         hsize_t total = 1;
         for (int i = 0; i < rank; i++) total *= dims[i];
         if (total > 0 && H5Dwrite(dataset, mem_type(type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
-            rc = nc_error_set(err, 1, "%s: cannot write dataset %s", f->path, path);
+            rc = fail(f, err, "cannot write dataset", path);
         H5Dclose(dataset);
     }
     H5Sclose(space);
@@ -90,6 +144,8 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
 static int write_attr(nc_h5_file *f, const char *object, const char *name, hid_t type,
                       const void *value, nc_error *err)
 {
+    if (f->failed) return nc_error_set(err, 1, "%s: attribute %s not written after an earlier write error", f->path, name);
+    errno = 0;
     hid_t space = H5Screate(H5S_SCALAR);
     if (H5Aexists_by_name(f->file, object, name, H5P_DEFAULT) > 0)
         H5Adelete_by_name(f->file, object, name, H5P_DEFAULT);
@@ -97,7 +153,7 @@ static int write_attr(nc_h5_file *f, const char *object, const char *name, hid_t
                                    H5P_DEFAULT);
     int rc = 0;
     if (attr < 0 || H5Awrite(attr, type, value) < 0)
-        rc = nc_error_set(err, 1, "%s: cannot write attribute %s on %s", f->path, name, object);
+        rc = fail(f, err, "cannot write attribute", name);
     if (attr >= 0) H5Aclose(attr);
     H5Sclose(space);
     return rc;
@@ -126,6 +182,7 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     memset(s, 0, sizeof *s);
     s->dataset = H5I_INVALID_HID;
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not created after an earlier write error", f->path, path);
     if (make_parents(f, path, err)) return -1;
     s->type = type;
     s->rank = rank;
@@ -144,6 +201,7 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     if (rows > 1024) rows = 1024;
     chunk[0] = rows;
     if (row_values == 0) chunk[1] = 1;
+    errno = 0;
     hid_t space = H5Screate_simple(rank, s->dims, maxdims);
     hid_t props = H5Pcreate(H5P_DATASET_CREATE);
     for (int i = 1; i < rank; i++) if (chunk[i] == 0) chunk[i] = 1;
@@ -151,15 +209,17 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     s->dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, props, H5P_DEFAULT);
     H5Pclose(props);
     H5Sclose(space);
-    if (s->dataset < 0) return nc_error_set(err, 1, "%s: cannot create dataset %s", f->path, path);
+    if (s->dataset < 0) return fail(f, err, "cannot create dataset", path);
     return 0;
 }
 
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
 {
+    if (s->owner->failed)
+        return nc_error_set(err, 1, "%s: %s not written after an earlier write error", s->owner->path, s->name);
     hsize_t new_dims[3] = {s->dims[0] + 1, s->dims[1], s->dims[2]};
-    if (H5Dset_extent(s->dataset, new_dims) < 0)
-        return nc_error_set(err, 1, "%s: cannot extend %s", s->owner->path, s->name);
+    errno = 0;
+    if (H5Dset_extent(s->dataset, new_dims) < 0) return fail(s->owner, err, "cannot extend", s->name);
     hid_t file_space = H5Dget_space(s->dataset);
     hsize_t start[3] = {s->dims[0], 0, 0};
     hsize_t count[3] = {1, s->dims[1], s->dims[2]};
@@ -168,7 +228,7 @@ int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
     herr_t rc = H5Dwrite(s->dataset, mem_type(s->type), mem_space, file_space, H5P_DEFAULT, row);
     H5Sclose(mem_space);
     H5Sclose(file_space);
-    if (rc < 0) return nc_error_set(err, 1, "%s: cannot write to %s", s->owner->path, s->name);
+    if (rc < 0) return fail(s->owner, err, "cannot write to", s->name);
     s->dims[0]++;
     return 0;
 }
@@ -179,4 +239,45 @@ void nc_h5_series_close(nc_h5_series *s)
         H5Dclose(s->dataset);
         s->dataset = H5I_INVALID_HID;
     }
+}
+
+int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                      const hsize_t *dims, const void *data, const char *units, nc_error *err)
+{
+    if (nc_h5_write(f, path, type, rank, dims, data, err)) return -1;
+    return nc_h5_attr_string(f, path, "units", units, err);
+}
+
+int nc_h5_series_create_units(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                              int rank, const hsize_t *row_dims, const char *units,
+                              nc_error *err)
+{
+    if (nc_h5_series_create(f, s, path, type, rank, row_dims, err)) return -1;
+    return nc_h5_attr_string(f, path, "units", units, err);
+}
+
+int nc_xdmf_row_item(char *out, size_t cap, const char *h5_file, const char *dataset,
+                     long row, int row_rank, const hsize_t *row_dims, nc_h5_type type)
+{
+    char dims[64] = "", start[64] = "", stride[64] = "1", count[64] = "1", space[80];
+    snprintf(start, sizeof start, "%ld", row);
+    snprintf(space, sizeof space, "%ld", row + 1);
+    for (int i = 0; i < row_rank; i++) {
+        size_t used = strlen(dims);
+        snprintf(dims + used, sizeof dims - used, "%s%llu", i ? " " : "", (unsigned long long)row_dims[i]);
+        used = strlen(start);
+        snprintf(start + used, sizeof start - used, " 0");
+        used = strlen(stride);
+        snprintf(stride + used, sizeof stride - used, " 1");
+        used = strlen(count);
+        snprintf(count + used, sizeof count - used, " %llu", (unsigned long long)row_dims[i]);
+        used = strlen(space);
+        snprintf(space + used, sizeof space - used, " %llu", (unsigned long long)row_dims[i]);
+    }
+    if (row_rank == 0) snprintf(dims, sizeof dims, "1");
+    return snprintf(out, cap,
+                    "<DataItem Dimensions=\"%s\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">"
+                    "%s:%s|%s:%s:%s:%s</DataItem>",
+                    dims, type == NC_H5_F64 ? "Float" : "Int", type == NC_H5_F64 ? 8 : 4, h5_file,
+                    dataset, start, stride, count, space);
 }

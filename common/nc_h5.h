@@ -5,6 +5,12 @@
  * one row at a time. nc_h5_flush() after each output step keeps everything written so far
  * readable if the process is later stopped or killed (the file stays in the default,
  * pre-1.10 format, which has no "file open for writing" flag to clear after a crash).
+ *
+ * Write errors (a full disk): the message names the file, what failed and the operating
+ * system's reason ("No space left on device"); the file is then marked failed, nothing more
+ * is written to it and nc_h5_close() leaves it as the last successful flush wrote it (HDF5
+ * can neither flush nor safely close it). HDF5's exit handler is switched off for the same
+ * reason: every program closes its files itself.
  */
 #ifndef NC_H5_H
 #define NC_H5_H
@@ -16,6 +22,7 @@
 typedef struct nc_h5_file {
     hid_t file;
     char path[512];
+    int failed;         /* a write or flush failed: nothing more is written (see nc_h5_close) */
 } nc_h5_file;
 
 typedef enum { NC_H5_F64, NC_H5_I32 } nc_h5_type;
@@ -27,7 +34,7 @@ typedef struct nc_h5_series {
     int rank;
     hsize_t dims[3];
     char name[256];
-    const nc_h5_file *owner;
+    nc_h5_file *owner;
 } nc_h5_series;
 
 int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
@@ -49,6 +56,22 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
 /* Appends one row of prod(row_dims) values. */
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err);
 void nc_h5_series_close(nc_h5_series *s);
+
+/* The same with a "units" string attribute on the dataset ("m", "N", "m/s", "1", ...). */
+int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
+                      const hsize_t *dims, const void *data, const char *units, nc_error *err);
+int nc_h5_series_create_units(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                              int rank, const hsize_t *row_dims, const char *units,
+                              nc_error *err);
+
+/* XDMF text of one row of a series: the XDMF 3 HDF DataItem whose heavy-data reference
+ * "FILE:DATASET|start:stride:count:space" selects row `row` of a dataset with row_rank
+ * further dimensions row_dims (so "Dimensions" is row_dims). ParaView's default XDMF reader
+ * (Xdmf3) reads this form; its HyperSlab DataItem it does not. The space named is
+ * (row + 1) x row_dims, which the dataset holds once the row is written, so the text of a
+ * row never changes as the series grows. Returns the length written (snprintf rules). */
+int nc_xdmf_row_item(char *out, size_t cap, const char *h5_file, const char *dataset,
+                     long row, int row_rank, const hsize_t *row_dims, nc_h5_type type);
 
 /* Turns off HDF5's own error stack printing (messages go through nc_error instead). */
 void nc_h5_quiet(void);

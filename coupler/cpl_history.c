@@ -22,11 +22,11 @@ static void energy_values(const cpl_energy_record *e, double *v)
 }
 
 static int series(cpl_history *h, nc_h5_series *s, const char *path, nc_h5_type type, int cols,
-                  nc_error *err)
+                  const char *units, nc_error *err)
 {
     hsize_t row[1] = {(hsize_t)cols};
-    return nc_h5_series_create(&h->h5, s, path, type, cols > 1 ? 2 : 1, cols > 1 ? row : NULL,
-                               err);
+    return nc_h5_series_create_units(&h->h5, s, path, type, cols > 1 ? 2 : 1,
+                                     cols > 1 ? row : NULL, units, err);
 }
 
 int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s,
@@ -38,43 +38,43 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
     if (nc_h5_create(&h->h5, path, err)) return -1;
     h->open = 1;
     h->write_iterations = write_iterations;
-    if (series(h, &h->s_time, "/steps/time", NC_H5_F64, 1, err) ||
-        series(h, &h->s_dt, "/steps/dt", NC_H5_F64, 1, err) ||
-        series(h, &h->s_iterations, "/steps/iterations", NC_H5_I32, 1, err) ||
-        series(h, &h->s_residual, "/steps/residual", NC_H5_F64, 1, err) ||
-        series(h, &h->s_converged, "/steps/converged", NC_H5_I32, 1, err) ||
-        series(h, &h->s_force, "/steps/contact_force", NC_H5_F64, 3, err) ||
-        series(h, &h->s_contact, "/steps/in_contact", NC_H5_I32, 1, err) ||
-        series(h, &h->s_near, "/steps/near_interface", NC_H5_I32, 1, err) ||
-        series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, err) ||
-        series(h, &h->s_rejected, "/steps/rejected", NC_H5_I32, 1, err) ||
-        series(h, &h->r_step, "/rejections/step", NC_H5_I32, 1, err) ||
-        series(h, &h->r_attempt, "/rejections/attempt", NC_H5_I32, 1, err) ||
-        series(h, &h->r_time, "/rejections/time", NC_H5_F64, 1, err) ||
-        series(h, &h->r_dt, "/rejections/dt", NC_H5_F64, 1, err) ||
-        series(h, &h->r_next_dt, "/rejections/next_dt", NC_H5_F64, 1, err) ||
-        series(h, &h->r_iterations, "/rejections/iterations", NC_H5_I32, 1, err) ||
-        series(h, &h->r_residual, "/rejections/residual", NC_H5_F64, 1, err) ||
-        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, err) ||
-        series(h, &h->e_above, "/energy/above", NC_H5_I32, 1, err) ||
-        nc_h5_attr_string(&h->h5, "/energy/above", "units", "1", err))
+    /* the residual is a scaled norm of the relaxed quantity */
+    const char *res_units = s->relaxed == CPL_RELAXED_FORCE ? "N" : "m, m/s";
+    if (series(h, &h->s_time, "/steps/time", NC_H5_F64, 1, "s", err) ||
+        series(h, &h->s_dt, "/steps/dt", NC_H5_F64, 1, "s", err) ||
+        series(h, &h->s_iterations, "/steps/iterations", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->s_residual, "/steps/residual", NC_H5_F64, 1, res_units, err) ||
+        series(h, &h->s_converged, "/steps/converged", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->s_force, "/steps/contact_force", NC_H5_F64, 3, "N", err) ||
+        series(h, &h->s_contact, "/steps/in_contact", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->s_near, "/steps/near_interface", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, "m", err) ||
+        series(h, &h->s_rejected, "/steps/rejected", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->r_step, "/rejections/step", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->r_attempt, "/rejections/attempt", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->r_time, "/rejections/time", NC_H5_F64, 1, "s", err) ||
+        series(h, &h->r_dt, "/rejections/dt", NC_H5_F64, 1, "s", err) ||
+        series(h, &h->r_next_dt, "/rejections/next_dt", NC_H5_F64, 1, "s", err) ||
+        series(h, &h->r_iterations, "/rejections/iterations", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->r_residual, "/rejections/residual", NC_H5_F64, 1, res_units, err) ||
+        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->e_above, "/energy/above", NC_H5_I32, 1, "1", err))
         goto fail;
     for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) {
         char name[64];
         snprintf(name, sizeof name, "/energy/%s", energy_names[k]);
-        if (series(h, &h->e_series[k], name, NC_H5_F64, 1, err) ||
-            nc_h5_attr_string(&h->h5, name, "units", "J", err))
+        if (series(h, &h->e_series[k], name, NC_H5_F64, 1, "J", err))
             goto fail;
     }
     if (write_iterations &&
-        (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, err) ||
-         series(h, &h->i_iteration, "/iterations/iteration", NC_H5_I32, 1, err) ||
-         series(h, &h->i_residual, "/iterations/residual", NC_H5_F64, 1, err) ||
-         series(h, &h->i_alpha, "/iterations/alpha", NC_H5_F64, 1, err) ||
-         series(h, &h->i_force, "/iterations/contact_force", NC_H5_F64, 3, err) ||
-         series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, err) ||
-         series(h, &h->i_attempt, "/iterations/attempt", NC_H5_I32, 1, err) ||
-         series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, err)))
+        (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, "1", err) ||
+         series(h, &h->i_iteration, "/iterations/iteration", NC_H5_I32, 1, "1", err) ||
+         series(h, &h->i_residual, "/iterations/residual", NC_H5_F64, 1, res_units, err) ||
+         series(h, &h->i_alpha, "/iterations/alpha", NC_H5_F64, 1, "1", err) ||
+         series(h, &h->i_force, "/iterations/contact_force", NC_H5_F64, 3, "N", err) ||
+         series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, "1", err) ||
+         series(h, &h->i_attempt, "/iterations/attempt", NC_H5_I32, 1, "1", err) ||
+         series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, "s", err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
         nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_settings_method(&s->relax), err) ||
@@ -185,7 +185,7 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
         /* best effort: a failure here must not hide the run's own error */
         hsize_t one = 1;
         double total = t->total_s;
-        if (nc_h5_write(&h->h5, "/timing/total", NC_H5_F64, 1, &one, &total, NULL) == 0) {
+        if (nc_h5_write_units(&h->h5, "/timing/total", NC_H5_F64, 1, &one, &total, "s", NULL) == 0) {
             nc_h5_attr_double(&h->h5, "/timing/total", "wait_fem_s", t->wait_fem_s, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "wait_dem_s", t->wait_dem_s, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "solver_fem_s", t->solver_fem_s, NULL);

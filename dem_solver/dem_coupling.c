@@ -270,6 +270,7 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
     if (!(dt_step > 0.0) || !isfinite(dt_step))
         return nc_error_set(err, 1, "dem: coupling step dt_s must be > 0, got %g", dt_step);
     size_t nn = net->n_nodes;
+    const double t_start = s->time_s;
     for (size_t k = 0; k < 3 * nn; k++) {
         if (!isfinite(disp_end[k]) || (vel_end && !isfinite(vel_end[k])))
             return nc_error_set(err, 1, "dem: interface displacement/velocity of node %zu is not "
@@ -312,6 +313,8 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
         }
         for (size_t k = 0; k < 3 * nn; k++) net->impulse[k] += h * net->force[k];
     }
+    /* the step ends at t_n + dt exactly: sub-step sums drift past the output gate's 1e-12 s */
+    s->time_s = t_start + dt_step;
     memcpy(net->cur, net->end, 3 * nn * sizeof(double));
     if (build_net_grid(s, err)) return -1;
     if (net->force_at_end) {

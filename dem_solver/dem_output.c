@@ -16,22 +16,47 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
     char path[1100];
     snprintf(path, sizeof path, "%s/dem.h5", dir);
     if (nc_h5_create(&o->h5, path, err)) return -1;
+    /* index files of an earlier run in this folder would show stale or missing data */
+    static const char *const stale[] = {"dem.xdmf", "particles.xdmf", "dem_net.xdmf"};
+    for (size_t i = 0; i < sizeof stale / sizeof *stale; i++) {
+        char old[1100];
+        snprintf(old, sizeof old, "%s/%s", dir, stale[i]);
+        remove(old);
+    }
+    nc_h5_file *h = &o->h5;
     hsize_t n = s->model.sph.n;
+    size_t scratch = 4 * s->model.bod.n + 3 * n + 4;
+    o->scratch = malloc(scratch * sizeof *o->scratch);
+    if (!o->scratch) return nc_error_set(err, 1, "%s: out of memory", path);
     if (n > 0) {
         int32_t *mat = malloc(n * sizeof *mat);
-        if (!mat) return nc_error_set(err, 1, "dem: out of memory");
+        if (!mat) return nc_error_set(err, 1, "%s: out of memory", path);
         for (size_t i = 0; i < n; i++) mat[i] = s->model.sph.material[i];
-        int rc = nc_h5_write(&o->h5, "/particles/id", NC_H5_I32, 1, &n, s->model.sph.id, err) ||
-                 nc_h5_write(&o->h5, "/particles/radius", NC_H5_F64, 1, &n, s->model.sph.radius, err) ||
-                 nc_h5_write(&o->h5, "/particles/body", NC_H5_I32, 1, &n, s->model.sph.body, err) ||
-                 nc_h5_write(&o->h5, "/particles/material", NC_H5_I32, 1, &n, mat, err);
+        hsize_t row[2] = {n, 3};
+        int rc = nc_h5_write_units(h, "/particles/id", NC_H5_I32, 1, &n, s->model.sph.id, "1", err) ||
+                 nc_h5_write_units(h, "/particles/radius", NC_H5_F64, 1, &n, s->model.sph.radius, "m", err) ||
+                 nc_h5_write_units(h, "/particles/body", NC_H5_I32, 1, &n, s->model.sph.body, "1", err) ||
+                 nc_h5_write_units(h, "/particles/material", NC_H5_I32, 1, &n, mat, "1", err) ||
+                 nc_h5_series_create_units(h, &o->pos, "/particles/position", NC_H5_F64, 3, row, "m", err) ||
+                 nc_h5_series_create_units(h, &o->vel, "/particles/velocity", NC_H5_F64, 3, row, "m/s", err) ||
+                 nc_h5_series_create_units(h, &o->omega, "/particles/angular_velocity", NC_H5_F64, 3, row, "rad/s", err);
+        /* one vertex cell per sphere, so ParaView shows the centres without a filter */
+        for (size_t i = 0; i < n; i++) mat[i] = (int32_t)i;
+        rc = rc || nc_h5_write_units(h, "/particles/vertex", NC_H5_I32, 1, &n, mat, "1", err);
         free(mat);
         if (rc) return -1;
     }
+    for (size_t b = 0; b < s->model.bod.n; b++) o->n_clusters += s->model.bod.is_cluster[b] != 0;
+    if (o->n_clusters > 0) {
+        hsize_t r3[2] = {o->n_clusters, 3}, r4[2] = {o->n_clusters, 4};
+        if (nc_h5_series_create_units(h, &o->cl_pos, "/clusters/position", NC_H5_F64, 3, r3, "m", err) ||
+            nc_h5_series_create_units(h, &o->cl_quat, "/clusters/orientation", NC_H5_F64, 3, r4, "1", err))
+            return -1;
+    }
     hsize_t wall_dims[2] = {s->n_walls, 3};
-    if (nc_h5_series_create(&o->h5, &o->time, "/time", NC_H5_F64, 1, NULL, err) ||
-        nc_h5_series_create(&o->h5, &o->wall_force, "/walls/force", NC_H5_F64, 3, wall_dims, err) ||
-        nc_h5_series_create(&o->h5, &o->kinetic, "/energy/kinetic", NC_H5_F64, 1, NULL, err))
+    if (nc_h5_series_create_units(h, &o->time, "/time", NC_H5_F64, 1, NULL, "s", err) ||
+        nc_h5_series_create_units(h, &o->wall_force, "/walls/force", NC_H5_F64, 3, wall_dims, "N", err) ||
+        nc_h5_series_create_units(h, &o->kinetic, "/energy/kinetic", NC_H5_F64, 1, NULL, "J", err))
         return -1;
     char names[4096] = "";
     for (size_t w = 0; w < s->n_walls; w++) {
@@ -41,12 +66,11 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
             snprintf(names + used, sizeof names - used, "%smesh%zu", w ? "," : "", w - s->model.n_planes);
         else snprintf(names + used, sizeof names - used, "%snet", w ? "," : "");
     }
-    if (nc_h5_attr_string(&o->h5, "/walls/force", "walls", names, err) ||
-        nc_h5_attr_string(&o->h5, "/", "program", "netcouple dem_solver", err))
+    if (nc_h5_attr_string(h, "/walls/force", "walls", names, err) ||
+        nc_h5_attr_string(h, "/", "program", "netcouple dem_solver", err) ||
+        nc_h5_attr_string(h, "/", "units", "SI: m, s, N, kg", err))
         return -1;
-    o->scratch = malloc((4 * s->model.bod.n + 4) * sizeof *o->scratch);
-    if (!o->scratch) return nc_error_set(err, 1, "dem: out of memory");
-    return nc_h5_flush(&o->h5, err);
+    return nc_h5_flush(h, err);
 }
 
 /* Appends formatted text to a growing buffer (the XDMF grids of all output steps so far, so
@@ -74,186 +98,158 @@ static int text_append(dem_text *t, nc_error *err, const char *format, ...)
     }
 }
 
-static int data_item(dem_text *t, nc_error *err, const char *dims, const char *type,
-                     int precision, const char *path)
+/* One DataItem line: row k of a series (row_rank further dims) or, k < 0, a fixed dataset. */
+static int data_item(dem_text *t, nc_error *err, const char *dataset, long k, int row_rank,
+                     hsize_t d0, hsize_t d1, nc_h5_type type)
 {
-    return text_append(t, err, "          <DataItem Dimensions=\"%s\" NumberType=\"%s\" "
-                               "Precision=\"%d\" Format=\"HDF\">dem.h5:%s</DataItem>\n",
-                       dims, type, precision, path);
+    char item[700];
+    hsize_t dims[2] = {d0, d1};
+    if (k >= 0) nc_xdmf_row_item(item, sizeof item, "dem.h5", dataset, k, row_rank, dims, type);
+    else if (row_rank == 1)
+        snprintf(item, sizeof item, "<DataItem Dimensions=\"%llu\" NumberType=\"%s\" Precision=\"%d\" "
+                 "Format=\"HDF\">dem.h5:%s</DataItem>", (unsigned long long)d0,
+                 type == NC_H5_F64 ? "Float" : "Int", type == NC_H5_F64 ? 8 : 4, dataset);
+    else
+        snprintf(item, sizeof item, "<DataItem Dimensions=\"%llu %llu\" NumberType=\"%s\" Precision=\"%d\" "
+                 "Format=\"HDF\">dem.h5:%s</DataItem>", (unsigned long long)d0, (unsigned long long)d1,
+                 type == NC_H5_F64 ? "Float" : "Int", type == NC_H5_F64 ? 8 : 4, dataset);
+    return text_append(t, err, "          %s\n", item);
 }
 
-/* Formats the grids of output step k (particles, and the net when written). */
-static int format_step(dem_output *o, const dem_sim *s, long k, nc_error *err)
+/* Formats the grids of output step k (particles, and the net when written: its row j). */
+static int format_step(dem_output *o, const dem_sim *s, long k, double time_s, long net_row,
+                       nc_error *err)
 {
     size_t n = s->model.sph.n;
-    char nd[64], n3[64], group[64], p[128];
-    snprintf(nd, sizeof nd, "%zu", n);
-    snprintf(n3, sizeof n3, "%zu 3", n);
-    snprintf(group, sizeof group, "/steps/%06ld", k);
     dem_text *t = &o->xdmf_particles;
     if (n > 0) {
         static const char *const vec[] = {"velocity", "angular_velocity"};
+        static const char *const path[] = {"/particles/velocity", "/particles/angular_velocity"};
         if (text_append(t, err, "      <Grid Name=\"step_%06ld\" GridType=\"Uniform\">\n"
                                 "        <Time Value=\"%.17g\"/>\n"
-                                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\"/>\n"
-                                "        <Geometry GeometryType=\"XYZ\">\n",
-                        k, o->times[k], n))
-            return -1;
-        snprintf(p, sizeof p, "%s/position", group);
-        if (data_item(t, err, n3, "Float", 8, p) ||
+                                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\">\n",
+                        k, time_s, n) ||
+            data_item(t, err, "/particles/vertex", -1, 1, n, 0, NC_H5_I32) ||
+            text_append(t, err, "        </Topology>\n        <Geometry GeometryType=\"XYZ\">\n") ||
+            data_item(t, err, "/particles/position", k, 2, n, 3, NC_H5_F64) ||
             text_append(t, err, "        </Geometry>\n"
                                 "        <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">\n") ||
-            data_item(t, err, nd, "Float", 8, "/particles/radius") ||
+            data_item(t, err, "/particles/radius", -1, 1, n, 0, NC_H5_F64) ||
             text_append(t, err, "        </Attribute>\n"
                                 "        <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">\n") ||
-            data_item(t, err, nd, "Int", 4, "/particles/id") ||
+            data_item(t, err, "/particles/id", -1, 1, n, 0, NC_H5_I32) ||
             text_append(t, err, "        </Attribute>\n"))
             return -1;
-        for (int v = 0; v < 2; v++) {
-            snprintf(p, sizeof p, "%s/%s", group, vec[v]);
+        for (int v = 0; v < 2; v++)
             if (text_append(t, err, "        <Attribute Name=\"%s\" AttributeType=\"Vector\" Center=\"Node\">\n", vec[v]) ||
-                data_item(t, err, n3, "Float", 8, p) ||
+                data_item(t, err, path[v], k, 2, n, 3, NC_H5_F64) ||
                 text_append(t, err, "        </Attribute>\n"))
                 return -1;
-        }
         if (text_append(t, err, "      </Grid>\n")) return -1;
     }
-    if (o->has_net[k]) {
-        char ne[64], nn3[64];
-        snprintf(ne, sizeof ne, "%zu 2", o->net_edges);
-        snprintf(nn3, sizeof nn3, "%zu 3", o->net_nodes);
+    if (net_row >= 0) {
         t = &o->xdmf_net;
         if (text_append(t, err, "      <Grid Name=\"net_%06ld\" GridType=\"Uniform\">\n"
                                 "        <Time Value=\"%.17g\"/>\n"
                                 "        <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" "
                                 "NumberOfElements=\"%zu\">\n",
-                        k, o->times[k], o->net_edges) ||
-            data_item(t, err, ne, "Int", 4, "/net/edges") ||
-            text_append(t, err, "        </Topology>\n        <Geometry GeometryType=\"XYZ\">\n"))
-            return -1;
-        snprintf(p, sizeof p, "%s/net_position", group);
-        if (data_item(t, err, nn3, "Float", 8, p) ||
+                        k, time_s, o->net_edges) ||
+            data_item(t, err, "/net/edges", -1, 2, o->net_edges, 2, NC_H5_I32) ||
+            text_append(t, err, "        </Topology>\n        <Geometry GeometryType=\"XYZ\">\n") ||
+            data_item(t, err, "/net/position", net_row, 2, o->net_nodes, 3, NC_H5_F64) ||
             text_append(t, err, "        </Geometry>\n"
-                                "        <Attribute Name=\"contact_force\" AttributeType=\"Vector\" Center=\"Node\">\n"))
-            return -1;
-        snprintf(p, sizeof p, "%s/net_force", group);
-        if (data_item(t, err, nn3, "Float", 8, p) ||
+                                "        <Attribute Name=\"contact_force\" AttributeType=\"Vector\" Center=\"Node\">\n") ||
+            data_item(t, err, "/net/force", net_row, 2, o->net_nodes, 3, NC_H5_F64) ||
             text_append(t, err, "        </Attribute>\n      </Grid>\n"))
             return -1;
     }
     return 0;
 }
 
-static int write_xdmf(const dem_output *o, nc_error *err)
+static int write_xdmf(const dem_output *o, const char *name, const char *grid,
+                      const dem_text *text, nc_error *err)
 {
     char path[1100], tmp[1120];
-    snprintf(path, sizeof path, "%s/dem.xdmf", o->dir);
+    snprintf(path, sizeof path, "%s/%s", o->dir, name);
     FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
     if (!f) return -1;
-    fputs("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n  <Domain>\n"
-          "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", f);
-    if (o->xdmf_particles.len) fwrite(o->xdmf_particles.data, 1, o->xdmf_particles.len, f);
-    fputs("    </Grid>\n", f);
-    if (o->xdmf_net.len) {
-        fputs("    <Grid Name=\"net\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", f);
-        fwrite(o->xdmf_net.data, 1, o->xdmf_net.len, f);
-        fputs("    </Grid>\n", f);
-    }
-    fputs("  </Domain>\n</Xdmf>\n", f);
+    fprintf(f, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
+               "    <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", grid);
+    fwrite(text->data, 1, text->len, f);
+    fputs("    </Grid>\n  </Domain>\n</Xdmf>\n", f);
     return nc_file_replace_commit(f, tmp, path, err);
 }
 
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err)
 {
-    if ((size_t)o->n_out >= o->times_cap) {
-        size_t cap = o->times_cap ? 2 * o->times_cap : 64;
-        double *t = realloc(o->times, cap * sizeof *t);
-        int *h = realloc(o->has_net, cap * sizeof *h);
-        if (t) o->times = t;
-        if (h) o->has_net = h;
-        if (!t || !h) return nc_error_set(err, 1, "dem: out of memory");
-        o->times_cap = cap;
-    }
     long k = o->n_out;
-    char group[64], p[128];
-    snprintf(group, sizeof group, "/steps/%06ld", k);
     size_t n = s->model.sph.n;
     if (n > 0) {
-        hsize_t d[2] = {n, 3};
-        snprintf(p, sizeof p, "%s/position", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.sph.pos, err)) return -1;
-        snprintf(p, sizeof p, "%s/velocity", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.sph.vel, err)) return -1;
         /* angular velocity of each sphere = that of its body */
-        double *w = malloc(3 * n * sizeof *w);
-        if (!w) return nc_error_set(err, 1, "dem: out of memory");
+        double *w = o->scratch;
         for (size_t i = 0; i < n; i++)
             memcpy(w + 3 * i, s->model.bod.omega + 3 * (size_t)s->model.sph.body[i], 3 * sizeof *w);
-        snprintf(p, sizeof p, "%s/angular_velocity", group);
-        int rc = nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, w, err);
-        free(w);
-        if (rc) return -1;
+        if (nc_h5_series_append(&o->pos, s->model.sph.pos, err) ||
+            nc_h5_series_append(&o->vel, s->model.sph.vel, err) ||
+            nc_h5_series_append(&o->omega, w, err))
+            return -1;
     }
-    size_t nc = 0;
-    for (size_t b = 0; b < s->model.bod.n; b++) nc += s->model.bod.is_cluster[b] != 0;
-    if (nc > 0) {
+    if (o->n_clusters > 0) {
         size_t c = 0;
         for (size_t b = 0; b < s->model.bod.n; b++)
             if (s->model.bod.is_cluster[b]) memcpy(o->scratch + 4 * c++, s->model.bod.quat + 4 * b, 4 * sizeof(double));
-        hsize_t d4[2] = {nc, 4}, d3[2] = {nc, 3};
-        snprintf(p, sizeof p, "%s/cluster_orientation", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d4, o->scratch, err)) return -1;
+        if (nc_h5_series_append(&o->cl_quat, o->scratch, err)) return -1;
         c = 0;
         for (size_t b = 0; b < s->model.bod.n; b++)
             if (s->model.bod.is_cluster[b]) memcpy(o->scratch + 3 * c++, s->model.bod.pos + 3 * b, 3 * sizeof(double));
-        snprintf(p, sizeof p, "%s/cluster_position", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d3, o->scratch, err)) return -1;
+        if (nc_h5_series_append(&o->cl_pos, o->scratch, err)) return -1;
     }
-    o->has_net[k] = 0;
+    long net_row = -1;
     if (s->model.net.active) {
         if (!o->net_written) {
             hsize_t de[2] = {s->model.net.n_edges, 2}, dn = s->model.net.n_nodes;
-            if (nc_h5_write(&o->h5, "/net/edges", NC_H5_I32, 2, de, s->model.net.edges, err) ||
-                nc_h5_write(&o->h5, "/net/node_ids", NC_H5_I32, 1, &dn, s->model.net.node_ids, err))
+            hsize_t row[2] = {s->model.net.n_nodes, 3};
+            if (nc_h5_write_units(&o->h5, "/net/edges", NC_H5_I32, 2, de, s->model.net.edges, "1", err) ||
+                nc_h5_write_units(&o->h5, "/net/node_ids", NC_H5_I32, 1, &dn, s->model.net.node_ids, "1", err) ||
+                nc_h5_attr_double(&o->h5, "/net", "first_output_step", (double)k, err) ||
+                nc_h5_series_create_units(&o->h5, &o->net_pos, "/net/position", NC_H5_F64, 3, row, "m", err) ||
+                nc_h5_series_create_units(&o->h5, &o->net_force, "/net/force", NC_H5_F64, 3, row, "N", err))
                 return -1;
             o->net_written = 1;
             o->net_nodes = s->model.net.n_nodes;
             o->net_edges = s->model.net.n_edges;
         }
-        hsize_t d[2] = {s->model.net.n_nodes, 3};
-        snprintf(p, sizeof p, "%s/net_position", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, s->model.net.cur, err)) return -1;
-        snprintf(p, sizeof p, "%s/net_force", group);
-        if (nc_h5_write(&o->h5, p, NC_H5_F64, 2, d, net_force ? net_force : s->model.net.force, err))
+        if (s->model.net.n_nodes != o->net_nodes)
+            return nc_error_set(err, 1, "%s: the net wall changed from %zu to %zu nodes", o->h5.path,
+                                o->net_nodes, s->model.net.n_nodes);
+        if (nc_h5_series_append(&o->net_pos, s->model.net.cur, err) ||
+            nc_h5_series_append(&o->net_force, net_force ? net_force : s->model.net.force, err))
             return -1;
-        o->has_net[k] = 1;
+        net_row = o->net_rows++;
     }
     double ke = dem_sim_kinetic_energy(s);
     if (nc_h5_series_append(&o->time, &s->time_s, err) ||
         nc_h5_series_append(&o->wall_force, s->wall_force, err) ||
         nc_h5_series_append(&o->kinetic, &ke, err))
         return -1;
-    o->times[k] = s->time_s;
     o->n_out++;
     if (nc_h5_flush(&o->h5, err)) return -1;
-    if (format_step(o, s, k, err)) return -1;
-    return write_xdmf(o, err);
+    if (format_step(o, s, k, s->time_s, net_row, err)) return -1;
+    if (n > 0 && write_xdmf(o, "particles.xdmf", "particles", &o->xdmf_particles, err)) return -1;
+    if (net_row >= 0 && write_xdmf(o, "dem_net.xdmf", "net", &o->xdmf_net, err)) return -1;
+    return 0;
 }
 
 void dem_output_close(dem_output *o)
 {
-    nc_h5_series_close(&o->time);
-    nc_h5_series_close(&o->wall_force);
-    nc_h5_series_close(&o->kinetic);
+    nc_h5_series *all[] = {&o->time, &o->wall_force, &o->kinetic, &o->pos, &o->vel, &o->omega,
+                           &o->cl_pos, &o->cl_quat, &o->net_pos, &o->net_force};
+    for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     nc_h5_close(&o->h5);
-    free(o->times);
-    free(o->has_net);
     free(o->scratch);
     free(o->xdmf_particles.data);
     free(o->xdmf_net.data);
     memset(&o->xdmf_particles, 0, sizeof o->xdmf_particles);
     memset(&o->xdmf_net, 0, sizeof o->xdmf_net);
-    o->times = NULL;
-    o->has_net = NULL;
     o->scratch = NULL;
 }

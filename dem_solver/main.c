@@ -77,32 +77,45 @@ static int parse_args(int argc, char **argv, options *o)
     return 0;
 }
 
-/* Runs until end_time_s, or until *stop is set (returns 1 then, after writing the state). */
+/* Runs until end_time_s, or until *stop is set (returns 1 then, after writing the state).
+ * Output falls on exact multiples of output_interval_s and the run ends exactly at
+ * end_time_s: the step that would pass one of these times is shortened to meet it (a
+ * shorter step is never less stable), and the clock is set to that time, so repeated sums
+ * of dt do not drift. */
 static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic_t *stop,
                           nc_error *err)
 {
     double dt = s->model.prm.dt_s, end = s->model.prm.end_time_s, interval = s->model.prm.output_interval_s;
-    long steps = (long)ceil(end / dt - 1e-9);
+    long estimate = (long)ceil(end / dt - 1e-9);
     printf("dem_solver: %zu spheres in %zu bodies, dt = %.3e s (critical %.3e s), %ld steps\n",
-           s->model.sph.n, s->model.bod.n, dt, dem_sim_critical_dt(s), steps);
+           s->model.sph.n, s->model.bod.n, dt, dem_sim_critical_dt(s), estimate);
     if (dem_output_write(out, s, NULL, err)) return -1;
-    double next_out = interval;
     double t0 = nc_clock_now_s();
-    for (long k = 0; k < steps; k++) {
+    long steps = 0, next_out = 1;
+    while (s->time_s < end) {
         if (*stop) {
             if (dem_output_write(out, s, NULL, err)) return -1;
             fprintf(stderr, "dem_solver: interrupted at t = %g s; results so far are in %s\n",
                     s->time_s, out->dir);
             return 1;
         }
-        if (dem_sim_step(s, dt, err)) return nc_error_prefix(err, "step %ld (t = %g s)", k, s->time_s);
-        if (s->time_s >= next_out - 0.5 * dt || k == steps - 1) {
+        double target = interval > 0.0 ? fmin((double)next_out * interval, end) : end;
+        double h = dt;
+        int reaches = 0;
+        if (s->time_s + dt >= target - 1e-6 * dt) {
+            h = target - s->time_s;
+            reaches = 1;
+        }
+        if (dem_sim_step(s, h, err)) return nc_error_prefix(err, "step %ld (t = %g s)", steps, s->time_s);
+        steps++;
+        if (reaches) s->time_s = target;
+        if (reaches || interval <= 0.0) {
             if (dem_output_write(out, s, NULL, err)) return -1;
-            while (next_out <= s->time_s + 0.5 * dt) next_out += interval > 0.0 ? interval : dt;
+            if (reaches && interval > 0.0 && target < end) next_out++;
         }
     }
     double wall = nc_clock_now_s() - t0;
-    printf("dem_solver: done, t = %g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
+    printf("dem_solver: done, t = %.9g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
            s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->model.sph.n / wall : 0.0,
            s->contact.list.n);
     return 0;

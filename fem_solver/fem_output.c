@@ -1,9 +1,11 @@
 /* fem_output — HDF5 results and the XDMF index ParaView opens (layout in fem_output.h). */
 #include "fem_output.h"
 
+#include "fem_element_cable.h"
 #include "nc_file.h"
 #include "nc_clock.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,40 +13,76 @@
 int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error *err)
 {
     memset(o, 0, sizeof *o);
+    o->max_u_node = -1;
     snprintf(o->dir, sizeof o->dir, "%s", dir);
     char path[700];
     snprintf(path, sizeof path, "%s/fem.h5", dir);
-    o->buf = malloc(3 * (size_t)(m->n_nodes > m->n_elements ? m->n_nodes : m->n_elements) * sizeof(double) + 8);
-    if (!o->buf) return nc_error_set(err, 1, "out of memory");
-    if (nc_h5_create(&o->h5, path, err)) return -1;
-    o->open = 1;
-    hsize_t n = (hsize_t)m->n_nodes, e = (hsize_t)m->n_elements, p = (hsize_t)m->n_monitor;
-    hsize_t dx[2] = {n, 3}, de[2] = {e, 2}, dm[1] = {p}, row_n3[2] = {n, 3}, row_e[1] = {e},
-            row_p3[2] = {p, 3};
-    if (nc_h5_write(&o->h5, "/mesh/coordinates", NC_H5_F64, 2, dx, m->X, err) ||
-        nc_h5_write(&o->h5, "/mesh/elements", NC_H5_I32, 2, de, m->conn, err) ||
-        nc_h5_write(&o->h5, "/mesh/element_set", NC_H5_I32, 1, &e, m->element_set, err) ||
-        nc_h5_write(&o->h5, "/monitor/node_ids", NC_H5_I32, 1, dm, m->monitor_nodes, err) ||
-        nc_h5_attr_string(&o->h5, "/", "program", "netcouple fem_solver", err) ||
-        nc_h5_attr_string(&o->h5, "/", "units", "SI: m, s, N, kg", err) ||
-        nc_h5_series_create(&o->h5, &o->time, "/output/time", NC_H5_F64, 1, NULL, err) ||
-        nc_h5_series_create(&o->h5, &o->step, "/output/step", NC_H5_I32, 1, NULL, err) ||
-        nc_h5_series_create(&o->h5, &o->disp, "/output/displacement", NC_H5_F64, 3, row_n3, err) ||
-        nc_h5_series_create(&o->h5, &o->vel, "/output/velocity", NC_H5_F64, 3, row_n3, err) ||
-        nc_h5_series_create(&o->h5, &o->pos, "/output/position", NC_H5_F64, 3, row_n3, err) ||
-        nc_h5_series_create(&o->h5, &o->axial, "/output/axial_force", NC_H5_F64, 2, row_e, err) ||
-        nc_h5_series_create(&o->h5, &o->mon_time, "/monitor/time", NC_H5_F64, 1, NULL, err) ||
-        nc_h5_series_create(&o->h5, &o->mon_disp, "/monitor/displacement", NC_H5_F64, 3, row_p3, err) ||
-        nc_h5_series_create(&o->h5, &o->mon_vel, "/monitor/velocity", NC_H5_F64, 3, row_p3, err) ||
-        nc_h5_flush(&o->h5, err))
+    size_t big = (size_t)(m->n_nodes > m->n_elements ? m->n_nodes : m->n_elements);
+    o->buf = malloc(3 * big * sizeof(double) + 8);
+    o->force = malloc(3 * big * sizeof(double) + 8);
+    o->support_nodes = malloc((size_t)m->n_nodes * sizeof(int) + 8);
+    int *support_dofs = malloc(3 * (size_t)m->n_nodes * sizeof(int) + 8);
+    if (!o->buf || !o->force || !o->support_nodes || !support_dofs) {
+        free(support_dofs);
+        return nc_error_set(err, 1, "%s: out of memory", path);
+    }
+    for (int i = 0; i < m->n_nodes; i++) {
+        const unsigned char *fx = m->fixed + 3 * i;
+        if (!(fx[0] || fx[1] || fx[2])) continue;
+        for (int c = 0; c < 3; c++) support_dofs[3 * o->n_support + c] = fx[c] != 0;
+        o->support_nodes[o->n_support++] = i;
+    }
+    if (nc_h5_create(&o->h5, path, err)) {
+        free(support_dofs);
         return -1;
-    return 0;
+    }
+    o->open = 1;
+    hsize_t n = (hsize_t)m->n_nodes, e = (hsize_t)m->n_elements, p = (hsize_t)m->n_monitor,
+            r = (hsize_t)o->n_support;
+    hsize_t dx[2] = {n, 3}, de[2] = {e, 2}, dm[1] = {p}, dr[2] = {r, 3}, row_n3[2] = {n, 3},
+            row_e[1] = {e}, row_p3[2] = {p, 3}, row_r3[2] = {r, 3};
+    nc_h5_file *h = &o->h5;
+    int rc = nc_h5_write_units(h, "/mesh/coordinates", NC_H5_F64, 2, dx, m->X, "m", err) ||
+             nc_h5_write_units(h, "/mesh/elements", NC_H5_I32, 2, de, m->conn, "1", err) ||
+             nc_h5_write_units(h, "/mesh/element_set", NC_H5_I32, 1, &e, m->element_set, "1", err) ||
+             nc_h5_write_units(h, "/mesh/reference_length", NC_H5_F64, 1, &e, m->L0, "m", err) ||
+             nc_h5_write_units(h, "/mesh/support_nodes", NC_H5_I32, 1, &r, o->support_nodes, "1", err) ||
+             nc_h5_write_units(h, "/mesh/support_dofs", NC_H5_I32, 2, dr, support_dofs, "1", err) ||
+             nc_h5_write_units(h, "/monitor/node_ids", NC_H5_I32, 1, dm, m->monitor_nodes, "1", err) ||
+             nc_h5_attr_string(h, "/", "program", "netcouple fem_solver", err) ||
+             nc_h5_attr_string(h, "/", "units", "SI: m, s, N, kg", err) ||
+             nc_h5_series_create_units(h, &o->time, "/output/time", NC_H5_F64, 1, NULL,
+                                       m->settings.type == FEM_STATIC ? "1" : "s", err) ||
+             nc_h5_series_create_units(h, &o->step, "/output/step", NC_H5_I32, 1, NULL, "1", err) ||
+             nc_h5_series_create_units(h, &o->load, "/output/load_factor", NC_H5_F64, 1, NULL, "1", err) ||
+             nc_h5_series_create_units(h, &o->disp, "/output/displacement", NC_H5_F64, 3, row_n3, "m", err) ||
+             nc_h5_series_create_units(h, &o->vel, "/output/velocity", NC_H5_F64, 3, row_n3, "m/s", err) ||
+             nc_h5_series_create_units(h, &o->pos, "/output/position", NC_H5_F64, 3, row_n3, "m", err) ||
+             nc_h5_series_create_units(h, &o->axial, "/output/axial_force", NC_H5_F64, 2, row_e, "N", err) ||
+             nc_h5_series_create_units(h, &o->strain, "/output/strain", NC_H5_F64, 2, row_e, "1", err) ||
+             nc_h5_series_create_units(h, &o->reaction, "/output/reaction", NC_H5_F64, 3, row_r3, "N", err) ||
+             nc_h5_series_create_units(h, &o->mon_time, "/monitor/time", NC_H5_F64, 1, NULL,
+                                       m->settings.type == FEM_STATIC ? "1" : "s", err) ||
+             nc_h5_series_create_units(h, &o->mon_disp, "/monitor/displacement", NC_H5_F64, 3, row_p3, "m", err) ||
+             nc_h5_series_create_units(h, &o->mon_vel, "/monitor/velocity", NC_H5_F64, 3, row_p3, "m/s", err) ||
+             nc_h5_flush(h, err);
+    free(support_dofs);
+    return rc ? -1 : 0;
 }
 
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
 {
     const fem_model *m = s->m;
     double *b = o->buf;
+    for (int i = 0; i < m->n_nodes; i++) {
+        const double *u = s->cur.u + 3 * i;
+        double mag = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        if (o->max_u_node < 0 || mag > o->max_u_m) {
+            o->max_u_m = mag;
+            o->max_u_time_s = time_s;
+            o->max_u_node = i;
+        }
+    }
     if (nc_h5_series_append(&o->mon_time, &time_s, err)) return -1;
     for (int i = 0; i < m->n_monitor; i++)
         for (int c = 0; c < 3; c++) b[3 * i + c] = s->cur.u[3 * m->monitor_nodes[i] + c];
@@ -54,39 +92,74 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
     return nc_h5_series_append(&o->mon_vel, b, err);
 }
 
+void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r)
+{
+    /* The support takes what the net's own balance leaves on a prescribed dof:
+     * R = F_int(u) + M a + C v - lambda f_model - f_coupling, C = tau M + kappa K_T. */
+    const fem_model *m = s->m;
+    double *f = o->force;
+    const double *u = s->cur.u, *v = s->cur.v, *a = s->cur.a;
+    const double tau = m->tau_per_s, kappa = m->kappa_s;
+    for (int i = 0; i < 3 * m->n_nodes; i++) f[i] = -lambda * s->f_model[i] - s->f_coupling[i];
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double d[3], fl[3], Kb[9];
+        int slack;
+        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
+        fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], fl, Kb, &slack);
+        double m11, m12;
+        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        for (int c = 0; c < 3; c++) {
+            double kv = 0.0;
+            if (kappa != 0.0)
+                for (int j = 0; j < 3; j++) kv += Kb[3 * c + j] * (v[l + j] - v[k + j]);
+            f[l + c] += fl[c] + kappa * kv;
+            f[k + c] -= fl[c] + kappa * kv;
+            double wk = a[k + c] + tau * v[k + c], wl = a[l + c] + tau * v[l + c];
+            f[k + c] += m11 * wk + m12 * wl;
+            f[l + c] += m12 * wk + m11 * wl;
+        }
+    }
+    for (int i = 0; i < o->n_support; i++) {
+        int node = o->support_nodes[i];
+        for (int c = 0; c < 3; c++)
+            r[3 * i + c] = m->fixed[3 * node + c] ? f[3 * node + c] : 0.0;
+    }
+}
+
+/* One attribute of a grid: row i of a series. */
+static void attribute(FILE *f, const char *name, const char *kind, const char *center,
+                      const char *dataset, long i, int row_rank, const hsize_t *row_dims)
+{
+    char item[600];
+    nc_xdmf_row_item(item, sizeof item, "fem.h5", dataset, i, row_rank, row_dims, NC_H5_F64);
+    fprintf(f, "    <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">\n     %s\n"
+               "    </Attribute>\n", name, kind, center, item);
+}
+
 static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
 {
-    char path[700], tmp[710];
+    char path[700], tmp[710], item[600];
     snprintf(path, sizeof path, "%s/fem.xdmf", o->dir);
     FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
     if (!f) return -1;
-    int n = m->n_nodes, e = m->n_elements, k = o->n_out;
-    fprintf(f, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-               "<Xdmf Version=\"2.0\">\n <Domain>\n"
+    int e = m->n_elements, k = o->n_out;
+    hsize_t n3[2] = {(hsize_t)m->n_nodes, 3}, e1[1] = {(hsize_t)e};
+    fprintf(f, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
                "  <Grid Name=\"net\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
     for (int i = 0; i < k; i++) {
         fprintf(f, "   <Grid Name=\"step%d\" GridType=\"Uniform\">\n    <Time Value=\"%.17g\"/>\n", i, o->times[i]);
         fprintf(f, "    <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"%d\">\n"
-                   "     <DataItem Dimensions=\"%d 2\" NumberType=\"Int\" Format=\"HDF\">fem.h5:/mesh/elements</DataItem>\n"
+                   "     <DataItem Dimensions=\"%d 2\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">fem.h5:/mesh/elements</DataItem>\n"
                    "    </Topology>\n", e, e);
         /* current coordinates, so the net deforms without a Warp filter */
-        const char *fields[3][3] = {{"Geometry", "", "/output/position"},
-                                    {"Attribute", "displacement", "/output/displacement"},
-                                    {"Attribute", "velocity", "/output/velocity"}};
-        for (int a = 0; a < 3; a++) {
-            if (a == 0) fprintf(f, "    <Geometry GeometryType=\"XYZ\">\n");
-            else fprintf(f, "    <Attribute Name=\"%s\" AttributeType=\"Vector\" Center=\"Node\">\n", fields[a][1]);
-            fprintf(f, "     <DataItem ItemType=\"HyperSlab\" Dimensions=\"%d 3\" Type=\"HyperSlab\">\n"
-                       "      <DataItem Dimensions=\"3 3\" Format=\"XML\">%d 0 0 1 1 1 1 %d 3</DataItem>\n"
-                       "      <DataItem Dimensions=\"%d %d 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">fem.h5:%s</DataItem>\n"
-                       "     </DataItem>\n", n, i, n, k, n, fields[a][2]);
-            fprintf(f, a == 0 ? "    </Geometry>\n" : "    </Attribute>\n");
-        }
-        fprintf(f, "    <Attribute Name=\"axial_force\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-                   "     <DataItem ItemType=\"HyperSlab\" Dimensions=\"%d\" Type=\"HyperSlab\">\n"
-                   "      <DataItem Dimensions=\"3 2\" Format=\"XML\">%d 0 1 1 1 %d</DataItem>\n"
-                   "      <DataItem Dimensions=\"%d %d\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">fem.h5:/output/axial_force</DataItem>\n"
-                   "     </DataItem>\n    </Attribute>\n   </Grid>\n", e, i, e, k, e);
+        nc_xdmf_row_item(item, sizeof item, "fem.h5", "/output/position", i, 2, n3, NC_H5_F64);
+        fprintf(f, "    <Geometry GeometryType=\"XYZ\">\n     %s\n    </Geometry>\n", item);
+        attribute(f, "displacement", "Vector", "Node", "/output/displacement", i, 2, n3);
+        attribute(f, "velocity", "Vector", "Node", "/output/velocity", i, 2, n3);
+        attribute(f, "axial_force", "Scalar", "Cell", "/output/axial_force", i, 1, e1);
+        attribute(f, "strain", "Scalar", "Cell", "/output/strain", i, 1, e1);
+        fprintf(f, "   </Grid>\n");
     }
     fprintf(f, "  </Grid>\n </Domain>\n</Xdmf>\n");
     return nc_file_replace_commit(f, tmp, path, err);
@@ -96,11 +169,25 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
 {
     const fem_model *m = s->m;
     int step = (int)s->cur.step;
+    double lambda = m->settings.type == FEM_STATIC ? time_s : fem_analysis_load_factor(s, time_s);
     for (int i = 0; i < 3 * m->n_nodes; i++) o->buf[i] = m->X[i] + s->cur.u[i];
     if (nc_h5_series_append(&o->time, &time_s, err) || nc_h5_series_append(&o->step, &step, err) ||
+        nc_h5_series_append(&o->load, &lambda, err) ||
         nc_h5_series_append(&o->disp, s->cur.u, err) || nc_h5_series_append(&o->vel, s->cur.v, err) ||
         nc_h5_series_append(&o->pos, o->buf, err) || nc_h5_series_append(&o->axial, s->axial, err))
         return -1;
+    for (int e = 0; e < m->n_elements; e++) {
+        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double len2 = 0.0;
+        for (int c = 0; c < 3; c++) {
+            double d = o->buf[l + c] - o->buf[k + c];
+            len2 += d * d;
+        }
+        o->force[e] = (sqrt(len2) - m->L0[e]) / m->L0[e];
+    }
+    if (nc_h5_series_append(&o->strain, o->force, err)) return -1;
+    fem_output_reactions(o, s, lambda, o->buf);
+    if (nc_h5_series_append(&o->reaction, o->buf, err)) return -1;
     if (o->n_out == o->cap) {
         int cap = o->cap ? 2 * o->cap : 64;
         double *t = realloc(o->times, (size_t)cap * sizeof *t);
@@ -113,6 +200,7 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     /* The XDMF file grows with the number of output steps; rewriting it after each of
      * thousands of steps would cost O(k^2) bytes, so beyond 200 steps it is rewritten at
      * most every 2 s of wall time (and always on close). */
+    o->model = m;
     double now = nc_clock_now_s();
     if (o->n_out <= 200 || now - o->last_xdmf_s > 2.0) {
         o->last_xdmf_s = now;
@@ -120,23 +208,29 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
         return write_xdmf(o, m, err);
     }
     o->xdmf_current = 0;
-    o->model = m;
     return 0;
 }
 
 void fem_output_close(fem_output *o)
 {
     if (!o) return;
-    nc_h5_series *all[] = {&o->time, &o->step, &o->disp, &o->vel, &o->pos, &o->axial,
-                           &o->mon_time, &o->mon_disp, &o->mon_vel};
+    nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
+                           &o->strain, &o->reaction, &o->mon_time, &o->mon_disp, &o->mon_vel};
     if (o->open) {
         nc_error ignored;
         if (!o->xdmf_current && o->model) write_xdmf(o, o->model, &ignored);
+        if (o->max_u_node >= 0 && o->disp.dataset > 0) {
+            nc_h5_attr_double(&o->h5, "/output/displacement", "max_magnitude", o->max_u_m, &ignored);
+            nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);
+            nc_h5_attr_double(&o->h5, "/output/displacement", "max_node", o->max_u_node, &ignored);
+        }
         for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
         nc_h5_flush(&o->h5, &ignored);
         nc_h5_close(&o->h5);
     }
     free(o->times);
     free(o->buf);
+    free(o->force);
+    free(o->support_nodes);
     memset(o, 0, sizeof *o);
 }

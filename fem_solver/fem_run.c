@@ -7,16 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-static double max_displacement(const fem_analysis *s)
-{
-    double best = 0;
-    for (int i = 0; i < s->m->n_nodes; i++) {
-        const double *u = s->cur.u + 3 * i;
-        best = fmax(best, sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
-    }
-    return best;
-}
-
 int fem_run_standalone(const fem_model *m, const char *output_dir,
                        const volatile sig_atomic_t *stop, fem_run_summary *summary,
                        nc_error *err)
@@ -27,6 +17,7 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
     fem_analysis s;
     fem_output out;
     memset(&out, 0, sizeof out);
+    out.max_u_node = -1;
     int rc = -1;
     if (fem_analysis_init(&s, m, err)) goto done;
     if (fem_output_open(&out, m, output_dir, err)) goto done;
@@ -79,10 +70,11 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
     rc = 0;
 done:
     sum.output_steps = out.n_out;
-    if (s.m) {
-        sum.max_displacement_m = max_displacement(&s);
-        sum.stats = s.stats;
-    }
+    /* the run's largest |u| over every step, not the last step's */
+    sum.max_displacement_m = out.max_u_node >= 0 ? out.max_u_m : 0.0;
+    sum.max_displacement_time_s = out.max_u_node >= 0 ? out.max_u_time_s : -1.0;
+    sum.max_displacement_node = out.max_u_node;
+    if (s.m) sum.stats = s.stats;
     fem_output_close(&out);
     fem_analysis_free(&s);
     sum.wall_s = nc_clock_now_s() - t0;

@@ -18,7 +18,9 @@ typedef struct fem_run_summary {
     long newton_iterations;     /* total */
     long output_steps;
     double final_time_s;
-    double max_displacement_m;  /* largest nodal displacement magnitude at the end */
+    double max_displacement_m;  /* largest nodal |u| of the run (standalone; coupled: at the end) */
+    double max_displacement_time_s; /* when it occurred (load factor for statics); -1 unknown */
+    int max_displacement_node;  /* where; -1 unknown */
     double wall_s;
     int failed_solves;          /* coupled: SOLVE commands answered with an error */
     fem_stats stats;

@@ -83,19 +83,28 @@ int main(int argc, char **argv)
         return 1;
     }
     fem_run_summary sum;
+    memset(&sum, 0, sizeof sum);
+    sum.max_displacement_node = -1;
     int rc;
     if (endpoint) {
         fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0)};
         rc = fem_run_coupled(&model, output, &opt, stop, &sum, &err);
+        sum.max_displacement_node = -1;   /* the coupled summary holds the last step's value */
     } else {
         rc = fem_run_standalone(&model, output, stop, &sum, &err);
     }
+    char where[96] = "";
+    if (sum.max_displacement_node >= 0)
+        snprintf(where, sizeof where, " at %s %g, node %d",
+                 model.settings.type == FEM_STATIC ? "load factor" : "t =",
+                 sum.max_displacement_time_s, sum.max_displacement_node);
     fprintf(stderr,
             "fem_solver: %s: %d nodes, %d elements, %ld steps, %ld Newton iterations, "
-            "%ld output steps, t = %g, max |u| = %.6g m, %.3f s (assembly %.3f s, "
+            "%ld output steps, t = %g, max |u| = %.6g m%s%s, %.3f s (assembly %.3f s, "
             "factorisation %.3f s, %ld LU fallbacks)\n",
             input, model.n_nodes, model.n_elements, sum.steps, sum.newton_iterations,
-            sum.output_steps, sum.final_time_s, sum.max_displacement_m, sum.wall_s,
+            sum.output_steps, sum.final_time_s, sum.max_displacement_m, where,
+            sum.max_displacement_node < 0 ? " (at the end)" : "", sum.wall_s,
             sum.stats.assembly_s, sum.stats.factor_s, sum.stats.lu_factorizations);
     fem_model_free(&model);
     if (rc == 1) {

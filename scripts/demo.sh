@@ -32,8 +32,10 @@ cat <<MSG
 
 demo: done.
   results (HDF5):  $out/fem.h5  $out/dem.h5  $out/coupling.h5
-  ParaView:        paraview $out/fem.xdmf $out/dem.xdmf
-                   (net: colour by axial_force; spheres: Glyph filter, Sphere, scale by 'radius' x2)
+  ParaView:        paraview $out/fem.xdmf $out/particles.xdmf
+                   (net: colour by axial_force; rocks: Glyph filter, Sphere, scale array 'radius',
+                   scale factor 2; the DEM's copy of the net is in $out/dem_net.xdmf)
+  picture:         xvfb-run -a pvpython scripts/paraview_view.py $out   (writes $out/paraview.png)
   plots (PNG):     $(ls "$out"/plots/*.png | tr '\n' ' ')
   iterations log:  $out/iterations.log   (step time iterations converged residual)
 MSG

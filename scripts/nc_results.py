@@ -1,7 +1,10 @@
 """Reading netcouple results (fem.h5, dem.h5, coupling.h5) for plots and checks.
 
 Only the dataset names that the programs document as stable are used:
-fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3)
+fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3),
+         /output/{time,axial_force,strain,reaction}, /mesh/support_nodes
+dem.h5   /time, /particles/{radius,body,position,velocity,angular_velocity},
+         /clusters/{position,orientation}, /net/{position,force}, /energy/kinetic
 coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact}
              /iterations/{step,iteration,residual,alpha,contact_force}
 contact_intervals / contact_free_time: contact windows of coupled runs or of a fine-step reference
@@ -31,6 +34,64 @@ def load_monitor(results_dir):
     with h5py.File(path, "r") as f:
         return Monitor(np.array(f["/monitor/time"]), np.array(f["/monitor/node_ids"]),
                        np.array(f["/monitor/displacement"]))
+
+
+class Dem:
+    """DEM output steps as arrays over time: time [k], position/velocity/angular_velocity
+    [k, n, 3], radius/body [n]; cluster_position [k, c, 3] and cluster_orientation [k, c, 4]
+    (None without clusters); net_position/net_force [j, nodes, 3] from output step
+    net_first_step on (None outside coupled runs); kinetic [k] (J)."""
+
+    def __init__(self, path):
+        with h5py.File(path, "r") as f:
+            def get(name):
+                return np.array(f[name]) if name in f else None
+            self.time = np.array(f["/time"])
+            self.radius = get("/particles/radius")
+            self.body = get("/particles/body")
+            self.position = get("/particles/position")
+            self.velocity = get("/particles/velocity")
+            self.angular_velocity = get("/particles/angular_velocity")
+            self.cluster_position = get("/clusters/position")
+            self.cluster_orientation = get("/clusters/orientation")
+            self.net_position = get("/net/position")
+            self.net_force = get("/net/force")
+            self.net_first_step = int(f["/net"].attrs["first_output_step"]) if "/net" in f else None
+            self.kinetic = get("/energy/kinetic")
+
+
+def load_dem(results_dir):
+    return Dem(os.path.join(results_dir, "dem.h5"))
+
+
+class Fem:
+    """FEM output steps: time, load_factor [k], axial_force/strain [k, m], reaction
+    [k, supports, 3] at support_nodes, displacement [k, n, 3]; max_u (m), max_time, max_node."""
+
+    def __init__(self, path):
+        with h5py.File(path, "r") as f:
+            self.time = np.array(f["/output/time"])
+            self.load_factor = np.array(f["/output/load_factor"])
+            self.axial_force = np.array(f["/output/axial_force"])
+            self.strain = np.array(f["/output/strain"])
+            self.reaction = np.array(f["/output/reaction"])
+            self.support_nodes = np.array(f["/mesh/support_nodes"])
+            self.displacement = np.array(f["/output/displacement"])
+            a = f["/output/displacement"].attrs
+            self.max_u = float(a.get("max_magnitude", np.nan))
+            self.max_time = float(a.get("max_time", np.nan))
+            self.max_node = int(a.get("max_node", -1))
+
+
+def load_fem(results_dir):
+    return Fem(os.path.join(results_dir, "fem.h5"))
+
+
+def units(path, dataset):
+    """The "units" attribute of a dataset as a str."""
+    with h5py.File(path, "r") as f:
+        u = f[dataset].attrs["units"]
+        return u.decode() if isinstance(u, bytes) else str(u)
 
 
 class Coupling:

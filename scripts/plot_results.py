@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Plots of one coupled run: monitor-node deflection, contact force, interface iterations,
-and the contact force over the iterations of the step that needed the most.
+"""Plots of one coupled run: monitor-node deflection, largest rope force and the support
+reactions over time, contact force, interface iterations, and the contact force over the
+iterations of the step that needed the most.
 
     scripts/plot_results.py RESULTS_DIR [--out DIR] [--node ID] [--component z]
 """
@@ -52,6 +53,24 @@ def main():
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     written.append(path)
+
+    fem = nc_results.load_fem(args.results)
+    if len(fem.time):
+        fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        axes[0].plot(fem.time, fem.axial_force.max(axis=1) / 1e3)
+        axes[0].set_ylabel("largest axial force [kN]")
+        axes[0].grid(True, alpha=0.3)
+        for i, node in enumerate(fem.support_nodes):
+            axes[1].plot(fem.time, np.linalg.norm(fem.reaction[:, i], axis=1) / 1e3, label="node %d" % node)
+        axes[1].set_ylabel("support reaction |R| [kN]")
+        axes[1].set_xlabel("time [s]")
+        axes[1].grid(True, alpha=0.3)
+        if len(fem.support_nodes) <= 8:
+            axes[1].legend(fontsize=8)
+        path = os.path.join(out, "forces_reactions.png")
+        fig.tight_layout()
+        fig.savefig(path, dpi=120)
+        written.append(path)
 
     coupling_path = os.path.join(args.results, "coupling.h5")
     if os.path.exists(coupling_path):

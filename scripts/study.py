@@ -376,13 +376,12 @@ def load_dem(run_dir):
     import h5py
     r = {}
     with h5py.File(os.path.join(run_dir, "dem.h5"), "r") as f:
-        keys = sorted(f["steps"].keys())
         r["t"] = np.array(f["/time"])
-        r["pos"] = np.array([f["steps"][k]["position"][:] for k in keys])
-        r["vel"] = np.array([f["steps"][k]["velocity"][:] for k in keys])
+        r["pos"] = np.array(f["/particles/position"])
+        r["vel"] = np.array(f["/particles/velocity"])
         r["radius"] = np.array(f["/particles/radius"])
-        if "cluster_position" in f["steps"][keys[0]]:
-            r["cpos"] = np.array([f["steps"][k]["cluster_position"][:] for k in keys])
+        if "/clusters/position" in f:
+            r["cpos"] = np.array(f["/clusters/position"])
     return r
 
 

@@ -4,7 +4,7 @@ only Debian's python3 with h5py and numpy).
 
     from xdmf_check import check_xdmf, grid_counts, self_test
     problems = check_xdmf("out/fem.xdmf", "/output/time")   # [] when the file is right
-    grid_counts("out/dem.xdmf")                              # {"particles": 101}
+    grid_counts("out/particles.xdmf")                        # {"particles": 101}
     self_test("out", "fem.xdmf", "/output/time", scratch)    # [] when every corruption is caught
 
     /usr/bin/python3 tests/xdmf_check.py FILE.xdmf TIMES_DATASET   (exit 1 and the problems)
@@ -15,14 +15,16 @@ check_xdmf(path, times) reports, per DataItem and grid:
   and a dataset there with exactly the declared Dimensions, NumberType and Precision (XDMF's
   defaults: Float, 4 bytes); an XML DataItem holds as many numbers as its Dimensions say;
 - a HyperSlab's start/stride/count stay inside its source and select the declared Dimensions;
+  so does an XDMF 3 selection `file.h5:/path|start:stride:count:space` (what both programs
+  write: ParaView's default reader, Xdmf3, reads it), whose space must match the dataset
+  except along dimension 0, where a series grows;
 - topology and geometry agree: connectivity is (cells x nodes per cell) with indices of existing
   points, a Polyvertex has one cell per point, XYZ geometry is (points x 3);
 - an Attribute has one value (Scalar) or 3 (Vector) per point (Center="Node") or per cell
   (Center="Cell"), and names are unique within a grid;
 - in each temporal collection the Time values increase strictly and equal the times of the HDF5
   output (dataset `times`, e.g. /output/time of fem.h5, /time of dem.h5) at the row the grid's
-  data come from: row k of a time series (a HyperSlab starting at k, fem.h5) or the group
-  /steps/<k> (dem.h5). Both programs print times with 17 digits, which round-trips a double, so
+  data come from: row k of a time series (a selection or HyperSlab starting at k). Both programs print times with 17 digits, which round-trips a double, so
   the comparison is exact.
 """
 import os
@@ -118,6 +120,9 @@ class _Checker:
             self.problem(where, "HDF reference %r is not file.h5:/path" % ref)
             return dims, None, None
         name, dset = ref.split(":", 1)
+        selection = None
+        if "|" in dset:
+            dset, selection = dset.split("|", 1)
         f = self.h5(name, where)
         if f is None:
             return dims, None, None
@@ -125,20 +130,54 @@ class _Checker:
             self.problem(where, "missing dataset %s in %s" % (dset, name))
             return dims, None, None
         d = f[dset]
-        if d.shape != dims:
-            self.problem(where, "%s:%s has dimensions %s, the XDMF file declares %s"
-                         % (name, dset, d.shape, dims))
-            return dims, None, None
         number_type = item.get("NumberType", item.get("DataType", "Float"))
         precision = int(item.get("Precision", "1" if number_type in ("Char", "UChar") else "4"))
         if (KINDS.get(number_type) != d.dtype.kind or d.dtype.itemsize != precision):
             self.problem(where, "%s:%s is %s, the XDMF file declares %s of %d bytes"
                          % (name, dset, d.dtype, number_type, precision))
+        if selection is not None:
+            return self.selection(name, dset, d, selection, dims, where)
+        if d.shape != dims:
+            self.problem(where, "%s:%s has dimensions %s, the XDMF file declares %s"
+                         % (name, dset, d.shape, dims))
+            return dims, None, None
         row = None
         m = STEP_GROUP.match(dset)
         if m:
             row = int(m.group(1))
         return dims, d, row
+
+    def selection(self, name, dset, d, text, dims, where):
+        """An XDMF 3 HDF selection FILE:DATASET|start:stride:count:space (one row of a series):
+        the space has the dataset's rank and sizes except along dimension 0 (the series grows
+        there, the space names the rows it needs), the selection stays inside the dataset and
+        selects the declared Dimensions."""
+        try:
+            start, stride, count, space = (np.array(_dims(p), dtype=int) for p in text.split(":"))
+        except ValueError:
+            self.problem(where, "selection %r is not start:stride:count:space" % text)
+            return dims, None, None
+        rank = len(d.shape)
+        if not (len(start) == len(stride) == len(count) == len(space) == rank):
+            self.problem(where, "selection %r does not have the rank %d of %s:%s" % (text, rank, name, dset))
+            return dims, None, None
+        if tuple(space[1:]) != d.shape[1:] or space[0] > d.shape[0]:
+            self.problem(where, "%s:%s has dimensions %s, the selection's space is %s"
+                         % (name, dset, d.shape, tuple(space)))
+            return dims, None, None
+        last = start + (count - 1) * stride
+        if (start < 0).any() or (stride < 1).any() or (count < 1).any() or (last >= space).any():
+            self.problem(where, "selection start %s stride %s count %s outside the space %s"
+                         % (list(start), list(stride), list(count), tuple(space)))
+            return dims, None, None
+        if _squeeze(tuple(count)) != _squeeze(dims):
+            self.problem(where, "selection of %s, the XDMF file declares %s" % (tuple(count), dims))
+            return dims, None, None
+        row = None
+        if self.times is not None and d.shape[0] == len(self.times) and count[0] == 1:
+            row = int(start[0])
+        sl = tuple(slice(a, a + (c - 1) * st + 1, st) for a, st, c in zip(start, stride, count))
+        return dims, np.asarray(d[sl]).reshape(dims), row
 
     def hyperslab(self, item, dims, where):
         children = item.findall("DataItem")
@@ -219,7 +258,9 @@ class _Checker:
                     self.problem(where, "Polyvertex of %d cells for %d points" % (n_cells, n_points))
             else:
                 dims, conn = use(item, where + " Topology")
-                if dims is not None and npe and dims != (n_cells, npe):
+                if dims is not None and npe == 1 and dims == (n_cells,):
+                    pass   # one node per cell: a plain list of point indices
+                elif dims is not None and npe and dims != (n_cells, npe):
                     self.problem(where, "connectivity %s, expected %d cells x %d nodes per cell"
                                  % (dims, n_cells, npe))
                 elif conn is not None and n_points is not None and conn.size:
@@ -399,7 +440,7 @@ def self_test(out_dir, xdmf_name, times, scratch):
         root = ET.parse(os.path.join(copy, xdmf_name)).getroot()
         name, dset = hdf_items(root)[-1].text.strip().split(":", 1)
         with h5py.File(os.path.join(copy, name), "a") as f:
-            del f[dset]
+            del f[dset.split("|")[0]]
 
     def longer_dataset(copy):
         root = ET.parse(os.path.join(copy, xdmf_name)).getroot()
@@ -407,10 +448,12 @@ def self_test(out_dir, xdmf_name, times, scratch):
         if geometry.get("ItemType") == "HyperSlab":
             geometry = geometry.findall("DataItem")[1]
         name, dset = geometry.text.strip().split(":", 1)
+        dset = dset.split("|")[0]
         with h5py.File(os.path.join(copy, h5_name(root)), "a") as f:
             data = f[dset][:]
             del f[dset]
-            f[dset] = np.concatenate([data, data[-1:]], axis=0) if data.ndim else data
+            # a series may grow along dimension 0; one more coordinate per point may not
+            f[dset] = np.concatenate([data, data[..., -1:]], axis=-1) if data.ndim else data
 
     corrupt("wrong_dimensions", edit_xml=wrong_dims, expect="declares")
     corrupt("wrong_precision", edit_xml=wrong_precision, expect="bytes")

@@ -37,7 +37,7 @@ def cable(ui, vi):
         w += (AS * AS - (A * Spre)**2) / (2 * E * A)
     return ke, w, 2 * tau * ke  # dissipation rate tau v^T M v = 2 tau KE
 g = h5py.File(os.path.join(d, 'dem.h5'), 'r')
-td = g['time'][:]; keys = sorted(g['steps'].keys())
+td = g['time'][:]; P = g['particles/position'][:]; V = g['particles/velocity'][:]
 rows = []
 diss = 0.0; prev_rate = None; prev_t = None
 for i, ti in enumerate(t):
@@ -46,8 +46,7 @@ for i, ti in enumerate(t):
     prev_rate, prev_t = rate, ti
     j = int(np.argmin(abs(td - ti)))
     if abs(td[j] - ti) > 1e-6: continue
-    s = g['steps'][keys[j]]
-    p = s['position'][0]; vs = s['velocity'][0]
+    p = P[j, 0]; vs = V[j, 0]
     es_ = 0.5 * Ms * vs @ vs + Ms * 9.81 * (p[2] - z0)
     a = X[1] + np.r_[u[i, 0]]; b = X[2] + u[i, 1]
     ab = b - a; tt = np.clip((p - a) @ ab / (ab @ ab), 0, 1); q = a + tt * ab

@@ -18,10 +18,9 @@ u = fem['/monitor/displacement'][:]
 uA = u[:, 0, 2]
 vA = fem['/monitor/velocity'][:][:, 0, 2] if '/monitor/velocity' in fem else None
 dem = h5py.File(os.path.join(d, 'dem.h5'), 'r')
-keys = sorted(dem['steps'].keys())
-tdem = dem['time'][:] if isinstance(dem['time'], h5py.Dataset) else None
-pz = np.array([dem['steps'][k]['position'][0, 2] for k in keys])
-vz = np.array([dem['steps'][k]['velocity'][0, 2] for k in keys])
+tdem = dem['time'][:]
+pz = dem['particles/position'][:, 0, 2]
+vz = dem['particles/velocity'][:, 0, 2]
 cfg = json.load(open(os.path.join(d, 'dem.json')))
 mat = cfg['materials'][0]; R = cfg['particles'][0]['radius']
 m = 4 / 3 * np.pi * R**3 * mat['density_kg_m3']
@@ -30,8 +29,8 @@ cpl = h5py.File(os.path.join(d, 'coupling.h5'), 'r')
 ct = cpl['steps/time'][:]; it = cpl['steps/iterations'][:]
 cf = cpl['steps/contact_force'][:]
 conv = cpl['steps/converged'][:]
-if tdem is None or len(tdem) != len(keys):
-    tdem = np.linspace(0, t[-1], len(keys))
+if len(tdem) != len(pz):
+    tdem = np.linspace(0, t[-1], len(pz))
 print(f"run {d}: sphere m = {m:.2f} kg, {len(ct)} steps, iterations total {it.sum()} "
       f"(mean {it.mean():.2f}, max {it.max()}), unconverged {int((conv == 0).sum())}")
 print("   t      uA[m]     vA      sphere z   vz     E_sph[J]   Fz_cpl[N]  iters")

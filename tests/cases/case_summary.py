@@ -14,14 +14,13 @@ def load(run):
     """Return a dict of numpy arrays read from RUN/dem.h5, fem.h5, coupling.h5."""
     r = {}
     with h5py.File(run + "/dem.h5", "r") as f:
-        keys = sorted(f["steps"].keys())
         r["t"] = f["/time"][:]
-        r["pos"] = np.array([f["steps"][k]["position"][:] for k in keys])
-        r["vel"] = np.array([f["steps"][k]["velocity"][:] for k in keys])
+        r["pos"] = np.array(f["/particles/position"])
+        r["vel"] = np.array(f["/particles/velocity"])
         r["radius"] = f["/particles/radius"][:]
         r["body"] = f["/particles/body"][:]
-        if "cluster_position" in f["steps"][keys[0]]:
-            r["cpos"] = np.array([f["steps"][k]["cluster_position"][:] for k in keys])
+        if "/clusters/position" in f:
+            r["cpos"] = np.array(f["/clusters/position"])
         r["ekin"] = f["/energy/kinetic"][:]
     with h5py.File(run + "/fem.h5", "r") as f:
         r["mt"] = f["/monitor/time"][:]

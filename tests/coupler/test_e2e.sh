@@ -9,12 +9,13 @@
 . tests/e2e_lib.sh
 
 check() {   # dir scheme [rock density]
-  for f in coupling.h5 iterations.log fem.h5 dem.h5 fem.xdmf dem.xdmf fem.log dem.log coupler.log; do
+  for f in coupling.h5 iterations.log fem.h5 dem.h5 fem.xdmf particles.xdmf dem_net.xdmf fem.log dem.log coupler.log; do
     [ -s "$1/$f" ] || fail "$1/$f missing"
   done
   # both XDMF files describe their HDF5 output exactly (tests/xdmf_check.py)
   "$PY" tests/xdmf_check.py "$1/fem.xdmf" /output/time || fail "$1/fem.xdmf"
-  "$PY" tests/xdmf_check.py "$1/dem.xdmf" /time || fail "$1/dem.xdmf"
+  "$PY" tests/xdmf_check.py "$1/particles.xdmf" /time || fail "$1/particles.xdmf"
+  "$PY" tests/xdmf_check.py "$1/dem_net.xdmf" /time || fail "$1/dem_net.xdmf"
   "$PY" - "$1" "$2" "${3:-2500}" <<'PY' || exit 1
 import sys, math, h5py, numpy as np
 d, scheme, density = sys.argv[1], sys.argv[2], float(sys.argv[3])
@@ -28,9 +29,17 @@ with h5py.File(d + "/coupling.h5", "r") as f:
     impulse = float((f["/steps/contact_force"][:, 2] * f["/steps/dt"][:]).sum())
     T = float(f["/steps/dt"][:].sum())
 with h5py.File(d + "/dem.h5", "r") as f:
-    last = sorted(f["steps"].keys())[-1]
-    assert len(f["steps"]) == 41, len(f["steps"])   # outputs every 0.01 s up to 0.4 s
-    vz = float(f["steps"][last]["velocity"][0, 2])
+    t = f["/time"][:]
+    assert len(t) == 41, len(t)   # outputs every 0.01 s up to 0.4 s
+    assert abs(t - 0.01 * np.arange(41)).max() < 1e-12, t   # at exact multiples of the interval
+    assert f["/particles/velocity"].shape == (41, 1, 3), f["/particles/velocity"].shape
+    vz = float(f["/particles/velocity"][-1, 0, 2])
+# every dataset of the three files carries its units
+for name in ("fem.h5", "dem.h5", "coupling.h5"):
+    with h5py.File(d + "/" + name, "r") as f:
+        missing = []
+        f.visititems(lambda n, o: missing.append(n) if isinstance(o, h5py.Dataset) and "units" not in o.attrs else None)
+        assert not missing, (name, "datasets without units", missing)
 lhs = m * (vz - (-0.5))
 rhs = -impulse + m * -9.81 * T
 print("%s: m dv = %.9f, -impulse + m g T = %.9f N s" % (d, lhs, rhs))
@@ -45,9 +54,11 @@ run() {   # name, --set arguments
 
 run strong_aitken
 check "$NC_TMP/strong_aitken" strong
-# the XDMF check fails on broken copies of a coupled dem.xdmf (particles and net collections)
-"$PY" tests/xdmf_check.py --self-test "$NC_TMP/strong_aitken" dem.xdmf /time "$NC_TMP" \
-  || fail "xdmf_check self-test"
+# the XDMF check fails on broken copies of a coupled run's particles.xdmf and dem_net.xdmf
+for x in particles.xdmf dem_net.xdmf; do
+  "$PY" tests/xdmf_check.py --self-test "$NC_TMP/strong_aitken" $x /time "$NC_TMP" \
+    || fail "xdmf_check self-test $x"
+done
 run strong_iqn --set coupler.relaxation.method=iqn-ils --set coupler.relaxed_quantity=force
 check "$NC_TMP/strong_iqn" strong
 # weak coupling with the plain exchange is unstable for the 18 kg rock on this light net at

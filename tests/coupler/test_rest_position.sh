@@ -58,9 +58,8 @@ def summary(name):
     cfg = json.load(open(d + "/dem.json"))
     m = 4 / 3 * math.pi * cfg["particles"][0]["radius"] ** 3 * cfg["materials"][0]["density_kg_m3"]
     with h5py.File(d + "/dem.h5", "r") as f:
-        keys = sorted(f["steps"].keys())
-        z = np.array([f["steps"][k]["position"][0, 2] for k in keys])
-        vz = np.array([f["steps"][k]["velocity"][0, 2] for k in keys])
+        z = f["/particles/position"][:, 0, 2]
+        vz = f["/particles/velocity"][:, 0, 2]
     e = 0.5 * m * vz ** 2 + m * 9.81 * (z - z[0])
     tail = uA[t >= t[-1] - 0.5]
     return uA.min(), tail.mean(), np.abs(tail - static).max(), e.max()

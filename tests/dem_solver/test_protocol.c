@@ -165,7 +165,9 @@ static void test_coupled_drop_on_two_edges(void **state)
     snprintf(h5, sizeof h5, "%s/dem.h5", outdir);
     struct stat st;
     assert_int_equal(stat(h5, &st), 0);
-    snprintf(h5, sizeof h5, "%s/dem.xdmf", outdir);
+    snprintf(h5, sizeof h5, "%s/particles.xdmf", outdir);
+    assert_int_equal(stat(h5, &st), 0);
+    snprintf(h5, sizeof h5, "%s/dem_net.xdmf", outdir);
     assert_int_equal(stat(h5, &st), 0);
 }
 

@@ -6,7 +6,7 @@ exe="$NC_BIN/dem_solver"
 out="$NC_TMP/signal"
 "$exe" "$NC_ROOT/dem_solver/examples/settle.json" --output "$out" >"$NC_TMP/signal.log" 2>&1 &
 pid=$!
-for _ in $(seq 1 100); do [ -f "$out/dem.xdmf" ] && break; sleep 0.1; done
+for _ in $(seq 1 100); do [ -f "$out/particles.xdmf" ] && break; sleep 0.1; done
 sleep 0.5
 kill -TERM "$pid"
 wait "$pid"
@@ -19,8 +19,8 @@ out = sys.argv[1]
 with h5py.File(out + "/dem.h5", "r") as f:
     n = len(f["time"])
     assert n >= 1, "no output step"
-    assert "steps/%06d/position" % (n - 1) in f
-ET.parse(out + "/dem.xdmf")
+    assert f["particles/position"].shape[0] == n, f["particles/position"].shape
+ET.parse(out + "/particles.xdmf")
 print("readable after SIGTERM:", n, "output steps")
 PY
 

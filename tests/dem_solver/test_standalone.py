@@ -51,20 +51,28 @@ with h5py.File(os.path.join(out, "dem.h5"), "r") as f:
     check(n_out == 101, "101 output steps (0..2 s every 0.02 s), got %d" % n_out)
     check(np.allclose(f["particles/radius"][:], [0.1]), "radius dataset")
     check(f["particles/id"].dtype == np.int32, "ids are int32")
-    last = "steps/%06d" % (n_out - 1)
-    for name in ("position", "velocity", "angular_velocity"):
-        check(f[last + "/" + name].shape == (1, 3), last + "/" + name + " shape")
+    # output at exact multiples of the interval, the last one at end_time_s exactly
+    check(np.abs(t - 0.02 * np.arange(n_out)).max() < 1e-12 and t[-1] == 2.0,
+          "output times k * 0.02 s up to 2 s: %s ... %s" % (t[:3], t[-2:]))
+    for name, units in (("position", "m"), ("velocity", "m/s"), ("angular_velocity", "rad/s")):
+        d = f["particles/" + name]
+        check(d.shape == (n_out, 1, 3), "particles/%s shape %s" % (name, d.shape))
+        check(d.attrs.get("units") == units.encode(), "particles/%s units %r" % (name, d.attrs.get("units")))
+    no_units = []
+    f.visititems(lambda name, obj: no_units.append(name)
+                 if isinstance(obj, h5py.Dataset) and "units" not in obj.attrs else None)
+    check(not no_units, "every dataset has a units attribute: missing on %s" % no_units)
     wall = f["walls/force"][:]
     check(wall.shape == (n_out, 2, 3), "walls/force shape (steps, planes + net, 3)")
     m = 4.0 / 3.0 * np.pi * 0.1**3 * 2500
     check(abs(-wall[-1, 0, 2] - m * 9.81) < 1e-3 * m * 9.81,
           "floor force at rest = weight (%g vs %g)" % (-wall[-1, 0, 2], m * 9.81))
     # rolling after sliding: v = 5/7 v0 (without losses in the bounces' tangential dashpot, 3 %)
-    vx = f[last + "/velocity"][0, 0]
+    vx = f["particles/velocity"][-1, 0, 0]
     check(abs(vx - 5.0 / 7.0 * 0.5) < 0.03 * 5.0 / 7.0 * 0.5, "rolls at 5/7 v0: %g" % vx)
-# dem.xdmf describes dem.h5 exactly (tests/xdmf_check.py): one Polyvertex grid per row of /time
+# particles.xdmf describes dem.h5 exactly (tests/xdmf_check.py): one Polyvertex grid per row of /time
 # at that time, with the radius, id and velocity attributes; and the check fails on broken copies
-xdmf_path = os.path.join(out, "dem.xdmf")
+xdmf_path = os.path.join(out, "particles.xdmf")
 for problem in check_xdmf(xdmf_path, "/time"):
     check(False, problem)
 check(grid_counts(xdmf_path) == {"particles": n_out}, "xdmf has one grid per output step: %s" % grid_counts(xdmf_path))
@@ -74,7 +82,7 @@ check(len(grids) == n_out, "xdmf has one grid per output step")
 check(grids[0].find("Topology").get("TopologyType") == "Polyvertex", "Polyvertex topology")
 names = [a.get("Name") for a in grids[0].findall("Attribute")]
 check("radius" in names and "velocity" in names, "radius and velocity attributes: %s" % names)
-for missed in self_test(out, "dem.xdmf", "/time", tmp):
+for missed in self_test(out, "particles.xdmf", "/time", tmp):
     check(False, "xdmf_check self-test: " + missed)
 
 # 2. the other examples run (short end times are set in the files)
