@@ -32,6 +32,7 @@ typedef struct coupled {
     double *lin_K, *lin_C;    /* [9 blocks] their values */
     size_t lin_cap;
     long written_step;
+    double next_output_s;     /* time of the next full output */
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
 } coupled;
 
@@ -203,10 +204,15 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     fem_analysis *s = &c->s;
     c->sum->steps++;
     if (fem_output_monitor(&c->out, s, s->cur.time_s, err)) return -1;
-    if (s->cur.step % c->m->settings.output_interval == 0) {
+    /* full output at multiples of interval_steps x the nominal dt in TIME: the coupler's
+     * steps may be shorter (step control) or longer (far steps), so counting steps would
+     * write off the grid the DEM writes on */
+    double every_s = c->m->settings.output_interval * c->m->settings.dt_s;
+    if (s->cur.time_s >= c->next_output_s - 1e-6 * every_s) {
         fem_analysis_update_axial(s);
         if (fem_output_step(&c->out, s, s->cur.time_s, err)) return -1;
         c->written_step = s->cur.step;
+        c->next_output_s = (floor(s->cur.time_s / every_s + 1e-6) + 1.0) * every_s;
     }
     return 0;
 }
@@ -229,6 +235,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->m = m;
     c->sum = &sum;
     c->written_step = -1;
+    c->out.max_u_node = -1;
     proto_participant *p = NULL;
     proto_serve_summary served;
     memset(&served, 0, sizeof served);
@@ -253,6 +260,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     if (fem_output_monitor(&c->out, &c->s, 0.0, err) || fem_output_step(&c->out, &c->s, 0.0, err))
         goto done;
     c->written_step = 0;
+    c->next_output_s = m->settings.output_interval * m->settings.dt_s;
     proto_options po;
     proto_options_default(&po);
     po.idle_timeout_ms = opt->idle_timeout_ms;
@@ -283,11 +291,10 @@ done:
     }
     sum.final_time_s = c->s.cur.u ? c->s.cur.time_s : 0;
     sum.output_steps = c->out.n_out;
-    if (c->s.cur.u)
-        for (int i = 0; i < m->n_nodes; i++) {
-            const double *u = c->s.cur.u + 3 * i;
-            sum.max_displacement_m = fmax(sum.max_displacement_m, sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
-        }
+    /* the run's largest |u| over every accepted step (fem_output_monitor tracks it) */
+    sum.max_displacement_m = c->out.max_u_node >= 0 ? c->out.max_u_m : 0.0;
+    sum.max_displacement_time_s = c->out.max_u_node >= 0 ? c->out.max_u_time_s : -1.0;
+    sum.max_displacement_node = c->out.max_u_node;
     sum.stats = c->s.stats;
     if (p) proto_participant_close(p);
     fem_output_close(&c->out);
