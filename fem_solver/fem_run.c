@@ -79,7 +79,7 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
     rc = 0;
 done:
     sum.output_steps = out.n_out;
-    if (s.m) {
+    if (s.m && s.cur.u) { /* not when the set-up failed (out of memory) */
         sum.max_displacement_m = max_displacement(&s);
         sum.stats = s.stats;
     }
