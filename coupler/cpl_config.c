@@ -191,9 +191,12 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     long steps;
     nc_json_path(what, sizeof what, where, "dt");
     double t_max = fmax(fabs(s->start_time_s), fabs(s->end_time_s));
+    char what_min[CPL_PATH_MAX + 64];
+    snprintf(what_min, sizeof what_min, "%s (its smallest value under step_control)", what);
     if (nc_time_check_step(s->dt_s, t_max, what, err) ||
         nc_time_step_count(s->end_time_s - s->start_time_s, s->dt_s, NC_TIME_MAX_STEPS, what,
-                           &steps, err))
+                           &steps, err) ||
+        nc_time_check_step(cpl_loop_settings_dt_min(s), t_max, what_min, err))
         return -1;
     return 0;
 }
