@@ -4,7 +4,8 @@
 #   make test       install missing Debian packages (as root), build, run every test
 #   make bench      benchmarks (protocol latency, FEM, DEM, coupling overhead)
 #   make demo       run the default case and make its plots
-#   make fuzz       run the libFuzzer target of the protocol decoder (clang)
+#   make fuzz       run the libFuzzer targets of the protocol decoder and the input readers (clang)
+#   make fuzz-replay   replay their corpora once (CI)
 #   make install PREFIX=/usr/local
 #   make SANITIZE=1 ...   the same with AddressSanitizer + UndefinedBehaviorSanitizer
 #
@@ -130,6 +131,43 @@ endef
 TEST_BINS :=
 $(foreach m,$(MODULES),$(eval $(call test_rules,$(m))))
 tests: $(TEST_BINS)
+
+# ---- fuzz targets of the input readers ------------------------------------------------------
+# <module>/fuzz/fuzz_<name>.c with its seed corpus <module>/fuzz/corpus_<name>/:
+#   make fuzz-<name>     explore for FUZZ_SECONDS with libFuzzer (clang), new inputs in
+#                        build/fuzz/corpus_<name>
+#   make fuzz-replay     every corpus input once through $(BUILD)/fuzz/replay_<name>, built with
+#                        the ordinary compiler (no libFuzzer needed; ASan/UBSan with SANITIZE=1);
+#                        the test suite replays them too (tests/common/test_fuzz_corpus.sh)
+READER_FUZZ := fem_solver:gmsh fem_solver:fem_json dem_solver:stl dem_solver:dem_json \
+  coupler:coupler_json
+READER_FUZZ_REPLAY :=
+FUZZ_READER_FLAGS = -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+  -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -fopenmp -Icommon -Iprotocol \
+  $(PKG_CFLAGS) $(SUITESPARSE_CFLAGS)
+define reader_fuzz_rules
+$(BUILD)/$(1)/fuzz/%.o: CFLAGS += -I$(1)
+$(BUILD)/fuzz/replay_$(2): $(BUILD)/$(1)/fuzz/fuzz_$(2).o $(BUILD)/common/fuzz/nc_fuzz_memfile.o \
+  $(BUILD)/common/fuzz/nc_fuzz_replay.o $$(LINK_$(1))
+	@mkdir -p $$(@D)
+	$$(CC) $$(LDFLAGS) -o $$@ $$^ $$(LDLIBS)
+build/fuzz/fuzz_$(2): $(1)/fuzz/fuzz_$(2).c common/fuzz/nc_fuzz_memfile.c \
+  $$(filter-out $(1)/main.c,$$(wildcard $(1)/*.c)) $$(protocol_SRC) $$(common_SRC)
+	@mkdir -p $$(@D)
+	$$(FUZZ_CC) $$(FUZZ_READER_FLAGS) -I$(1) -o $$@ $$^ $$(PKG_LIBS) $$(SUITESPARSE_LIBS) -lm -lpthread
+.PHONY: fuzz-$(2) fuzz-replay-$(2)
+fuzz-$(2): check-deps build/fuzz/fuzz_$(2)
+	@mkdir -p build/fuzz/corpus_$(2)
+	build/fuzz/fuzz_$(2) -max_total_time=$$(FUZZ_SECONDS) -max_len=4096 -rss_limit_mb=2048 \
+	  build/fuzz/corpus_$(2) $(1)/fuzz/corpus_$(2)
+fuzz-replay-$(2): $(BUILD)/fuzz/replay_$(2)
+	$(BUILD)/fuzz/replay_$(2) $(1)/fuzz/corpus_$(2)
+READER_FUZZ_REPLAY += $(BUILD)/fuzz/replay_$(2)
+fuzz: fuzz-$(2)
+fuzz-replay: fuzz-replay-$(2)
+endef
+$(foreach f,$(READER_FUZZ),$(eval $(call reader_fuzz_rules,$(word 1,$(subst :, ,$(f))),$(word 2,$(subst :, ,$(f))))))
+tests: $(READER_FUZZ_REPLAY)
 
 # Per-module extra rules: each <module>/module.mk may add phony targets to BENCH_TARGETS
 # (run by `make bench`) and define its own helpers (fuzz target, demo, ...).

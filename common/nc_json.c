@@ -48,8 +48,11 @@ static int wrong(nc_error *err, const char *where, const char *key, const char *
                  const cJSON *got)
 {
     char shown[64];
-    describe(got, shown, sizeof shown);
     char path[512];
+    if (cJSON_IsNumber(got) && !isfinite(got->valuedouble)) /* cJSON would print "null" */
+        return nc_error_set(err, 1, "%s: expected %s, got a number out of range",
+                            nc_json_path(path, sizeof path, where, key), expected);
+    describe(got, shown, sizeof shown);
     return nc_error_set(err, 1, "%s: expected %s, got %s",
                         nc_json_path(path, sizeof path, where, key), expected, shown);
 }
@@ -59,6 +62,116 @@ static int missing(nc_error *err, const char *where, const char *key, const char
     char path[512];
     return nc_error_set(err, 1, "%s: missing (expected %s)",
                         nc_json_path(path, sizeof path, where, key), expected);
+}
+
+/* Path of a value for messages: "nodes[3]", "analysis.dt_s" (appended in place). */
+typedef struct tree_path {
+    char text[512];
+    size_t length;
+} tree_path;
+
+static size_t path_push(tree_path *p, const cJSON *parent, const cJSON *item, int index)
+{
+    size_t saved = p->length;
+    size_t room = sizeof p->text - p->length;
+    int n = cJSON_IsObject(parent)
+                ? snprintf(p->text + p->length, room, "%s%s", p->length ? "." : "",
+                           item->string ? item->string : "?")
+                : snprintf(p->text + p->length, room, "[%d]", index);
+    p->length = n < 0 ? p->length : (size_t)n >= room ? sizeof p->text - 1 : p->length + (size_t)n;
+    return saved;
+}
+
+static int cmp_key(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* The first key of `obj` that appears more than once, or NULL; -1 when out of memory.
+ * Sorting the keys keeps this O(k log k) for objects with many members. */
+static int duplicate_key(const cJSON *obj, const char **dup)
+{
+    *dup = NULL;
+    size_t k = 0;
+    for (const cJSON *c = obj->child; c; c = c->next) k++;
+    if (k < 2) return 0;
+    if (k <= 8) {
+        for (const cJSON *a = obj->child; a; a = a->next)
+            for (const cJSON *b = a->next; b; b = b->next)
+                if (a->string && b->string && strcmp(a->string, b->string) == 0) {
+                    *dup = a->string;
+                    return 0;
+                }
+        return 0;
+    }
+    const char **keys = malloc(k * sizeof *keys);
+    if (!keys) return -1;
+    size_t n = 0;
+    for (const cJSON *c = obj->child; c; c = c->next)
+        if (c->string) keys[n++] = c->string;
+    qsort(keys, n, sizeof *keys, cmp_key);
+    for (size_t i = 1; i < n && !*dup; i++)
+        if (strcmp(keys[i], keys[i - 1]) == 0) *dup = keys[i];
+    free(keys);
+    return 0;
+}
+
+/* Rejects what cJSON accepts silently: a key given twice in one object (cJSON would use the
+ * first) and a number beyond the range of a double (cJSON stores infinity, printed "null"). */
+static int check_tree(const cJSON *item, tree_path *p, const char *name, nc_error *err)
+{
+    if (cJSON_IsNumber(item) && !isfinite(item->valuedouble))
+        return nc_error_set(err, 1, "%s: %s: number out of range (the magnitude of a number "
+                                    "must be below 1.8e308)", name, p->length ? p->text : "(top level)");
+    if (cJSON_IsObject(item)) {
+        const char *dup;
+        if (duplicate_key(item, &dup))
+            return nc_error_set(err, 1, "%s: out of memory checking the keys", name);
+        if (dup) {
+            if (p->length) return nc_error_set(err, 1, "%s: %s.%s: key given twice", name, p->text, dup);
+            return nc_error_set(err, 1, "%s: %s: key given twice", name, dup);
+        }
+    }
+    if (!cJSON_IsObject(item) && !cJSON_IsArray(item)) return 0;
+    int index = 0;
+    for (const cJSON *c = item->child; c; c = c->next, index++) {
+        size_t saved = path_push(p, item, c, index);
+        int rc = check_tree(c, p, name, err);
+        p->length = saved;
+        p->text[saved] = '\0';
+        if (rc) return -1;
+    }
+    return 0;
+}
+
+int nc_json_parse_text(const char *name, const char *text, size_t size, cJSON **root,
+                       nc_error *err)
+{
+    *root = NULL;
+    if (size == 0) return nc_error_set(err, 1, "%s: file is empty (expected JSON)", name);
+    const char *end = NULL;
+    cJSON *parsed = cJSON_ParseWithLengthOpts(text, size, &end, 0);
+    if (!parsed) {
+        int line = 1, column = 1;
+        const char *stop = end ? end : text;
+        if (stop < text || stop > text + size) stop = text;
+        for (const char *c = text; c < stop; c++) {
+            if (*c == '\n') { line++; column = 1; } else column++;
+        }
+        return nc_error_set(err, 1, "%s:%d:%d: malformed JSON near this position", name, line,
+                            column);
+    }
+    if (!cJSON_IsObject(parsed)) {
+        cJSON_Delete(parsed);
+        return nc_error_set(err, 1, "%s: expected a JSON object at top level", name);
+    }
+    tree_path path = {{0}, 0};
+    if (check_tree(parsed, &path, name, err)) {
+        cJSON_Delete(parsed);
+        return -1;
+    }
+    *root = parsed;
+    return 0;
 }
 
 int nc_json_load_file(const char *path, cJSON **root, nc_error *err)
@@ -89,27 +202,9 @@ int nc_json_load_file(const char *path, cJSON **root, nc_error *err)
         return nc_error_set(err, 1, "%s: short read", path);
     }
     text[size] = '\0';
-    const char *end = NULL;
-    cJSON *parsed = cJSON_ParseWithLengthOpts(text, (size_t)size, &end, 0);
-    if (!parsed) {
-        int line = 1, column = 1;
-        const char *stop = end ? end : text;
-        if (stop < text || stop > text + size) stop = text;
-        for (const char *c = text; c < stop; c++) {
-            if (*c == '\n') { line++; column = 1; } else column++;
-        }
-        free(text);
-        if (size == 0) return nc_error_set(err, 1, "%s: file is empty (expected JSON)", path);
-        return nc_error_set(err, 1, "%s:%d:%d: malformed JSON near this position", path, line,
-                            column);
-    }
+    int rc = nc_json_parse_text(path, text, (size_t)size, root, err);
     free(text);
-    if (!cJSON_IsObject(parsed)) {
-        cJSON_Delete(parsed);
-        return nc_error_set(err, 1, "%s: expected a JSON object at top level", path);
-    }
-    *root = parsed;
-    return 0;
+    return rc;
 }
 
 int nc_json_check_keys(const cJSON *obj, const char *where, const char *const *allowed,
@@ -290,8 +385,8 @@ int nc_json_vec3(const cJSON *obj, const char *where, const char *key, double ou
     if (!item) return missing(err, where, key, "[x, y, z]");
     if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
         return wrong(err, where, key, "[x, y, z] (3 numbers)", item);
-    for (int i = 0; i < 3; i++) {
-        const cJSON *c = cJSON_GetArrayItem(item, i);
+    int i = 0;
+    for (const cJSON *c = item->child; c; c = c->next, i++) {
         if (!cJSON_IsNumber(c) || !isfinite(c->valuedouble))
             return wrong(err, where, key, "[x, y, z] (3 finite numbers)", item);
         out[i] = c->valuedouble;

@@ -8,11 +8,17 @@
 #ifndef NC_JSON_H
 #define NC_JSON_H
 
+#include <stddef.h>
 #include <cjson/cJSON.h>
 #include "nc_error.h"
 
-/* Reads and parses a whole file; parse errors give line and column. Free with cJSON_Delete. */
+/* Reads and parses a whole file; parse errors give line and column. Free with cJSON_Delete.
+ * The top level must be an object; a key given twice in one object and a number beyond the
+ * range of a double (1e400) are errors naming the path of the value. */
 int nc_json_load_file(const char *path, cJSON **root, nc_error *err);
+/* The same for `size` bytes of text in memory; `name` stands for the file in messages. */
+int nc_json_parse_text(const char *name, const char *text, size_t size, cJSON **root,
+                       nc_error *err);
 
 /* Fails naming any key of `obj` not in the NULL-terminated `allowed` list (catches typos). */
 int nc_json_check_keys(const cJSON *obj, const char *where, const char *const *allowed,

@@ -8,6 +8,7 @@
 
 #include "nc_file.h"
 #include "nc_json.h"
+#include "nc_time.h"
 
 void cpl_config_default(cpl_config *c)
 {
@@ -188,7 +189,21 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     s->predictor = (cpl_predictor)predictor;
     s->max_iterations = (int)max_it;
     s->max_steps = max_steps;
-    return cpl_loop_settings_check(s, where, err);
+    if (cpl_loop_settings_check(s, where, err)) return -1;
+    /* dt against the float spacing of the times it is added to (nc_time.h), and a bound on
+     * the number of steps, so that a run that could not advance or never end is refused */
+    char what[CPL_PATH_MAX + 8];
+    long steps;
+    nc_json_path(what, sizeof what, where, "dt");
+    double t_max = fmax(fabs(s->start_time_s), fabs(s->end_time_s));
+    char what_min[CPL_PATH_MAX + 64];
+    snprintf(what_min, sizeof what_min, "%s (its smallest value under step_control)", what);
+    if (nc_time_check_step(s->dt_s, t_max, what, err) ||
+        nc_time_step_count(s->end_time_s - s->start_time_s, s->dt_s, NC_TIME_MAX_STEPS, what,
+                           &steps, err) ||
+        nc_time_check_step(cpl_loop_settings_dt_min(s), t_max, what_min, err))
+        return -1;
+    return 0;
 }
 
 int cpl_config_load(cpl_config *c, const char *path, nc_error *err)

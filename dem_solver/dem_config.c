@@ -12,6 +12,7 @@
 #include "dem_stl.h"
 #include "nc_file.h"
 #include "nc_json.h"
+#include "nc_time.h"
 
 static int find_material(const dem_sim *s, const cJSON *obj, const char *where, int *index,
                          nc_error *err)
@@ -39,10 +40,10 @@ static int parse_materials(dem_sim *s, const cJSON *root, const char *file, nc_e
     int count;
     if (nc_json_array(root, file, "materials", &arr, &count, err)) return -1;
     if (count == 0) return nc_error_set(err, 1, "%s.materials: expected at least one material", file);
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *m = count ? arr->child : NULL; m; m = m->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "materials", k);
-        const cJSON *m = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(m)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(m, where, keys, err)) return -1;
         dem_material mat;
@@ -75,10 +76,10 @@ static int parse_particles(dem_sim *s, const cJSON *root, const char *file, nc_e
     const cJSON *arr;
     int count;
     if (nc_json_array_opt(root, file, "particles", &arr, &count, err)) return -1;
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *p = count ? arr->child : NULL; p; p = p->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "particles", k);
-        const cJSON *p = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(p)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(p, where, keys, err)) return -1;
         double pos[3], vel[3], omega[3], r;
@@ -224,10 +225,10 @@ static int parse_generators(dem_sim *s, const cJSON *root, const char *file, nc_
     const cJSON *arr;
     int count;
     if (nc_json_array_opt(root, file, "generators", &arr, &count, err)) return -1;
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *g = count ? arr->child : NULL; g; g = g->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "generators", k);
-        const cJSON *g = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(g)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(g, where, keys, err)) return -1;
         int type, mat;
@@ -261,10 +262,10 @@ static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_er
     const cJSON *arr;
     int count;
     if (nc_json_array_opt(root, file, "clusters", &arr, &count, err)) return -1;
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *c = count ? arr->child : NULL; c; c = c->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "clusters", k);
-        const cJSON *c = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(c)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(c, where, keys, err)) return -1;
         const cJSON *sp;
@@ -282,10 +283,10 @@ static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_er
             return nc_error_set(err, 1, "%s: out of memory", where);
         }
         int rc = 0;
-        for (int q = 0; q < ns && rc == 0; q++) {
+        int q = 0;
+        for (const cJSON *o = sp->child; o && rc == 0; o = o->next, q++) {
             char sw[700];
             nc_json_path_index(sw, sizeof sw, where, "spheres", q);
-            const cJSON *o = cJSON_GetArrayItem(sp, q);
             if (!cJSON_IsObject(o)) rc = nc_error_set(err, 1, "%s: expected an object", sw);
             else rc = nc_json_check_keys(o, sw, skeys, err) ||
                       nc_json_vec3(o, sw, "position", pos + 3 * q, err) ||
@@ -306,10 +307,10 @@ static int parse_planes(dem_sim *s, const cJSON *root, const char *file, nc_erro
     const cJSON *arr;
     int count;
     if (nc_json_array_opt(root, file, "planes", &arr, &count, err)) return -1;
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *p = count ? arr->child : NULL; p; p = p->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "planes", k);
-        const cJSON *p = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(p)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(p, where, keys, err)) return -1;
         double point[3], normal[3], vel[3];
@@ -335,10 +336,10 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
     if (count == 0) return 0;
     s->model.meshes = calloc((size_t)count, sizeof *s->model.meshes);
     if (!s->model.meshes) return nc_error_set(err, 1, "dem: out of memory");
-    for (int k = 0; k < count; k++) {
+    int k = 0;
+    for (const cJSON *m = count ? arr->child : NULL; m; m = m->next, k++) {
         char where[600];
         nc_json_path_index(where, sizeof where, file, "meshes", k);
-        const cJSON *m = cJSON_GetArrayItem(arr, k);
         if (!cJSON_IsObject(m)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(m, where, keys, err)) return -1;
         dem_mesh *mesh = &s->model.meshes[k];
@@ -430,6 +431,15 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
         nc_json_bool_opt(root, file, "free_flight", 0, &p->free_flight, err))
         return -1;
     p->threads = (int)threads;
+    if (!p->dt_auto) {
+        /* a standalone run of end_time_s / dt_s steps: refuse what cannot run or never ends */
+        char what[600];
+        long steps;
+        nc_json_path(what, sizeof what, file, "dt_s");
+        if (nc_time_check_step(p->dt_s, p->end_time_s, what, err) ||
+            nc_time_step_count(p->end_time_s, p->dt_s, NC_TIME_MAX_STEPS, what, &steps, err))
+            return -1;
+    }
     const cJSON *lin;
     if (nc_json_object_opt(root, file, "linear", &lin, err)) return -1;
     if (lin) {
@@ -487,11 +497,8 @@ static int build_mesh_grids(dem_sim *s, nc_error *err)
 int dem_config_parse_string(dem_sim *s, const char *json, const char *where,
                             const char *base_dir, nc_error *err)
 {
-    cJSON *root = cJSON_Parse(json);
-    if (!root || !cJSON_IsObject(root)) {
-        cJSON_Delete(root);
-        return nc_error_set(err, 1, "%s: malformed JSON (expected an object)", where);
-    }
+    cJSON *root;
+    if (nc_json_parse_text(where, json, strlen(json), &root, err)) return -1;
     int rc = parse_root(s, root, where, base_dir, err);
     cJSON_Delete(root);
     if (rc == 0) rc = build_mesh_grids(s, err);

@@ -2,6 +2,7 @@
  * (begin_step / restore), the coupled sub-stepping with its free-flight shortcut, and the
  * particle–net gap. */
 #include "dem_coupling.h"
+#include "nc_time.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -278,10 +279,16 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
         net->end[k] = net->ref[k] + disp_end[k];
         net->end_vel[k] = vel_end ? vel_end[k] : 0.0;
     }
-    double ratio = dt_step / s->model.prm.dt_s;
-    long substeps = (long)ceil(ratio - 1e-9);
+    /* bounded before it becomes a count: a coupling step of 1e6 s would otherwise mean 1e9
+     * sub-steps that no SHUTDOWN interrupts (nc_time.h) */
+    long substeps;
+    if (nc_time_check_step(dt_step, s->time_s + dt_step, "dem: coupling step dt_s", err) ||
+        nc_time_step_count(dt_step, s->model.prm.dt_s, NC_TIME_MAX_SUBSTEPS,
+                           "dem: coupling step dt_s (in DEM sub-steps)", &substeps, err))
+        return -1;
     if (substeps < 1) substeps = 1;
     double h = dt_step / (double)substeps;
+    if (nc_time_check_step(h, s->time_s + dt_step, "dem: DEM sub-step", err)) return -1;
     memset(net->impulse, 0, 3 * nn * sizeof(double));
     /* the wall moves linearly from start to end: constant velocity over the step */
     for (size_t k = 0; k < 3 * nn; k++) net->vel[k] = (net->end[k] - net->start[k]) / dt_step;

@@ -132,25 +132,34 @@ int dem_mesh_from_triangles(dem_mesh *mesh, size_t n, const double *xyz, const c
     return 0;
 }
 
+/* Binary STL: 80-byte header, u32 facet count, then 50 bytes per facet (normal, 3 vertices
+ * as little-endian float32, u16 attribute). The caller has checked the size: 84 + 50 n. */
 static int read_binary(FILE *f, size_t n, double **out, const char *path, nc_error *err)
 {
-    double *xyz = malloc(9 * n * sizeof *xyz);
-    if (!xyz) return nc_error_set(err, 1, "%s: out of memory for %zu triangles", path, n);
+    double *xyz = malloc(9 * (n ? n : 1) * sizeof *xyz);
+    if (!xyz) return nc_error_set(err, 1, "%s: out of memory for %zu facets", path, n);
     if (fseek(f, 84, SEEK_SET) != 0) {
         free(xyz);
-        return nc_error_set(err, 1, "%s: cannot read", path);
+        return nc_error_set(err, 1, "%s: cannot read: %s", path, strerror(errno));
     }
     unsigned char rec[50];
     for (size_t t = 0; t < n; t++) {
         if (fread(rec, 1, 50, f) != 50) {
             free(xyz);
-            return nc_error_set(err, 1, "%s: binary STL truncated at triangle %zu", path, t);
+            return nc_error_set(err, 1, "%s: binary STL: facet %zu of %zu cannot be read "
+                                        "(file changed while read?)", path, t + 1, n);
         }
         for (int k = 0; k < 9; k++) {
             float v;
             uint32_t bits = (uint32_t)rec[12 + 4 * k] | ((uint32_t)rec[13 + 4 * k] << 8) |
                             ((uint32_t)rec[14 + 4 * k] << 16) | ((uint32_t)rec[15 + 4 * k] << 24);
             memcpy(&v, &bits, sizeof v);
+            if (!isfinite(v)) {
+                free(xyz);
+                return nc_error_set(err, 1, "%s: binary STL: facet %zu of %zu: vertex %d, "
+                                            "coordinate %c is not finite", path, t + 1, n,
+                                    k / 3 + 1, "xyz"[k % 3]);
+            }
             xyz[9 * t + (size_t)k] = (double)v;
         }
     }
@@ -158,68 +167,153 @@ static int read_binary(FILE *f, size_t n, double **out, const char *path, nc_err
     return 0;
 }
 
-static int read_ascii(const char *text, double **out, size_t *n_out, const char *path,
-                      nc_error *err)
+/* ASCII STL, read word by word against its grammar:
+ *   solid name / { facet normal n n n / outer loop / 3 x (vertex x y z) / endloop / endfacet }
+ *   / endsolid name     (several solids may follow one another)
+ * so that every facet is either read whole or refused, and a file that stops early is
+ * refused as truncated. */
+typedef struct lexer {
+    const char *p, *end;
+    int line;
+    size_t facet; /* 1-based number of the facet being read, 0 before the first */
+    const char *path;
+} lexer;
+
+static size_t next_word(lexer *x, const char **word)
 {
-    size_t cap = 64, count = 0; /* vertices */
-    double *xyz = malloc(3 * cap * sizeof *xyz);
-    if (!xyz) return nc_error_set(err, 1, "%s: out of memory", path);
-    int line = 1;
-    const char *p = text;
-    while (*p) {
-        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
-            if (*p == '\n') line++;
-            p++;
-        }
-        if (!*p) break;
-        const char *word = p;
-        while (*p && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') p++;
-        size_t len = (size_t)(p - word);
-        if (len == 6 && strncmp(word, "vertex", 6) == 0) {
-            if (count == cap) {
-                cap *= 2;
-                double *g = realloc(xyz, 3 * cap * sizeof *xyz);
-                if (!g) {
-                    free(xyz);
-                    return nc_error_set(err, 1, "%s: out of memory", path);
-                }
-                xyz = g;
-            }
-            for (int k = 0; k < 3; k++) {
-                char *end;
-                errno = 0;
-                double v = strtod(p, &end);
-                if (end == p || !isfinite(v)) {
-                    free(xyz);
-                    return nc_error_set(err, 1, "%s:%d: expected 3 finite numbers after 'vertex'",
-                                        path, line);
-                }
-                xyz[3 * count + (size_t)k] = v;
-                p = end;
-            }
-            count++;
-        } else if (len == 5 && strncmp(word, "solid", 5) == 0) {
-            while (*p && *p != '\n') p++; /* solid name */
-        } else if (len == 8 && strncmp(word, "endsolid", 8) == 0) {
-            while (*p && *p != '\n') p++;
-        } else if (len == 5 && strncmp(word, "facet", 5) == 0) {
-            while (*p && *p != '\n') p++; /* normal is recomputed, ignore */
-        } else if (!((len == 5 && strncmp(word, "outer", 5) == 0) ||
-                     (len == 4 && strncmp(word, "loop", 4) == 0) ||
-                     (len == 7 && strncmp(word, "endloop", 7) == 0) ||
-                     (len == 8 && strncmp(word, "endfacet", 8) == 0))) {
-            free(xyz);
-            return nc_error_set(err, 1, "%s:%d: unexpected word '%.*s' in ASCII STL", path, line,
-                                (int)(len > 40 ? 40 : len), word);
-        }
+    while (x->p < x->end && (*x->p == ' ' || *x->p == '\t' || *x->p == '\r' || *x->p == '\n')) {
+        if (*x->p == '\n') x->line++;
+        x->p++;
     }
-    if (count % 3 != 0) {
+    *word = x->p;
+    while (x->p < x->end && *x->p != ' ' && *x->p != '\t' && *x->p != '\r' && *x->p != '\n')
+        x->p++;
+    return (size_t)(x->p - *word);
+}
+
+static void skip_line(lexer *x)
+{
+    while (x->p < x->end && *x->p != '\n') x->p++;
+}
+
+static int is_word(const char *w, size_t len, const char *want)
+{
+    return len == strlen(want) && strncmp(w, want, len) == 0;
+}
+
+static int ascii_error(lexer *x, nc_error *err, const char *what, const char *w, size_t len)
+{
+    char at[64] = "";
+    if (x->facet) snprintf(at, sizeof at, " facet %zu:", x->facet);
+    if (len == 0)
+        return nc_error_set(err, 1, "%s:%d:%s the file ends where %s was expected (truncated "
+                                    "after %zu complete facets?)", x->path, x->line, at, what,
+                            x->facet ? x->facet - 1 : 0);
+    return nc_error_set(err, 1, "%s:%d:%s expected %s, got '%.*s'", x->path, x->line, at, what,
+                        (int)(len > 40 ? 40 : len), w);
+}
+
+static int expect_word(lexer *x, const char *want, nc_error *err)
+{
+    const char *w;
+    size_t len = next_word(x, &w);
+    if (is_word(w, len, want)) return 0;
+    char what[32];
+    snprintf(what, sizeof what, "'%s'", want);
+    return ascii_error(x, err, what, w, len);
+}
+
+static int read_numbers(lexer *x, double v[3], int finite, const char *what, nc_error *err)
+{
+    for (int k = 0; k < 3; k++) {
+        while (x->p < x->end && (*x->p == ' ' || *x->p == '\t')) x->p++;
+        if (x->p == x->end) return ascii_error(x, err, "a number", x->p, 0);
+        char *stop;
+        v[k] = strtod(x->p, &stop);
+        if (stop == x->p || stop > x->end ||
+            (stop < x->end && *stop != ' ' && *stop != '\t' && *stop != '\r' && *stop != '\n'))
+            return nc_error_set(err, 1, "%s:%d: facet %zu: expected 3 numbers after '%s'",
+                                x->path, x->line, x->facet, what);
+        if (finite && !isfinite(v[k]))
+            return nc_error_set(err, 1, "%s:%d: facet %zu: %s coordinate %c is not finite",
+                                x->path, x->line, x->facet, what, "xyz"[k]);
+        x->p = stop;
+    }
+    return 0;
+}
+
+static int read_ascii(const char *text, size_t size, double **out, size_t *n_out,
+                      const char *path, nc_error *err)
+{
+    size_t cap = 64, count = 0; /* facets */
+    double *xyz = malloc(9 * cap * sizeof *xyz);
+    if (!xyz) return nc_error_set(err, 1, "%s: out of memory", path);
+    lexer x = {text, text + size, 1, 0, path};
+    const char *w;
+    size_t len = next_word(&x, &w);
+    int in_solid = 0, rc = 0;
+    if (!is_word(w, len, "solid")) {
+        rc = ascii_error(&x, err, "'solid'", w, len);
+        goto done;
+    }
+    in_solid = 1;
+    skip_line(&x); /* the solid's name */
+    for (;;) {
+        len = next_word(&x, &w);
+        if (len == 0) {
+            if (in_solid) rc = ascii_error(&x, err, "'facet' or 'endsolid'", w, len);
+            break;
+        }
+        if (!in_solid) {
+            if (!is_word(w, len, "solid")) {
+                rc = ascii_error(&x, err, "'solid' or the end of the file after 'endsolid'", w, len);
+                break;
+            }
+            in_solid = 1;
+            skip_line(&x);
+            continue;
+        }
+        if (is_word(w, len, "endsolid")) {
+            in_solid = 0;
+            skip_line(&x);
+            continue;
+        }
+        x.facet = count + 1;
+        if (!is_word(w, len, "facet")) {
+            rc = ascii_error(&x, err, "'facet' or 'endsolid'", w, len);
+            break;
+        }
+        if (count == DEM_STL_MAX_TRIANGLES) {
+            rc = nc_error_set(err, 1, "%s:%d: more than %u facets", path, x.line, DEM_STL_MAX_TRIANGLES);
+            break;
+        }
+        if (count == cap) {
+            cap *= 2;
+            double *g = realloc(xyz, 9 * cap * sizeof *xyz);
+            if (!g) {
+                rc = nc_error_set(err, 1, "%s: out of memory at facet %zu", path, count + 1);
+                break;
+            }
+            xyz = g;
+        }
+        double normal[3];
+        if ((rc = expect_word(&x, "normal", err)) || (rc = read_numbers(&x, normal, 0, "normal", err)) ||
+            (rc = expect_word(&x, "outer", err)) || (rc = expect_word(&x, "loop", err)))
+            break;
+        for (int v = 0; v < 3 && !rc; v++)
+            if (!(rc = expect_word(&x, "vertex", err)))
+                rc = read_numbers(&x, xyz + 9 * count + 3 * (size_t)v, 1, "vertex", err);
+        if (rc || (rc = expect_word(&x, "endloop", err)) || (rc = expect_word(&x, "endfacet", err)))
+            break;
+        count++;
+    }
+done:
+    *n_out = count; /* the complete facets, also on failure (to say where it stopped) */
+    if (rc) {
         free(xyz);
-        return nc_error_set(err, 1, "%s: %zu vertices is not a multiple of 3 (truncated facet?)",
-                            path, count);
+        return -1;
     }
     *out = xyz;
-    *n_out = count / 3;
     return 0;
 }
 
@@ -231,7 +325,7 @@ int dem_stl_load(dem_mesh *mesh, const char *path, nc_error *err)
     if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
     if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
         fclose(f);
-        return nc_error_set(err, 1, "%s: cannot read STL file", path);
+        return nc_error_set(err, 1, "%s: cannot read STL file (not a regular file?)", path);
     }
     unsigned char head[84];
     size_t got = fread(head, 1, sizeof head, f);
@@ -241,31 +335,69 @@ int dem_stl_load(dem_mesh *mesh, const char *path, nc_error *err)
     uint32_t nbin = got == 84 ? ((uint32_t)head[80] | ((uint32_t)head[81] << 8) |
                                  ((uint32_t)head[82] << 16) | ((uint32_t)head[83] << 24))
                               : 0;
-    if (got == 84 && nbin <= DEM_STL_MAX_TRIANGLES && (long)(84 + 50 * (long)nbin) == size) {
+    /* binary exactly when the size is that of the announced facets, even when the 80-byte
+     * header happens to start with "solid" (many exporters write that) */
+    long long binary_size = 84LL + 50LL * (long long)nbin;
+    int ascii_start = got >= 5 && memcmp(head, "solid", 5) == 0;
+    if (got == 84 && binary_size == (long long)size) {
+        if (nbin > DEM_STL_MAX_TRIANGLES) {
+            fclose(f);
+            return nc_error_set(err, 1, "%s: binary STL with %u facets, more than the %u "
+                                        "allowed", path, (unsigned)nbin, DEM_STL_MAX_TRIANGLES);
+        }
         n = nbin;
         rc = read_binary(f, n, &xyz, path, err);
-    } else if (got >= 5 && memcmp(head, "solid", 5) == 0) {
+    } else if (ascii_start) {
         char *text = malloc((size_t)size + 1);
         if (!text) {
             fclose(f);
-            return nc_error_set(err, 1, "%s: out of memory", path);
+            return nc_error_set(err, 1, "%s: out of memory for %ld bytes", path, size);
         }
-        rc = fseek(f, 0, SEEK_SET) != 0 || fread(text, 1, (size_t)size, f) != (size_t)size;
-        if (rc) {
+        if (fseek(f, 0, SEEK_SET) != 0 || fread(text, 1, (size_t)size, f) != (size_t)size) {
             free(text);
             fclose(f);
             return nc_error_set(err, 1, "%s: short read", path);
         }
         text[size] = '\0';
-        rc = read_ascii(text, &xyz, &n, path, err);
+        const char *nul = memchr(text, '\0', (size_t)size);
+        if (nul) {
+            /* a NUL byte is not text: count the facets before it to say where it is */
+            size_t before = 0;
+            nc_error ignored;
+            double *part = NULL;
+            int line = 1;
+            for (const char *c = text; c < nul; c++) line += *c == '\n';
+            read_ascii(text, (size_t)(nul - text), &part, &before, path, &ignored);
+            free(part);
+            free(text);
+            fclose(f);
+            if (got == 84)
+                return nc_error_set(err, 1, "%s:%d: byte %zu is a NUL byte, in facet %zu: an "
+                                            "ASCII STL is text, and the file's %ld bytes are not "
+                                            "the %lld of a binary STL with the %u facets its "
+                                            "header announces", path, line,
+                                    (size_t)(nul - text), before + 1, size, binary_size,
+                                    (unsigned)nbin);
+            return nc_error_set(err, 1, "%s:%d: byte %zu is a NUL byte: an ASCII STL is text",
+                                path, line, (size_t)(nul - text));
+        }
+        rc = read_ascii(text, (size_t)size, &xyz, &n, path, err);
         free(text);
+        /* a header whose count is near the size hints at a damaged binary file */
+        if (rc && got == 84 && llabs(binary_size - (long long)size) < (long long)size) {
+            char first[NC_ERROR_MESSAGE_MAX];
+            snprintf(first, sizeof first, "%s", err ? err->message : "");
+            nc_error_set(err, 1, "%s (read as ASCII: the file's %ld bytes are not the %lld of a "
+                                 "binary STL with the %u facets its header announces)", first,
+                         size, binary_size, (unsigned)nbin);
+        }
     } else {
         fclose(f);
         if (got == 84)
-            return nc_error_set(err, 1, "%s: not an STL file (binary header says %u triangles, "
-                                        "so %ld bytes were expected, the file has %ld; an ASCII "
+            return nc_error_set(err, 1, "%s: not an STL file (binary header says %u facets, "
+                                        "so %lld bytes were expected, the file has %ld; an ASCII "
                                         "STL starts with 'solid')",
-                                path, (unsigned)nbin, 84L + 50L * (long)nbin, size);
+                                path, (unsigned)nbin, binary_size, size);
         return nc_error_set(err, 1, "%s: not an STL file (too short)", path);
     }
     fclose(f);

@@ -4,6 +4,7 @@
 #include "fem_mesh_gmsh.h"
 #include "nc_file.h"
 #include "nc_json.h"
+#include "nc_time.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -20,10 +21,11 @@ static int parse_node_ref(const fem_model *m, const cJSON *item, const char *whe
     *out = NULL;
     *count = 0;
     if (!item) return nc_error_set(err, 1, "%s: missing (expected a node index, a node set name or an array of them)", where);
-    int n_items = cJSON_IsArray(item) ? cJSON_GetArraySize(item) : 1;
-    int cap = 0;
-    for (int i = 0; i < n_items; i++) {
-        const cJSON *it = cJSON_IsArray(item) ? cJSON_GetArrayItem(item, i) : item;
+    /* the items: the children of an array, or the one value itself */
+    const cJSON *first = cJSON_IsArray(item) ? item->child : item;
+    const cJSON *stop = cJSON_IsArray(item) ? NULL : item->next;
+    long cap = 0;
+    for (const cJSON *it = first; it != stop; it = it->next) {
         if (cJSON_IsString(it)) {
             const fem_node_set *ns = fem_model_find_node_set(m, it->valuestring);
             if (!ns) {
@@ -39,6 +41,8 @@ static int parse_node_ref(const fem_model *m, const cJSON *item, const char *whe
                                     it->valuestring, names[0] ? names : "none");
             }
             cap += ns->count;
+            if (cap > 100000000L)
+                return nc_error_set(err, 1, "%s: more than 1e8 node references", where);
         } else if (cJSON_IsNumber(it)) {
             cap += 1;
         } else {
@@ -47,8 +51,7 @@ static int parse_node_ref(const fem_model *m, const cJSON *item, const char *whe
     }
     *out = malloc((size_t)(cap > 0 ? cap : 1) * sizeof **out);
     if (!*out) return nc_error_set(err, 1, "%s: out of memory", where);
-    for (int i = 0; i < n_items; i++) {
-        const cJSON *it = cJSON_IsArray(item) ? cJSON_GetArrayItem(item, i) : item;
+    for (const cJSON *it = first; it != stop; it = it->next) {
         if (cJSON_IsString(it)) {
             const fem_node_set *ns = fem_model_find_node_set(m, it->valuestring);
             memcpy(*out + *count, ns->nodes, (size_t)ns->count * sizeof(int));
@@ -76,10 +79,10 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, nc_erro
     static const char *const keys[] = {"name", "youngs_modulus_pa", "area_m2", "density_kg_m3",
                                        "prestress_pa", "behaviour", NULL};
     static const char *const behaviours[] = {"cable", "truss", NULL};
-    for (int i = 0; i < n; i++) {
+    int i = 0;
+    for (const cJSON *o = arr->child; o; o = o->next, i++) {
         char w[WHERE_MAX];
         snprintf(w, sizeof w, "%s: element_sets[%d]", file, i);
-        const cJSON *o = cJSON_GetArrayItem(arr, i);
         if (!cJSON_IsObject(o)) return nc_error_set(err, 1, "%s: expected an object {...}", w);
         if (nc_json_check_keys(o, w, keys, err)) return -1;
         fem_element_set set;
@@ -128,21 +131,21 @@ static int parse_explicit_mesh(fem_model *m, const cJSON *root, const char *file
     if (nn < 2) return nc_error_set(err, 1, "%s: nodes: expected at least 2 nodes, got %d", file, nn);
     if (ne < 1) return nc_error_set(err, 1, "%s: elements: expected at least 1 element", file);
     if (fem_model_alloc(m, nn, ne, err)) return -1;
-    for (int i = 0; i < nn; i++) {
-        const cJSON *p = cJSON_GetArrayItem(nodes, i);
+    int i = 0;
+    for (const cJSON *p = nodes->child; p; p = p->next, i++) {
         int ok = cJSON_IsArray(p) && cJSON_GetArraySize(p) == 3;
-        for (int c = 0; ok && c < 3; c++) {
-            const cJSON *v = cJSON_GetArrayItem(p, c);
+        const cJSON *v = ok ? p->child : NULL;
+        for (int c = 0; ok && c < 3; c++, v = v->next) {
             ok = cJSON_IsNumber(v) && isfinite(v->valuedouble);
             if (ok) m->X[3 * i + c] = v->valuedouble;
         }
         if (!ok) return nc_error_set(err, 1, "%s: nodes[%d]: expected [x, y, z] of finite numbers (m)", file, i);
     }
     static const char *const ekeys[] = {"nodes", "set", NULL};
-    for (int e = 0; e < ne; e++) {
+    int e = 0;
+    for (const cJSON *p = elems->child; p; p = p->next, e++) {
         char w[WHERE_MAX];
         snprintf(w, sizeof w, "%s: elements[%d]", file, e);
-        const cJSON *p = cJSON_GetArrayItem(elems, e);
         const cJSON *pair = p;
         int set = 0;
         if (cJSON_IsObject(p)) {
@@ -150,8 +153,8 @@ static int parse_explicit_mesh(fem_model *m, const cJSON *root, const char *file
             pair = cJSON_GetObjectItemCaseSensitive(p, "nodes");
         }
         int ok = cJSON_IsArray(pair) && cJSON_GetArraySize(pair) == 2;
-        for (int c = 0; ok && c < 2; c++) {
-            const cJSON *v = cJSON_GetArrayItem(pair, c);
+        const cJSON *v = ok ? pair->child : NULL;
+        for (int c = 0; ok && c < 2; c++, v = v->next) {
             ok = cJSON_IsNumber(v) && v->valuedouble == floor(v->valuedouble);
             if (ok && (v->valuedouble < 0 || v->valuedouble >= nn))
                 return nc_error_set(err, 1, "%s: node index %g out of range 0..%d", w, v->valuedouble, nn - 1);
@@ -280,10 +283,10 @@ static int parse_supports(fem_model *m, const cJSON *root, const char *file, nc_
     int n;
     if (nc_json_array_opt(root, file, "supports", &arr, &n, err)) return -1;
     static const char *const keys[] = {"nodes", "dofs", "displacement_m", NULL};
-    for (int i = 0; i < n; i++) {
+    int i = 0;
+    for (const cJSON *o = n ? arr->child : NULL; o; o = o->next, i++) {
         char w[WHERE_MAX], wn[WHERE_MAX + 8];
         snprintf(w, sizeof w, "%s: supports[%d]", file, i);
-        const cJSON *o = cJSON_GetArrayItem(arr, i);
         if (!cJSON_IsObject(o)) return nc_error_set(err, 1, "%s: expected an object {...}", w);
         const char *dofs;
         double disp[3];
@@ -317,10 +320,10 @@ static int parse_loads(fem_model *m, const cJSON *root, const char *file, nc_err
     int n;
     if (nc_json_array_opt(root, file, "point_loads", &arr, &n, err)) return -1;
     static const char *const keys[] = {"nodes", "force_n", NULL};
-    for (int i = 0; i < n; i++) {
+    int i = 0;
+    for (const cJSON *o = n ? arr->child : NULL; o; o = o->next, i++) {
         char w[WHERE_MAX], wn[WHERE_MAX + 8];
         snprintf(w, sizeof w, "%s: point_loads[%d]", file, i);
-        const cJSON *o = cJSON_GetArrayItem(arr, i);
         if (!cJSON_IsObject(o)) return nc_error_set(err, 1, "%s: expected an object {...}", w);
         double f[3];
         if (nc_json_check_keys(o, w, keys, err) || nc_json_vec3(o, w, "force_n", f, err)) return -1;
@@ -384,6 +387,16 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
     s->max_iterations = (int)iters;
     if (s->residual_tol_n == 0 && s->relative_tol == 0)
         return nc_error_set(err, 1, "%s: residual_tolerance_n and relative_tolerance cannot both be 0", w);
+    if (s->type == FEM_DYNAMIC) {
+        /* end_time_s / dt_s steps: refuse a step lost in the float spacing of the time and a
+         * run that would never end (nc_time.h) */
+        char what[WHERE_MAX + 8];
+        long steps;
+        nc_json_path(what, sizeof what, w, "dt_s");
+        if (nc_time_check_step(s->dt_s, s->end_time_s, what, err) ||
+            nc_time_step_count(s->end_time_s, s->dt_s, NC_TIME_MAX_STEPS, what, &steps, err))
+            return -1;
+    }
     return 0;
 }
 
@@ -418,8 +431,8 @@ static int parse_rest(fem_model *m, const cJSON *root, const char *file, nc_erro
         if (n < 1) return nc_error_set(err, 1, "%s.element_sets: expected at least one set name", w);
         m->interface_sets = malloc((size_t)n * sizeof(int));
         if (!m->interface_sets) return nc_error_set(err, 1, "out of memory");
-        for (int i = 0; i < n; i++) {
-            const cJSON *it = cJSON_GetArrayItem(arr, i);
+        int i = 0;
+        for (const cJSON *it = arr->child; it; it = it->next, i++) {
             int s = cJSON_IsString(it) ? fem_model_find_set(m, it->valuestring) : -1;
             if (s < 0) return nc_error_set(err, 1, "%s.element_sets[%d]: expected the name of an element set", w, i);
             m->interface_sets[m->n_interface_sets++] = s;

@@ -74,7 +74,7 @@ done:
     sum.max_displacement_m = out.max_u_node >= 0 ? out.max_u_m : 0.0;
     sum.max_displacement_time_s = out.max_u_node >= 0 ? out.max_u_time_s : -1.0;
     sum.max_displacement_node = out.max_u_node;
-    if (s.m) sum.stats = s.stats;
+    if (s.m && s.cur.u) sum.stats = s.stats;   /* not when the set-up failed (out of memory) */
     fem_output_close(&out);
     fem_analysis_free(&s);
     sum.wall_s = nc_clock_now_s() - t0;
