@@ -89,7 +89,6 @@ int main(int argc, char **argv)
     if (endpoint) {
         fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0)};
         rc = fem_run_coupled(&model, output, &opt, stop, &sum, &err);
-        sum.max_displacement_node = -1;   /* the coupled summary holds the last step's value */
     } else {
         rc = fem_run_standalone(&model, output, stop, &sum, &err);
     }
