@@ -173,6 +173,7 @@ tests: $(READER_FUZZ_REPLAY)
 # (run by `make bench`) and define its own helpers (fuzz target, demo, ...).
 BENCH_TARGETS :=
 BENCH_BINS :=
+EXTRA_BINS :=   # further programs into bin/ (installed with the others)
 -include $(wildcard */module.mk)
 
 bench: check-bench-deps
@@ -188,13 +189,23 @@ check-bench-deps:
 	@scripts/check_deps.sh --bench >/dev/null 2>&1 || scripts/install_deps.sh --bench
 
 # ---- install / clean -------------------------------------------------------------------------
+# The Python participant module goes where Debian's /usr/bin/python3 looks for PREFIX's
+# packages: PREFIX/lib/python3.X/dist-packages (on sys.path for /usr/local and /usr).
+PYTHON_VERSION := $(shell /usr/bin/python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PYTHON_SITE ?= $(PREFIX)/lib/python$(or $(PYTHON_VERSION),3)/dist-packages
 install: programs
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/netcouple
-	install -m 755 $(PROGRAM_BINS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 755 $(PROGRAM_BINS) $(EXTRA_BINS) $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(PROTOCOL_LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -m 644 protocol/proto.h protocol/proto_serve.h common/nc_error.h $(DESTDIR)$(PREFIX)/include/netcouple/
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/share/doc/netcouple
 	install -m 644 protocol/README.md $(DESTDIR)$(PREFIX)/share/doc/netcouple/protocol.md
+	install -m 644 protocol/check/README.md $(DESTDIR)$(PREFIX)/share/doc/netcouple/netcouple-check.md
+	install -d $(DESTDIR)$(PYTHON_SITE) $(DESTDIR)$(PREFIX)/share/doc/netcouple/examples
+	install -m 644 scripts/participants/netcouple_participant.py $(DESTDIR)$(PYTHON_SITE)/
+	install -m 755 scripts/participants/spring_plate.py scripts/participants/ball_dem.py $(DESTDIR)$(PREFIX)/share/doc/netcouple/examples/
+	install -m 644 tests/coupler/cases/plate_ball/fem.json $(DESTDIR)$(PREFIX)/share/doc/netcouple/examples/plate.json
+	install -m 644 tests/coupler/cases/plate_ball/dem.json $(DESTDIR)$(PREFIX)/share/doc/netcouple/examples/ball.json
 	printf 'prefix=%s\nlibdir=$${prefix}/lib\nincludedir=$${prefix}/include/netcouple\n\nName: netcouple-protocol\nDescription: netcouple coupling protocol (ZeroMQ + JSON header + binary arrays)\nVersion: 1\nRequires: libzmq libcjson\nCflags: -I$${includedir}\nLibs: -L$${libdir} -lnetcouple_protocol -lm\n' \
 	  "$(PREFIX)" > $(DESTDIR)$(PREFIX)/lib/pkgconfig/netcouple-protocol.pc
 

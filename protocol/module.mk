@@ -31,3 +31,12 @@ fuzz: check-deps $(FUZZ_BIN)
 # Run every corpus input once (CI).
 fuzz-replay: check-deps $(FUZZ_BIN)
 	$(FUZZ_BIN) -runs=0 protocol/fuzz/corpus
+
+# netcouple-check: the conformance harness for participants (protocol/check/README.md).
+CHECK_BIN := $(BIN)/netcouple-check
+CHECK_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(wildcard protocol/check/*.c))
+EXTRA_BINS += $(CHECK_BIN)
+programs: $(CHECK_BIN)
+$(CHECK_BIN): $(CHECK_OBJ) $(LINK_protocol)
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
