@@ -366,10 +366,11 @@ while :; do
   read_progress
   now_ms
   for p in fem dem; do
-    # an exit is a failure unless the coupler told it to stop (it says so in its state first)
+    # an exit is a failure unless the coupler told it to stop (it says so in its state
+    # first); once it is stopping, a participant that answered errors exits 1 as it should
+    # (protocol/README.md §6), and the coupler's own message names who failed
     if [ -n "${rc[$p]:-}" ] && [ -z "${noticed_ms[$p]:-}" ]; then
-      if [ "${rc[$p]:-}" -ne 0 ] || [ "$cpl_state" = connecting ] || [ "$cpl_state" = running ] \
-         || [ -z "$cpl_state" ]; then
+      if [ "$cpl_state" = connecting ] || [ "$cpl_state" = running ] || [ -z "$cpl_state" ]; then
         noticed_ms[$p]=$NOW_MS
         if [ "${rc[$p]:-}" -eq 0 ]; then fail_first "$p" "exit 0 before the coupler told it to stop"
         else fail_first "$p" "$(how "$p") while the coupler was ${cpl_state:-starting}"; fi

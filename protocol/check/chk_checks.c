@@ -474,7 +474,7 @@ static void second_hello(session *s)
     char text[200];
     snprintf(text, sizeof text, "%s", s->reply.text);
     if (strcmp(s->reply.session, s->token) == 0)
-        chk_report_add(s->rep, row, CHK_WARN, "refused, but the refusal carries this coupler's "
+        chk_report_add(s->rep, row, CHK_FAIL, "refused, but the refusal carries this coupler's "
                        "session instead of the hello's own (§2.2): %s", text);
     else
         chk_report_add(s->rep, row, CHK_PASS, "refused: %s", text);
@@ -677,7 +677,7 @@ static void foreign_command(session *s)
         return;
     }
     if (!own)
-        chk_report_add(s->rep, row, CHK_WARN, "refused and the session goes on, but the refusal "
+        chk_report_add(s->rep, row, CHK_FAIL, "refused and the session goes on, but the refusal "
                        "carries session '%s' instead of the command's own (§2.2): %s",
                        carried, text);
     else
@@ -791,7 +791,7 @@ static void error_steps(session *s)
     nc_error e;
     proto_message cmd;
 
-    /* out of order (§3.2): the coupler never sends these, so accepting them is a WARN */
+    /* out of order (§3.2): a participant must refuse these */
     {
         const char *row = "order: solve before begin_step";
         command(&cmd, PROTO_MSG_SOLVE, step, ++it, 0, dt);
@@ -802,11 +802,11 @@ static void error_steps(session *s)
         }
         proto_message reply = head_of(&s->reply), sent = head_of(&cmd);
         int ok = step_command(s, PROTO_MSG_BEGIN_STEP, step, why, sizeof why) == 0;
-        judge_error(s, row, &sent, &reply, 0, "begin_step", ok, why, CHK_WARN);
+        judge_error(s, row, &sent, &reply, 0, "begin_step", ok, why, CHK_FAIL);
     }
     if (s->dead) return;
     command(&cmd, PROTO_MSG_ACCEPT_STEP, step, 0, 0, dt);
-    provoked(s, "order: accept_step without solve", &cmd, NULL, NULL, 0, 0, step, &it, CHK_WARN);
+    provoked(s, "order: accept_step without solve", &cmd, NULL, NULL, 0, 0, step, &it, CHK_FAIL);
 
     /* malformed commands (§2.2): each answered with an error, the next solve served */
     static const struct { const char *row, *format; } texts[] = {

@@ -259,11 +259,15 @@ class Participant:
                           version=self.version or PROTOCOL_VERSION_MIN,
                           session=self.session if self.version >= 2 else ""))
 
-    def _error(self, cmd, reason, retryable=False, counts=True, frames=None):
+    def _error(self, cmd, reason, retryable=False, counts=True, frames=None, echo=False):
         """An error reply answering cmd (or, for a command that did not decode, the step,
-        iteration and session its header names)."""
+        iteration and session its header names). echo: a refusal, sent in the command's own
+        version and session (protocol/README.md §2.2)."""
         step = iteration = None
         session = self.session if self.version >= 2 else ""
+        version = self.version or PROTOCOL_VERSION_MIN
+        if echo and cmd is not None:
+            session, version = cmd.session, cmd.version
         if cmd is None and frames is not None:
             step, iteration, _ = _counters(frames)
         if retryable:
@@ -272,7 +276,7 @@ class Participant:
             self.errors += 1
             self.last_error = reason
         self._send(encode("error", cmd, self.role, self.name, text=reason, error=True,
-                          version=self.version or PROTOCOL_VERSION_MIN, session=session,
+                          version=version, session=session,
                           retryable=retryable, step=step, iteration=iteration))
 
     def _hello(self, cmd):
@@ -282,7 +286,7 @@ class Participant:
             self.refused += 1
             self._error(cmd, "%s: refused hello from another coupler (session '%s'): this "
                         "participant already serves session %s; one coupler per participant"
-                        % (self.role, cmd.session, self.session), counts=False)
+                        % (self.role, cmd.session, self.session), counts=False, echo=True)
             return
         version = min(PROTOCOL_VERSION, cmd.offered_version())
         if version < PROTOCOL_VERSION_MIN:
@@ -291,7 +295,8 @@ class Participant:
                                                    PROTOCOL_VERSION))
             return
         if version >= 2 and not cmd.session:
-            self._error(cmd, "%s: refused hello: version 2 needs a session token" % self.role)
+            self._error(cmd, "%s: refused hello: version 2 needs a session token" % self.role,
+                        echo=True)
             return
         self.version = version
         self.session = cmd.session if version >= 2 else ""
@@ -316,6 +321,7 @@ class Participant:
         """Answers commands until SHUTDOWN (returns) or the idle timeout (raises IdleTimeout)."""
         poller = zmq.Poller()
         poller.register(self.socket, zmq.POLLIN)
+        step_open = last_solve_ok = False
         while True:
             if not poller.poll(self.idle_timeout_ms):
                 raise IdleTimeout("no command from the coupler for %.1f s"
@@ -336,7 +342,7 @@ class Participant:
                 self._check_session(cmd)
             except Refused as e:
                 self.refused += 1
-                self._error(cmd, str(e), counts=False)
+                self._error(cmd, str(e), counts=False, echo=True)
                 continue
             except ParticipantError as e:
                 self._error(cmd, str(e))
@@ -344,16 +350,34 @@ class Participant:
             if cmd.type == "shutdown":
                 self._reply("shutdown", cmd)
                 return
+            # the step order of protocol/README.md §3.2: solve and accept_step belong to a
+            # begun step, and accept_step needs a successful solve to commit
+            if cmd.type == "solve" and not step_open or \
+                    cmd.type == "accept_step" and not (step_open and last_solve_ok):
+                self._error(cmd, "%s (step %d, iteration %d): refused: %s"
+                            % (cmd.type, cmd.step, cmd.iteration,
+                               "no step begun (begin_step must come first)" if not step_open
+                               else "the step has no successful solve to accept"))
+                continue
             method = getattr(handler, cmd.type, None)
             if method is None:
                 self._error(cmd, "%s cannot do '%s'" % (self.role, cmd.type))
                 continue
+            if cmd.type == "solve":
+                last_solve_ok = False
             try:
                 arrays, values = method(cmd)
                 self._reply(cmd.type, cmd, arrays, values)
             except ParticipantError as e:
                 self._error(cmd, "%s (step %d, iteration %d): %s"
                             % (cmd.type, cmd.step, cmd.iteration, e), retryable=e.retryable)
+                continue
+            if cmd.type == "begin_step":
+                step_open, last_solve_ok = True, False
+            elif cmd.type == "solve":
+                last_solve_ok = True
+            elif cmd.type == "accept_step":
+                step_open = last_solve_ok = False
 
     def close(self):
         self.socket.close()
