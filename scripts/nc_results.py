@@ -2,11 +2,12 @@
 
 Only the dataset names that the programs document as stable are used:
 fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3),
-         /output/{time,axial_force,strain,reaction}, /mesh/support_nodes
-dem.h5   /time, /particles/{radius,body,position,velocity,angular_velocity},
-         /clusters/{position,orientation}, /net/{position,force}, /energy/kinetic
-coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact}
-             /iterations/{step,iteration,residual,alpha,contact_force}
+         /output/{time,axial_force,strain,reaction,displacement,position},
+         /mesh/{support_nodes,coordinates,elements,reference_length}
+dem.h5   /time, /particles/{radius,body,material,position,velocity,angular_velocity},
+         /clusters/{position,orientation}, /net/{position,force}, /energy/kinetic, /walls/force
+coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact,min_gap}
+             /iterations/{step,iteration,residual,alpha,contact_force}, /energy/*
 contact_intervals / contact_free_time: contact windows of coupled runs or of a fine-step reference
 rocks / Energy / run_verdict_line / load_json: what scripts/report.py builds on (rigid bodies
 with their mass from dem.json, coupling.h5 /energy, the coupler's reliability line)
