@@ -603,10 +603,12 @@ def report(args):
             summary.append(("reaction", "resultant peak %s N at t %s s, single peak %s N at node %d, t %s s"
                             % (fmt(rr["res_peak"][0], digits=6), fmt(rr["res_peak"][1], digits=6),
                                fmt(rr["single_peak"][0], digits=6), rr["single_peak"][1], fmt(rr["single_peak"][2], digits=6))))
-        md += ["", "Rope values are the largest over all elements at each FEM output step (%d steps, %s … %s s); "
-               "the peak deflection is fem.h5's maximum over every step. Reactions: the force each support "
-               "(fem.h5 /mesh/support_nodes, %d nodes) exerts on the net." % (len(f.time), fmt(f.time[0]), fmt(f.time[-1]),
-                                                                              len(f.support_nodes)), ""]
+        spacing = float(np.median(np.diff(f.time))) if len(f.time) > 1 else np.nan
+        md += ["", "Rope values are the largest over all elements at each FEM output step (%d steps, %s … %s s, "
+               "every %s: peaks between output steps are not seen; fem.json `output.interval_steps` sets the "
+               "spacing); the peak deflection is fem.h5's maximum over every step. Reactions: the force each "
+               "support (fem.h5 /mesh/support_nodes, %d nodes) exerts on the net."
+               % (len(f.time), fmt(f.time[0]), fmt(f.time[-1]), fmt(spacing, "s"), len(f.support_nodes)), ""]
         md += ["![net](%s)" % os.path.join(rel, os.path.basename(plot_net(r, net, windows, pngdir, written))), ""]
         if "reaction" in net:
             md += ["![reactions](%s)" % os.path.join(rel, os.path.basename(plot_reactions(r, net, windows, pngdir, written))), ""]
