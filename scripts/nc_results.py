@@ -64,6 +64,7 @@ class Dem:
             self.kinetic = get("/energy/kinetic")
             self.material = get("/particles/material")
             self.walls_force = get("/walls/force")
+            self.net_edges = get("/net/edges")
 
 
 def load_dem(results_dir):

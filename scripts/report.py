@@ -158,8 +158,8 @@ def impact_time(r, t, x, v, first):
     before: the smallest particle-to-cable surface distance) closed at the rock's velocity
     along its direction of motion under constant acceleration."""
     c = r["coupling"]
-    what = "the start of the first contact step"
-    if c is None or c.min_gap is None or not len(c.time):
+    what = "the start of the first contact window"
+    if c is None or c.min_gap is None or not len(c.time) or r.get("n_bodies", 1) > 1:
         return first, what
     k = int(np.argmax(c.force_magnitude() > 0))
     if k == 0 or not (0.0 < c.min_gap[k - 1] < 1e29):
@@ -183,6 +183,32 @@ def impact_time(r, t, x, v, first):
                          "of %s at its start (coupling.h5 /steps/min_gap)" % (fmt(first, digits=6), fmt(gap, "m")))
 
 
+def rock_net_windows(r, rk):
+    """Contact windows of one rock of a run with several: the DEM output steps at which one of
+    its spheres is within its radius (+ net_wall.cable_radius_m) of a segment of the DEM's net
+    (dem.h5 /net/position, /net/edges); None when the DEM has no net."""
+    d = r["dem"]
+    if d.net_position is None or d.net_edges is None or not len(d.net_edges):
+        return None
+    cable = float(((r["dem_cfg"] or {}).get("net_wall") or {}).get("cable_radius_m", 0.0))
+    j0 = d.net_first_step or 0
+    touch = np.zeros(len(d.time), bool)
+    for k in range(j0, min(len(d.time), j0 + len(d.net_position))):
+        a = d.net_position[k - j0][d.net_edges[:, 0]]
+        b = d.net_position[k - j0][d.net_edges[:, 1]]
+        ab = b - a
+        L2 = np.maximum(np.sum(ab * ab, axis=1), 1e-300)
+        for i in rk.particles:
+            c = d.position[k, i]
+            s = np.clip(np.sum((c - a) * ab, axis=1) / L2, 0.0, 1.0)
+            dist = np.linalg.norm(a + s[:, None] * ab - c, axis=1)
+            if dist.min() <= d.radius[i] + cable:
+                touch[k] = True
+                break
+    start = np.concatenate([[d.time[0]], d.time[:-1]])
+    return nc_results.contact_intervals(start, d.time, touch.astype(float), threshold=0.5)
+
+
 def pick_rock(rocks, particle):
     if particle is not None:
         for rk in rocks:
@@ -202,8 +228,25 @@ def analyse_rock(r, args, windows):
     rocks = nc_results.rocks(d, densities(r["dem_cfg"]))
     rk = pick_rock(rocks, args.particle)
     t, x, v = d.time, rk.position, rk.velocity
+    r["n_bodies"] = len(rocks)
+    wsource = None
+    if len(rocks) > 1:
+        own = rock_net_windows(r, rk)
+        if own is not None and own:
+            # the outputs may miss the first touch: take the start of a coupling contact window
+            # that begins within two output intervals before this rock's first one
+            dto = float(t[1] - t[0]) if len(t) > 1 else 0.0
+            near_starts = [a for a, _ in windows if own[0][0] - 2 * dto <= a <= own[0][0] + dto]
+            if near_starts:
+                own[0] = (min(near_starts[0], own[0][0]), own[0][1])
+        if own is not None:
+            windows = own
+            wsource = ("DEM output steps at which one of this rock's spheres touches a segment of the "
+                       "DEM's net (dem.h5 /net; the run has %d bodies; the first window starts at the "
+                       "coupling step with contact force that begins up to two output intervals before "
+                       "it, if there is one)" % len(rocks))
     speed = np.linalg.norm(v, axis=1)
-    out = dict(rock=rk, n_bodies=len(rocks), t=t, x=x, v=v, speed=speed,
+    out = dict(rock=rk, n_bodies=len(rocks), t=t, x=x, v=v, speed=speed, windows=windows, wsource=wsource,
                bound=float(np.max(np.linalg.norm(d.position[0, rk.particles] - x[0], axis=1)
                                   + d.radius[rk.particles])))
     first = windows[0][0] if windows else None
@@ -307,11 +350,17 @@ def verdict(rock, r, windows):
     """(word, sentence) — the criteria are written out in the report."""
     if rock is None:
         return "n/a", "no verdict: dem.h5 is missing (no rock)"
-    if not rock["contact"]:
-        return "no contact", "no contact: the rock never touched the net (largest speed %s)" % fmt(rock["vimp"], "m/s")
     if r["fem"] is None or r["fem"].position is None or not len(r["fem"].time):
         return "n/a", "no verdict: fem.h5 is missing (no net)"
     d, vthr = rock["dhat"], rock["vthr"]
+    if not rock["contact"]:
+        net, xe = r["fem"].position[-1], rock["x"][-1]
+        g = gravity(r["dem_cfg"])
+        ghat = g / np.linalg.norm(g) if np.linalg.norm(g) > 0 else np.array([0.0, 0.0, -1.0])
+        if xe @ ghat - rock["bound"] > (net @ ghat).max():
+            return "passed through", ("passed through without touching the net: at the end below its lowest "
+                                      "node, moving at %s" % fmt(float(rock["speed"][-1]), "m/s"))
+        return "no contact", "no contact: the rock never touched the net (largest speed %s)" % fmt(rock["vimp"], "m/s")
     xe, ve = rock["x"][-1], rock["v"][-1]
     net = r["fem"].position[-1]
     g = gravity(r["dem_cfg"])
@@ -324,14 +373,20 @@ def verdict(rock, r, windows):
         where = "beyond the net's deformed surface" if beyond else "below the net's lowest node"
         return "passed through", ("passed through: at the end (t = %s s) the rock is %s, moving at %s"
                                   % (fmt(rock["t"][-1]), where, fmt(se, "m/s")))
-    touching = windows and windows[-1][1] >= rock["t"][-1] - 1e-12
-    if r["coupling"] is not None and len(r["coupling"].time):
+    windows = rock["windows"]
+    touching = bool(windows) and windows[-1][1] >= rock["t"][-1] - 1e-12
+    if rock["n_bodies"] == 1 and r["coupling"] is not None and len(r["coupling"].time):
         touching = r["coupling"].force_magnitude()[-1] > 0
     ls = rock.get("leave_speed")
     if not touching and ls is not None and ls > vthr:
         e = ls / rock["vimp"]
         return "rebounded", ("rebounded: the rock left the net at %s against the impact direction "
                              "(impact %s, apparent restitution %.3g)" % (fmt(ls, "m/s"), fmt(rock["vimp"], "m/s"), e))
+    back = -float(rock["vd"][-1])
+    if touching and back > vthr:
+        return "rebounded", ("rebounded: at the end the rock is still touching the net but moving back at %s "
+                             "against the impact direction (impact %s, apparent restitution at least %.3g)"
+                             % (fmt(back, "m/s"), fmt(rock["vimp"], "m/s"), back / rock["vimp"]))
     # extent of the net across the impact direction, widened by the rock's size
     e1 = np.cross(d, [1.0, 0.0, 0.0])
     if np.linalg.norm(e1) < 0.1:
@@ -510,6 +565,8 @@ def report(args):
     if r["dem"] is not None and r["dem"].position is not None and len(r["dem"].time):
         rock = analyse_rock(r, args, windows)
     net = analyse_net(r) if r["fem"] is not None else {}
+    if rock is not None and rock["wsource"]:
+        windows, wsource = rock["windows"], rock["wsource"]
     word, sentence = verdict(rock, r, windows)
     md += ["**Verdict: %s**" % sentence, ""]
     if r["notes"]:
@@ -680,10 +737,12 @@ def report(args):
            "Checked in this order at the last DEM output; v_min = %s (the larger of %s m/s and 5 %% of the impact speed)."
            % (fmt(rock["vthr"], "m/s") if rock else "n/a", fmt(args.speed_threshold)), "",
            "- **passed through**: the whole rock (centre ± its size) is beyond the net's furthest deformed node "
-           "along the impact direction, or below its lowest node (along gravity) moving faster than v_min;",
+           "along the impact direction, or below its lowest node (along gravity) moving faster than v_min "
+           "(the latter also without any contact: a rock through an opening of the net);",
            "- **rebounded**: the rock is out of contact at the end and left its last contact window moving "
            "against the impact direction faster than v_min (rebound speed from the first DEM output after "
-           "that window, extrapolated back to its end); apparent restitution = rebound speed / impact speed;",
+           "that window, extrapolated back to its end), or it still touches the net at the end but moves "
+           "back faster than v_min; apparent restitution = rebound speed / impact speed;",
            "- **stopped**: its velocity along the impact direction came down to v_min or below after the "
            "impact and it ends within the net's extent across the impact direction (widened by the rock's size);",
            "- **undecided** otherwise (still braking at the end, or outside the net's extent); **no contact** "
