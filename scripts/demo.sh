@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# `make demo`: runs the default case (cases/rest_position, strong coupling), plots it and
-# says where the results are. Usage: scripts/demo.sh [OUT_DIR]   (default results/demo)
+# `make demo`: runs the default case (cases/rest_position, strong coupling), plots it, writes
+# its run report (scripts/report.py: OUT_DIR/report.md) and says where the results are.
+# Usage: scripts/demo.sh [OUT_DIR]   (default results/demo)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/results/demo}
@@ -28,6 +29,10 @@ print("demo: Point A at the end %.5f m, static solution %.5f m (%.2f %% apart); 
       "%d steps, %.2f interface iterations per step"
       % (a[-1], s, 100 * abs(a[-1] - s) / abs(s), a.min(), len(c.iterations), c.iterations.mean()))
 PY
+"$PYTHON" "$root/scripts/report.py" "$out" >"$out/report.txt" 2>&1 || {
+  cat "$out/report.txt" >&2; echo "demo: the run report failed" >&2; exit 1; }
+echo "demo: run report $out/report.md"
+grep '^verdict: ' "$out/report.txt" | sed 's/^/demo: /'
 cat <<MSG
 
 demo: done.
@@ -36,6 +41,7 @@ demo: done.
                    (net: colour by axial_force; rocks: Glyph filter, Sphere, scale array 'radius',
                    scale factor 2; the DEM's copy of the net is in $out/dem_net.xdmf)
   picture:         xvfb-run -a pvpython scripts/paraview_view.py $out   (writes $out/paraview.png)
+  run report:      $out/report.md   (plots in $out/report/, summary in $out/report.txt)
   plots (PNG):     $(ls "$out"/plots/*.png | tr '\n' ' ')
   iterations log:  $out/iterations.log   (step time iterations converged residual)
 MSG

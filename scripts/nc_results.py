@@ -2,13 +2,17 @@
 
 Only the dataset names that the programs document as stable are used:
 fem.h5   /monitor/time, /monitor/node_ids, /monitor/displacement (steps x nodes x 3),
-         /output/{time,axial_force,strain,reaction}, /mesh/support_nodes
-dem.h5   /time, /particles/{radius,body,position,velocity,angular_velocity},
-         /clusters/{position,orientation}, /net/{position,force}, /energy/kinetic
-coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact}
-             /iterations/{step,iteration,residual,alpha,contact_force}
+         /output/{time,axial_force,strain,reaction,displacement,position},
+         /mesh/{support_nodes,coordinates,elements,reference_length}
+dem.h5   /time, /particles/{radius,body,material,position,velocity,angular_velocity},
+         /clusters/{position,orientation}, /net/{position,force}, /energy/kinetic, /walls/force
+coupling.h5  /steps/{time,dt,iterations,residual,converged,contact_force,in_contact,min_gap}
+             /iterations/{step,iteration,residual,alpha,contact_force}, /energy/*
 contact_intervals / contact_free_time: contact windows of coupled runs or of a fine-step reference
+rocks / Energy / run_verdict_line / load_json: what scripts/report.py builds on (rigid bodies
+with their mass from dem.json, coupling.h5 /energy, the coupler's reliability line)
 """
+import json
 import os
 
 import h5py
@@ -58,6 +62,9 @@ class Dem:
             self.net_force = get("/net/force")
             self.net_first_step = int(f["/net"].attrs["first_output_step"]) if "/net" in f else None
             self.kinetic = get("/energy/kinetic")
+            self.material = get("/particles/material")
+            self.walls_force = get("/walls/force")
+            self.net_edges = get("/net/edges")
 
 
 def load_dem(results_dir):
@@ -81,6 +88,11 @@ class Fem:
             self.max_u = float(a.get("max_magnitude", np.nan))
             self.max_time = float(a.get("max_time", np.nan))
             self.max_node = int(a.get("max_node", -1))
+            self.coordinates = np.array(f["/mesh/coordinates"]) if "/mesh/coordinates" in f else None
+            self.elements = np.array(f["/mesh/elements"]) if "/mesh/elements" in f else None
+            self.reference_length = (np.array(f["/mesh/reference_length"])
+                                     if "/mesh/reference_length" in f else None)
+            self.position = np.array(f["/output/position"]) if "/output/position" in f else None
 
 
 def load_fem(results_dir):
@@ -107,6 +119,7 @@ class Coupling:
             self.converged = np.array(steps["converged"])
             self.contact_force = np.array(steps["contact_force"])
             self.in_contact = np.array(steps["in_contact"])
+            self.min_gap = np.array(steps["min_gap"]) if "min_gap" in steps else None
             it = f["/iterations"]
             self.it_step = np.array(it["step"])
             self.it_iteration = np.array(it["iteration"])
@@ -204,3 +217,94 @@ def run_contact(results_dir, until, window):
     return dict(n=len(iv), free=contact_free_time(iv, *window), longest=max((b - a for a, b in iv), default=0.0),
                 fmax=float(f.max()), peak=float(load_monitor(results_dir).node(1).min()),
                 lost=contact_lost_and_regained(c))
+
+
+def load_json(path):
+    """A JSON input file as a dict (ValueError naming the file when it does not parse)."""
+    with open(path) as fh:
+        try:
+            return json.load(fh)
+        except ValueError as e:
+            raise ValueError("%s: not valid JSON: %s" % (path, e))
+
+
+class Rock:
+    """One rigid body of the DEM (a sphere or a cluster) over the output steps: particles (indices
+    into /particles), mass (kg, the spheres' volumes times their density, as the DEM sums them),
+    position/velocity [k, 3] of the centre of mass (mass-weighted means of the spheres: exact
+    for a rigid body), kinetic [k] (J, translation + rotation: the sum over the spheres of
+    1/2 m v^2 + 1/5 m r^2 |w|^2, which is the rigid body's energy by the parallel-axis rule)."""
+
+    def __init__(self, body, particles, mass, position, velocity, kinetic):
+        self.body = body
+        self.particles = particles
+        self.mass = mass
+        self.position = position
+        self.velocity = velocity
+        self.kinetic = kinetic
+
+
+def rocks(dem, densities):
+    """The bodies of a Dem, each a Rock. densities: kg/m3 per material index (dem.json
+    "materials" in order); None when unknown: masses are then NaN and the centre is the
+    volume-weighted mean (exact for one material)."""
+    n = len(dem.radius)
+    body = dem.body if dem.body is not None else np.arange(n)
+    volume = 4.0 / 3.0 * np.pi * dem.radius ** 3
+    if densities is not None and dem.material is not None:
+        m = volume * np.asarray(densities, dtype=float)[dem.material]
+    else:
+        m = volume * np.nan
+    weight = m if np.all(np.isfinite(m)) else volume
+    out = []
+    for b in np.unique(body):
+        idx = np.where(body == b)[0]
+        w = weight[idx] / weight[idx].sum()
+        pos = np.einsum("i,kij->kj", w, dem.position[:, idx, :])
+        vel = np.einsum("i,kij->kj", w, dem.velocity[:, idx, :])
+        v2 = np.sum(dem.velocity[:, idx, :] ** 2, axis=2)
+        if dem.angular_velocity is not None:
+            w2 = np.sum(dem.angular_velocity[:, idx, :] ** 2, axis=2)
+        else:
+            w2 = np.zeros_like(v2)
+        ke = (0.5 * m[idx] * v2 + 0.2 * m[idx] * dem.radius[idx] ** 2 * w2).sum(axis=1)
+        out.append(Rock(int(b), idx, float(m[idx].sum()), pos, vel, ke))
+    return out
+
+
+class Energy:
+    """coupling.h5 /energy per coupling step (J): fem_/dem_ kinetic, elastic, potential (end of
+    step), fem_/dem_ dissipated and external_work (in the step), created, input, limit,
+    closure (accumulated); None for a dataset that is absent. attrs: the file's root attributes."""
+
+    NAMES = ("fem_kinetic", "fem_elastic", "fem_potential", "dem_kinetic", "dem_elastic",
+             "dem_potential", "fem_dissipated", "dem_dissipated", "external_work",
+             "fem_interface_work", "dem_interface_work", "interface_created",
+             "created", "input", "limit", "closure")
+
+    def __init__(self, path):
+        with h5py.File(path, "r") as f:
+            self.time = np.array(f["/steps/time"])
+            for name in self.NAMES:
+                key = "/energy/" + name
+                setattr(self, name, np.array(f[key]) if key in f else None)
+            self.attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def load_energy(results_dir):
+    return Energy(os.path.join(results_dir, "coupling.h5"))
+
+
+def run_verdict_line(results_dir):
+    """The coupler's last "results are reliable / NOT reliable" line from coupler.log (without
+    the "coupler: " prefix), or None when the log or the line is missing."""
+    path = os.path.join(results_dir, "coupler.log")
+    if not os.path.exists(path):
+        return None
+    found = None
+    with open(path, errors="replace") as fh:
+        for line in fh:
+            line = line.strip()
+            if "results are reliable" in line or "results are NOT reliable" in line:
+                found = line[len("coupler: "):] if line.startswith("coupler: ") else line
+    return found
