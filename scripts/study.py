@@ -766,7 +766,8 @@ def jacobian_meets(r, ref_peak):
     reliable = (not r["timed_out"]) and r["rc"] in (0, 3) and r["finished"] == 1 and r["unconverged"] == 0 \
         and not r["energy_fired"]
     peak = None
-    if ref_peak is not None and np.isfinite(r.get("peak", float("nan"))):
+    # only a run that reached its end time is compared (a stopped one may not have had its peak yet)
+    if ref_peak is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
         peak = abs(r["peak"] - ref_peak) / ref_peak * 100 <= TARGET_PEAK_PCT
     return its, reliable, peak
 
@@ -811,7 +812,7 @@ def study_jacobian(out, jobs, end_time):
             r = jacobian_metrics(run_dir, seconds, node, comp)
             cor = label.split("_")[1][3:]
             # a reference stopped at the cap still counts once its peak is behind it (by 5 % of the run)
-            if ("error" not in r and r["unconverged"] == 0 and not r["energy_fired"] and np.isfinite(r["peak"])
+            if ("error" not in r and r["unconverged"] == 0 and not r["energy_fired"] and r["peak"] > 0
                     and (r.get("finished") == 1 or r["t_peak"] < r["t_end"] - 0.05 * end)):
                 refs[(case, cor)] = r
             rows[(case, label)] = r
@@ -826,7 +827,7 @@ def jacobian_cell(r, ref):
                                   r["it_max"], r["unconverged"], r["rejected"])
     if r["energy_fired"]:
         cell += " E%+.0f%%" % r["created_pct"]
-    if ref is not None and np.isfinite(r.get("peak", float("nan"))):
+    if ref is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
         cell += " %+.1f%%" % ((r["peak"] - ref["peak"]) / ref["peak"] * 100)
     return cell + " %.0fs" % r["seconds"]
 
