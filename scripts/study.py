@@ -14,6 +14,7 @@ import argparse
 import concurrent.futures
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -31,8 +32,10 @@ import nc_results  # noqa: E402
 POINT_A = 1  # node at x = 1 m in the cable cases
 
 
-def run(case, label, sets, out_dir, end_time=None):
-    """Runs one case variant unless its results are complete; returns (label, dir, seconds, ok)."""
+def run(case, label, sets, out_dir, end_time=None, timeout_s=None):
+    """Runs one case variant unless its results are complete; returns (label, dir, seconds, ok).
+    timeout_s: wall-time cap; a run still going then is stopped like Ctrl-C (the coupler shuts
+    the solvers down, coupling.h5 keeps the steps done) and recorded as timed out."""
     run_dir = os.path.join(out_dir, label)
     done = os.path.join(run_dir, "done.json")
     if os.path.exists(done):
@@ -43,22 +46,36 @@ def run(case, label, sets, out_dir, end_time=None):
     for s in sets + ([("coupler.end_time=%g" % end_time)] if end_time else []):
         args += ["--set", s]
     start = time.monotonic()
-    result = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    timed_out = False
+    # its own process group: a capped run's leftovers can be ended without touching others
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True)
+    try:
+        output, _ = proc.communicate(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        timed_out = True
+        proc.send_signal(signal.SIGTERM)  # run_case.sh interrupts the coupler, which shuts down the solvers
+        try:
+            output, _ = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            output, _ = proc.communicate()
     seconds = time.monotonic() - start
-    ok = result.returncode == 0
+    ok = proc.returncode == 0 and not timed_out
     os.makedirs(run_dir, exist_ok=True)
     with open(os.path.join(run_dir, "study.log"), "w") as f:
-        f.write(result.stdout)
+        f.write(output)
     with open(done, "w") as f:
-        json.dump({"seconds": seconds, "ok": ok, "sets": sets}, f)
+        json.dump({"seconds": seconds, "ok": ok, "sets": sets, "returncode": proc.returncode,
+                   "timed_out": timed_out}, f)
     return label, run_dir, seconds, ok
 
 
-def run_all(case, variants, out_dir, jobs, end_time):
+def run_all(case, variants, out_dir, jobs, end_time, timeout_s=None):
     os.makedirs(out_dir, exist_ok=True)
     results = {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(run, case, label, sets, out_dir, end_time) for label, sets in variants]
+        futures = [pool.submit(run, case, label, sets, out_dir, end_time, timeout_s) for label, sets in variants]
         for future in concurrent.futures.as_completed(futures):
             label, run_dir, seconds, ok = future.result()
             print("  %-28s %6.1f s  %s" % (label, seconds, "ok" if ok else "FAILED (see %s)" % run_dir))
@@ -645,6 +662,308 @@ def study_special(out, jobs, end_time):
              c.iterations.mean(), c.iterations.max(), int((c.converged == 0).sum())))
 
 
+# ---- the interface Jacobian against the plain exchange (docs/notes/interface_jacobian.md) --
+
+# case: (end time [s] covering the main impact, monitor node, component of its peak (0 x, 2 z),
+# the --set keys of the rock–net restitution, wall-time cap per run [s], 5x dt included, extra sets).
+# Rock–net ζ is the mean of the rock's and the net wall's (dem_solver/README.md): where the net
+# wall has its own restitution both are set (the terrain cases' rock–ground pair changes with it).
+ROCK_NET = ["dem.materials.0.restitution", "dem.net_wall.restitution"]
+# the terrain cases roll 1.9 s before the net: far steps (x10, 0.056 m of rolling per step, less
+# than the near distance 0.3 m) for the approach, in every variant and in the reference
+FAR = ["coupler.efficiency.far_step=true", "coupler.efficiency.far_step_factor=10"]
+JACOBIAN_CASES = [
+    ("rest_position", 1.5, 1, 2, ["dem.materials.0.restitution"], 60, True, []),
+    ("cable_impact", 1.0, 1, 2, ["dem.materials.0.restitution"], 60, True, []),
+    ("net_sieve", 0.2, 30, 2, ROCK_NET, 60, True, []),
+    ("angled_net", 0.2, 220, 2, ROCK_NET, 60, True, []),
+    ("steel_net", 0.15, 220, 2, ROCK_NET, 45, False, []),
+    ("rock_cluster", 0.55, 220, 2, ROCK_NET, 40, False, []),
+    ("terrain_net", 2.15, 52, 0, ROCK_NET, 40, False, FAR),
+    ("terrain_curtain", 2.15, 52, 0, ROCK_NET, 40, False, FAR),
+]
+JACOBIAN_CORS = ["0.1", "0.3", "0.5", "1.0"]
+# references at Δt/10 for every COR where they are cheap, at COR 0.3 elsewhere (the budget)
+JACOBIAN_REF_ALL_CORS = ("rest_position", "cable_impact", "net_sieve")
+JACOBIAN_REF_CAP_S = 90
+JACOBIAN_VARIANTS = [
+    ("aitken", "plain Aitken", ["coupler.interface_jacobian=false"]),
+    ("iqn", "plain IQN-ILS", ["coupler.interface_jacobian=false", "coupler.relaxation.method=iqn-ils"]),
+    ("jac_aitken", "Jacobian + Aitken", ["coupler.interface_jacobian=true", "coupler.relaxation.method=aitken",
+                                         "coupler.relaxation.alpha=1.0", "coupler.relaxation.first_iteration_cap=1.0"]),
+    ("jac_iqn", "Jacobian + IQN-ILS", ["coupler.interface_jacobian=true", "coupler.relaxation.method=iqn-ils",
+                                       "coupler.relaxation.alpha=1.0"]),
+]
+TARGET_AVG, TARGET_MAX, TARGET_PEAK_PCT = 3.0, 10, 3.0
+
+
+def jacobian_sets(case_dt, factor, end, cor, cor_keys, variant_sets, extra):
+    dt = "%g" % (case_dt * factor)
+    return (variant_sets + extra + ["coupler.dt=" + dt, "fem.analysis.dt_s=" + dt,
+                                    "coupler.end_time=%g" % end, "fem.analysis.end_time_s=%g" % end]
+            + ["%s=%s" % (k, cor) for k in cor_keys])
+
+
+def case_dt_of(case):
+    with open(os.path.join(ROOT, "cases", case, "coupler.json")) as f:
+        return float(json.load(f)["dt"])
+
+
+def jacobian_metrics(run_dir, seconds, node, component):
+    """The study's numbers of one run (partial for a stopped run: coupling.h5 is flushed per step)."""
+    import h5py
+    info = {}
+    done = os.path.join(run_dir, "done.json")
+    if os.path.exists(done):
+        with open(done) as f:
+            info = json.load(f)
+    r = dict(seconds=seconds, rc=info.get("returncode"), timed_out=info.get("timed_out", False))
+    try:
+        with h5py.File(os.path.join(run_dir, "coupling.h5"), "r") as f:
+            st = f["/steps"]
+            it = np.array(st["iterations"])
+            contact = np.array(st["in_contact"]) > 0
+            r.update(steps=len(it), t_end=float(st["time"][-1]) if len(it) else 0.0,
+                     unconverged=int((np.array(st["converged"]) == 0).sum()),
+                     rejected=int(np.array(st["rejected"]).sum()),
+                     contact_steps=int(contact.sum()),
+                     it_avg=float(it[contact].mean()) if contact.any() else float("nan"),
+                     it_max=int(it[contact].max()) if contact.any() else 0,
+                     finished=int(f.attrs.get("finished", 0)))
+            e = f["/energy"]
+            created, inp, above = np.array(e["created"]), np.array(e["input"]), np.array(e["above"])
+            ok = np.isfinite(created) & (inp > 0)
+            r["created_pct"] = float((created[ok] / inp[ok]).max() * 100) if ok.any() else float("nan")
+            r["energy_fired"] = bool(above.any())
+    except (OSError, KeyError, IndexError) as e:
+        r["error"] = str(e)
+        return r
+    try:
+        m = nc_results.load_monitor(run_dir)
+        u = m.node(node, component)
+        r["peak"] = float(np.abs(u).max())
+        r["t_peak"] = float(m.time[int(np.argmax(np.abs(u)))])
+    except (OSError, KeyError, ValueError):
+        r["peak"] = float("nan")
+    return r
+
+
+def jacobian_status(r):
+    """Short exit status: 0, 3, the code, 'cap' (stopped at the wall-time cap), '-' (no results)."""
+    if "error" in r:
+        return "-"
+    if r.get("timed_out"):
+        return "cap@%.3g" % r["t_end"]
+    return str(r["rc"])
+
+
+def jacobian_meets(r, ref_peak):
+    """(iterations target, reliability target (finished, 0 unconverged, no energy), peak target or None)."""
+    if "error" in r:
+        return False, False, None
+    its = r["contact_steps"] > 0 and r["it_avg"] <= TARGET_AVG and r["it_max"] <= TARGET_MAX
+    reliable = (not r["timed_out"]) and r["rc"] in (0, 3) and r["finished"] == 1 and r["unconverged"] == 0 \
+        and not r["energy_fired"]
+    peak = None
+    # only a run that reached its end time is compared (a stopped one may not have had its peak yet)
+    if ref_peak is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
+        peak = abs(r["peak"] - ref_peak) / ref_peak * 100 <= TARGET_PEAK_PCT
+    return its, reliable, peak
+
+
+def study_jacobian(out, jobs, end_time):
+    """Interface Jacobian vs plain exchange, Aitken and IQN-ILS, 8 cases x COR x dt (targets of the coupling)."""
+    # 1. rest_position over 4 s, COR 0.5: strong 3e-2 with the Jacobian against weak 1e-3, one run at a time
+    speed = [("speed_strong3e-2_jac", ["coupler.scheme=strong", "coupler.dt=3e-2", "fem.analysis.dt_s=3e-2"]
+              + JACOBIAN_VARIANTS[2][2]),
+             ("speed_weak1e-3_plain", ["coupler.scheme=weak", "coupler.dt=1e-3", "fem.analysis.dt_s=1e-3",
+                                       "coupler.interface_jacobian=false"]),
+             ("speed_weak1e-3_jac", ["coupler.scheme=weak", "coupler.dt=1e-3", "fem.analysis.dt_s=1e-3",
+                                     "coupler.interface_jacobian=true"])]
+    speed = [(label, sets + ["dem.materials.0.restitution=0.5", "coupler.end_time=4", "fem.analysis.end_time_s=4"])
+             for label, sets in speed]
+    speed_results = run_all("rest_position", speed, os.path.join(out, "rest_position"), 1, None, 300)
+    # 2. the matrix, cheap cases first so that an interrupted study has them; then the references
+    rows = {}
+    refs = {}
+    for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
+        end = end_time or end
+        dt0 = case_dt_of(case)
+        variants = []
+        for cor in JACOBIAN_CORS:
+            for factor in ((1, 5) if five else (1,)):
+                for name, _, vsets in JACOBIAN_VARIANTS:
+                    variants.append(("%s_cor%s_dt%dx" % (name, cor, factor),
+                                     jacobian_sets(dt0, factor, end, cor, cor_keys, vsets, extra)))
+        case_out = os.path.join(out, case)
+        print("  %s: %d runs to %g s, cap %d s" % (case, len(variants), end, cap))
+        results = run_all(case, variants, case_out, jobs, None, cap)
+        for label, (run_dir, seconds, ok) in results.items():
+            rows[(case, label)] = jacobian_metrics(run_dir, seconds, node, comp)
+    for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
+        end = end_time or end
+        dt0 = case_dt_of(case)
+        cors = JACOBIAN_CORS if case in JACOBIAN_REF_ALL_CORS else ["0.3"]
+        variants = [("ref_cor%s_dt0.1x" % cor, jacobian_sets(dt0, 0.1, end, cor, cor_keys, JACOBIAN_VARIANTS[2][2], extra))
+                    for cor in cors]
+        results = run_all(case, variants, os.path.join(out, case), jobs, None, JACOBIAN_REF_CAP_S)
+        for label, (run_dir, seconds, ok) in results.items():
+            r = jacobian_metrics(run_dir, seconds, node, comp)
+            cor = label.split("_")[1][3:]
+            # a reference stopped at the cap still counts once its peak is behind it (by 5 % of the run)
+            if ("error" not in r and r["unconverged"] == 0 and not r["energy_fired"] and r["peak"] > 0
+                    and (r.get("finished") == 1 or r["t_peak"] < r["t_end"] - 0.05 * end)):
+                refs[(case, cor)] = r
+            rows[(case, label)] = r
+    jacobian_tables(out, rows, refs, speed_results)
+    jacobian_figures(out, rows, refs)
+
+
+def jacobian_cell(r, ref):
+    if "error" in r:
+        return "no results"
+    cell = "%s %s/%d u%d r%d" % (jacobian_status(r), "%.1f" % r["it_avg"] if np.isfinite(r["it_avg"]) else "-",
+                                  r["it_max"], r["unconverged"], r["rejected"])
+    if r["energy_fired"]:
+        cell += " E%+.0f%%" % r["created_pct"]
+    if ref is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
+        cell += " %+.1f%%" % ((r["peak"] - ref["peak"]) / ref["peak"] * 100)
+    return cell + " %.0fs" % r["seconds"]
+
+
+def jacobian_tables(out, rows, refs, speed_results):
+    print("\n  cell: exit status (0, 3 NOT reliable, 1 failed, cap@t: stopped at the wall-time cap at t)"
+          " it/step avg/max in contact, u unconverged steps accepted, r rejected tries, E energy created"
+          " (guard fired, % of input), peak vs the fine reference, wall time")
+    lines = []
+    head = "| case | end [s] | COR | Δt [s] | " + " | ".join(v[1] for v in JACOBIAN_VARIANTS) + " | reference peak (Δt/10) |"
+    lines.append(head)
+    lines.append("|" + "---|" * (5 + len(JACOBIAN_VARIANTS)))
+    tally = {v[0]: dict(runs=0, its=0, reliable=0, peak=0, peak_n=0, all=0) for v in JACOBIAN_VARIANTS}
+    for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
+        dt0 = case_dt_of(case)
+        for cor in JACOBIAN_CORS:
+            ref = refs.get((case, cor))
+            for factor in ((1, 5) if five else (1,)):
+                cells = []
+                for name, _, _ in JACOBIAN_VARIANTS:
+                    r = rows.get((case, "%s_cor%s_dt%dx" % (name, cor, factor)))
+                    if r is None:
+                        cells.append("not run")
+                        continue
+                    use_ref = ref if factor == 1 else None
+                    cells.append(jacobian_cell(r, use_ref))
+                    its, reliable, peak = jacobian_meets(r, use_ref["peak"] if use_ref else None)
+                    t = tally[name]
+                    t["runs"] += 1
+                    t["its"] += its
+                    t["reliable"] += reliable
+                    if peak is not None:
+                        t["peak_n"] += 1
+                        t["peak"] += peak
+                    # at the case's Δt "all" includes the peak check, so a run without a reference is not counted
+                    t["all"] += its and reliable and (peak is True or factor != 1)
+                refcell = "-"
+                if factor == 1:
+                    rr = rows.get((case, "ref_cor%s_dt0.1x" % cor))
+                    if ref is not None:
+                        refcell = "%.4f m at %.3f s%s" % (ref["peak"], ref["t_peak"],
+                                                          "" if ref.get("finished") == 1 else " (run to %.3g s)" % ref["t_end"])
+                    elif rr is not None:
+                        refcell = "none (%s, %d unconverged)" % (jacobian_status(rr), rr.get("unconverged", -1))
+                lines.append("| %s | %g | %s | %g | %s | %s |" % (case, end, cor, dt0 * factor, " | ".join(cells), refcell))
+    lines.append("")
+    lines.append("| variant | runs | iterations ≤ %g avg / ≤ %d max in contact | reliable (finished, 0 unconverged, no energy) "
+                 "| peak within %g %% (of runs with a reference) | all targets |" % (TARGET_AVG, TARGET_MAX, TARGET_PEAK_PCT))
+    lines.append("|---|---|---|---|---|---|")
+    for name, title, _ in JACOBIAN_VARIANTS:
+        t = tally[name]
+        lines.append("| %s | %d | %d | %d | %d of %d | %d |" % (title, t["runs"], t["its"], t["reliable"], t["peak"],
+                                                                t["peak_n"], t["all"]))
+    lines.append("")
+    lines.append("| rest_position, COR 0.5, 4 s | wall [s] | coupler wall [s] | steps | it/step | exit |")
+    lines.append("|---|---|---|---|---|---|")
+    for label in ("speed_strong3e-2_jac", "speed_weak1e-3_plain", "speed_weak1e-3_jac"):
+        run_dir, seconds, ok = speed_results[label]
+        try:
+            import h5py
+            with h5py.File(os.path.join(run_dir, "coupling.h5"), "r") as f:
+                wall = float(f["/timing/total"][0])
+                it = np.array(f["/steps/iterations"])
+            with open(os.path.join(run_dir, "done.json")) as f:
+                rc = json.load(f).get("returncode")
+            lines.append("| %s | %.1f | %.2f | %d | %.2f | %s |" % (label[6:], seconds, wall, len(it), it.mean(), rc))
+        except (OSError, KeyError) as e:
+            lines.append("| %s | no results (%s) | | | | |" % (label[6:], e))
+    table = "\n".join(lines)
+    print(table)
+    with open(os.path.join(out, "jacobian_table.md"), "w") as f:
+        f.write(table + "\n")
+    print("  wrote", os.path.join(out, "jacobian_table.md"))
+
+
+def jacobian_figures(out, rows, refs):
+    """Targets map: one panel per variant, a cell per case x (COR, Δt) coloured by what it meets,
+    with the average / max iterations per contact step written in."""
+    cols = [(cor, f) for f in (1, 5) for cor in JACOBIAN_CORS]
+    fig, axes = plt.subplots(1, len(JACOBIAN_VARIANTS), figsize=(18, 5.4), sharey=True)
+    colours = {"all": "#4caf50", "noref": "#c5e1a5", "reliable": "#ffd54f", "its": "#90caf9", "none": "#ef9a9a", "missing": "#eeeeee"}
+    for ax, (name, title, _) in zip(axes, JACOBIAN_VARIANTS):
+        for i, case in enumerate(c[0] for c in JACOBIAN_CASES):
+            for j, (cor, factor) in enumerate(cols):
+                r = rows.get((case, "%s_cor%s_dt%dx" % (name, cor, factor)))
+                if r is None or "error" in r:
+                    colour, text = colours["missing"], "not run" if r is None else "-"
+                else:
+                    ref = refs.get((case, cor)) if factor == 1 else None
+                    its, reliable, peak = jacobian_meets(r, ref["peak"] if ref else None)
+                    kind = ("all" if its and reliable and (peak is True or factor != 1) else
+                            "noref" if its and reliable and peak is None else
+                            "reliable" if reliable else "its" if its else "none")
+                    colour = colours[kind]
+                    text = "%s\n%d" % ("%.1f" % r["it_avg"] if np.isfinite(r["it_avg"]) else "-", r["it_max"])
+                    if r["timed_out"]:
+                        text += "\ncap"
+                    elif r["rc"] not in (0, 3):
+                        text += "\nexit %s" % r["rc"]
+                    elif r["unconverged"]:
+                        text += "\nu%d" % r["unconverged"]
+                ax.add_patch(plt.Rectangle((j, i), 1, 1, facecolor=colour, edgecolor="white"))
+                ax.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=6)
+        ax.set_xlim(0, len(cols))
+        ax.set_ylim(len(JACOBIAN_CASES), 0)
+        ax.set_xticks(np.arange(len(cols)) + 0.5)
+        ax.set_xticklabels(["%s\n%s" % (cor, "Δt" if f == 1 else "5Δt") for cor, f in cols], fontsize=7)
+        ax.set_yticks(np.arange(len(JACOBIAN_CASES)) + 0.5)
+        ax.set_yticklabels([c[0] for c in JACOBIAN_CASES], fontsize=8)
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("rock–net COR, coupling step")
+    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=colours[k]) for k in ("all", "noref", "reliable", "its", "none", "missing")]
+    fig.legend(handles, ["all targets met", "iterations and reliability met, no reference for the peak", "reliable, iterations above target", "iterations met, not reliable",
+                         "neither", "not run (5Δt dropped: time budget)"], loc="lower center", ncol=6, fontsize=8)
+    fig.suptitle("interface iterations per contact step (average / max; u: unconverged steps accepted, cap: "
+                 "stopped at the wall-time cap) and the targets (≤ 3 / ≤ 10, reliable, peak within 3 %)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.06, 1, 0.95))
+    fig.savefig(os.path.join(out, "jacobian_targets.png"), dpi=120)
+    plt.close(fig)
+    print("  wrote", os.path.join(out, "jacobian_targets.png"))
+    # iterations over time at the case's Δt, COR 0.3, for the two light cases and one net case
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    for ax, case in zip(axes, ("rest_position", "cable_impact", "net_sieve")):
+        for name, title, _ in JACOBIAN_VARIANTS:
+            try:
+                c = nc_results.load_coupling(os.path.join(out, case, "%s_cor0.3_dt1x" % name))
+            except (OSError, KeyError):
+                continue
+            ax.step(c.end_time, c.iterations, where="pre", lw=0.9, label=title)
+        ax.set_title("%s, COR 0.3, the case's Δt" % case, fontsize=9)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("interface iterations per step")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    save(fig, os.path.join(out, "jacobian_iterations.png"))
+
+
 STUDIES = {
     "timestep": study_timestep,
     "relaxation": study_relaxation,
@@ -654,6 +973,7 @@ STUDIES = {
     "angled_net": study_angled_net,
     "terrain": study_terrain,
     "special": study_special,
+    "jacobian": study_jacobian,
 }
 
 
