@@ -235,6 +235,7 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
     if (s->lin.active) {
         fem_ijac_force(&s->lin, u, v);
         const double *df = s->lin.df;
+        scale2 += s->lin.force_scale_n * s->lin.force_scale_n;
         for (int i = 0; i < s->ndof; i++) {
             s->r[i] = lambda * s->f_model[i] + s->f_coupling[i] + df[i];
             fext2 += s->r[i] * s->r[i];

@@ -115,18 +115,23 @@ void fem_ijac_force(fem_ijac *j, const double *u, const double *v)
     /* only block rows are ever written (fem_ijac_set zeroes the rest) */
     for (int b = 0; b < j->n_blocks; b++)
         for (int r = 0; r < 3; r++) df[3 * j->nodes[2 * b] + r] = 0.0;
+    double scale2 = 0.0;
     for (int b = 0; b < j->n_blocks; b++) {
         const int fi = 3 * j->nodes[2 * b], mj = 3 * j->nodes[2 * b + 1];
         const double *K = j->K + 9 * b, *C = j->C + 9 * b;
         for (int r = 0; r < 3; r++) {
-            double sum = 0;
+            double sum = 0, mag = 0;
             for (int c = 0; c < 3; c++) {
-                sum += K[3 * r + c] * (u[mj + c] - j->u_ref[mj + c]);
-                if (v) sum += C[3 * r + c] * (v[mj + c] - j->v_ref[mj + c]);
+                double tk = K[3 * r + c] * (u[mj + c] - j->u_ref[mj + c]);
+                double tc = v ? C[3 * r + c] * (v[mj + c] - j->v_ref[mj + c]) : 0.0;
+                sum += tk + tc;
+                mag += fabs(tk) + fabs(tc);
             }
             df[fi + r] -= sum;
+            scale2 += mag * mag;
         }
     }
+    j->force_scale_n = sqrt(scale2);
 }
 
 void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x)

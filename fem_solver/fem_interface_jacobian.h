@@ -36,6 +36,9 @@ typedef struct fem_ijac {
     double *weight;          /* [9 n_blocks] share of the entry in its slot (1 or 1/2) */
     double *u_ref, *v_ref;   /* [ndof] reference displacement (m) and velocity (m/s) */
     double *df;              /* [ndof] dF at the last evaluation (N) */
+    double force_scale_n;    /* size of the terms of dF before they cancel (N): part of the
+                                Newton force scale, as a stiff contact's K (u - u^k) rounds
+                                at that size however small dF is */
 } fem_ijac;
 
 /* Sets the linearisation; returns 0, or -1 with err naming the offending block (then the

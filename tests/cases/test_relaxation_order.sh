@@ -41,6 +41,7 @@ for alpha in 0.1 0.2 0.5 0.7 1.0; do
     --set "coupler.relaxation.alpha=$alpha" "${common[@]}" "${plain[@]}" "${opt_in[@]}"
 done
 run_case aitken "$case_dir" --set coupler.relaxation.method=aitken "${common[@]}" "${plain[@]}" \
+  --set coupler.relaxation.alpha=0.5 --set coupler.relaxation.first_iteration_cap=0.5 \
   --set coupler.accept_energy_growth=true
 # with the interface Jacobian the unrelaxed iteration (alpha 1.0) converges
 run_case jacobian_alpha_1.0 "$case_dir" --set coupler.relaxation.method=constant \

@@ -63,9 +63,10 @@ for name, opted in (("unconverged", 0), ("opted_in", 1)):
         name, len(dt), a["unconverged_steps"], a["rejected_attempts"], a["min_dt_used"]))
     assert a["reliable"] == 0 and a["finished"] == 1 and a["accept_unconverged"] == opted, a
     assert a["unconverged_steps"] == (converged == 0).sum() > 0, a
-    # every rejection halves the step, down to dt_min = dt / 64, which the run then used
+    # every rejection halves the step, down to dt_min = dt / 64, which the run then used (a
+    # last step shortened to end on end_time carries the rounding of t: 1e-9)
     assert int(rejected.sum()) == int(a["rejected_attempts"]) == len(rdt) >= 6, a
-    assert np.allclose(rnext, rdt / 2, rtol=1e-12, atol=0), (rdt, rnext)
+    assert np.allclose(rnext, rdt / 2, rtol=1e-9, atol=0), (rdt, rnext)
     assert abs(a["dt_min"] - a["dt"] / 64) < 1e-12 * a["dt"], a
     assert abs(a["min_dt_used"] - a["dt_min"]) < 1e-12 * a["dt"], a
     assert abs(dt.sum() - 0.4) < 1e-9, dt.sum()
