@@ -3,6 +3,7 @@
 
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +14,121 @@
 #include "nc_file.h"
 #include "nc_json.h"
 #include "nc_time.h"
+
+/* Wide engineering ranges: a value outside is a warning (likely a unit mistake), not an error. */
+#define PLAUSIBLE_RADIUS_MIN_M 1e-3
+#define PLAUSIBLE_RADIUS_MAX_M 20.0
+#define PLAUSIBLE_DENSITY_MIN 100.0
+#define PLAUSIBLE_DENSITY_MAX 25000.0
+#define PLAUSIBLE_MODULUS_MIN_PA 1e5
+#define PLAUSIBLE_MODULUS_MAX_PA 1e12
+#define PLAUSIBLE_SPEED_MAX_M_S 100.0
+
+/* One warning line "warning: <field>: <text>" to the caller's sink (none: dropped). */
+static void warn(FILE *sink, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void warn(FILE *sink, const char *fmt, ...)
+{
+    if (!sink) return;
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("warning: ", sink);
+    vfprintf(sink, fmt, ap);
+    fputc('\n', sink);
+    va_end(ap);
+}
+
+static void warn_radius(FILE *sink, const char *where, const char *key, double r)
+{
+    if (r < PLAUSIBLE_RADIUS_MIN_M || r > PLAUSIBLE_RADIUS_MAX_M)
+        warn(sink, "%s.%s: %s%g m%s outside the plausible range 1e-3..20 m for a rock", where,
+             key, strcmp(key, "radius") ? "gives a radius of " : "", r,
+             strcmp(key, "radius") ? "," : " is");
+}
+
+static void warn_modulus(FILE *sink, const char *where, double e)
+{
+    if (e < PLAUSIBLE_MODULUS_MIN_PA || e > PLAUSIBLE_MODULUS_MAX_PA)
+        warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
+                   "(rock about 1e10..1e11, steel 2.1e11)", where, e);
+}
+
+static void warn_speed(FILE *sink, const char *where, const char *key, const double v[3])
+{
+    double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (sp > PLAUSIBLE_SPEED_MAX_M_S)
+        warn(sink, "%s.%s: gives a speed of %g m/s, above the plausible 100 m/s for a rockfall",
+             where, key, sp);
+}
+
+static double norm3(const double v[3])
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* The initial velocity of a body of mass `mass_kg` (<= 0: not known here, impact_energy_j is
+ * refused) from exactly one of velocity, drop_height_m (free fall from rest under `gravity`
+ * through that height: v = sqrt(2 |g| h) along g) or impact_energy_j (v = sqrt(2 E / m) along
+ * impact_direction, default along g). Missing all three: at rest. */
+static int parse_initial_velocity(const cJSON *o, const char *where, const double gravity[3],
+                                  double mass_kg, FILE *sink, double vel[3], nc_error *err)
+{
+    static const double zero[3] = {0, 0, 0};
+    const char *given[3] = {"velocity", "drop_height_m", "impact_energy_j"};
+    int n = 0, which = 0;
+    for (int k = 0; k < 3; k++)
+        if (cJSON_GetObjectItemCaseSensitive(o, given[k])) {
+            n++;
+            which = k;
+        }
+    if (n > 1)
+        return nc_error_set(err, 1, "%s: give only one of velocity, drop_height_m and "
+                                    "impact_energy_j", where);
+    int has_dir = cJSON_GetObjectItemCaseSensitive(o, "impact_direction") != NULL;
+    if (has_dir && !(n == 1 && which == 2))
+        return nc_error_set(err, 1, "%s.impact_direction: only used with impact_energy_j", where);
+    double g = norm3(gravity);
+    if (n == 0 || which == 0) {
+        if (nc_json_vec3_opt(o, where, "velocity", zero, vel, err)) return -1;
+        if (n) warn_speed(sink, where, "velocity", vel);
+        return 0;
+    }
+    double dir[3], speed;
+    if (which == 1) {
+        double h;
+        if (nc_json_number_range(o, where, "drop_height_m", 0.0, INFINITY, &h, err)) return -1;
+        if (!(g > 0.0))
+            return nc_error_set(err, 1, "%s.drop_height_m: needs a non-zero gravity", where);
+        for (int k = 0; k < 3; k++) dir[k] = gravity[k] / g;
+        speed = sqrt(2.0 * g * h);
+    } else {
+        double e;
+        if (nc_json_number_range(o, where, "impact_energy_j", 0.0, INFINITY, &e, err)) return -1;
+        if (!(mass_kg > 0.0))
+            return nc_error_set(err, 1, "%s.impact_energy_j: not available here (the mass is "
+                                        "not known)", where);
+        if (has_dir) {
+            if (nc_json_vec3(o, where, "impact_direction", dir, err)) return -1;
+            double d = norm3(dir);
+            if (!(d > 0.0))
+                return nc_error_set(err, 1, "%s.impact_direction: expected a non-zero vector", where);
+            for (int k = 0; k < 3; k++) dir[k] /= d;
+        } else if (g > 0.0) {
+            for (int k = 0; k < 3; k++) dir[k] = gravity[k] / g;
+        } else {
+            return nc_error_set(err, 1, "%s.impact_direction: missing (gravity is zero, so there "
+                                        "is no default direction)", where);
+        }
+        speed = sqrt(2.0 * e / mass_kg);
+    }
+    for (int k = 0; k < 3; k++) vel[k] = speed * dir[k];
+    warn_speed(sink, where, given[which], vel);
+    return 0;
+}
+
+static double sphere_mass_kg(double r, double density)
+{
+    return 4.0 / 3.0 * M_PI * r * r * r * density;
+}
 
 static int find_material(const dem_sim *s, const cJSON *obj, const char *where, int *index,
                          nc_error *err)
@@ -32,7 +148,8 @@ static int find_material(const dem_sim *s, const cJSON *obj, const char *where, 
                         where, name);
 }
 
-static int parse_materials(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+static int parse_materials(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
+                           nc_error *err)
 {
     static const char *const keys[] = {"name", "youngs_modulus_pa", "poisson_ratio",
                                        "density_kg_m3", "restitution", "friction", NULL};
@@ -63,15 +180,21 @@ static int parse_materials(dem_sim *s, const cJSON *root, const char *file, nc_e
             if (strcmp(s->model.materials[q].name, name) == 0)
                 return nc_error_set(err, 1, "%s.name: material \"%s\" defined twice", where, name);
         snprintf(mat.name, sizeof mat.name, "%s", name);
+        warn_modulus(sink, where, mat.youngs_modulus_pa);
+        if (mat.density_kg_m3 < PLAUSIBLE_DENSITY_MIN || mat.density_kg_m3 > PLAUSIBLE_DENSITY_MAX)
+            warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
+                       "kg/m³ (rock 1000..5000)", where, mat.density_kg_m3);
         if (dem_sim_add_material(s, &mat, err) < 0) return -1;
     }
     return 0;
 }
 
-static int parse_particles(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+static int parse_particles(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
+                           nc_error *err)
 {
-    static const char *const keys[] = {"position", "radius", "velocity", "angular_velocity",
-                                       "material", NULL};
+    static const char *const keys[] = {"position", "radius", "mass_kg", "velocity",
+                                       "drop_height_m", "impact_energy_j", "impact_direction",
+                                       "angular_velocity", "material", NULL};
     static const double zero[3] = {0, 0, 0};
     const cJSON *arr;
     int count;
@@ -82,13 +205,32 @@ static int parse_particles(dem_sim *s, const cJSON *root, const char *file, nc_e
         nc_json_path_index(where, sizeof where, file, "particles", k);
         if (!cJSON_IsObject(p)) return nc_error_set(err, 1, "%s: expected an object", where);
         if (nc_json_check_keys(p, where, keys, err)) return -1;
-        double pos[3], vel[3], omega[3], r;
+        double pos[3], vel[3], omega[3], r = 0.0, mass = 0.0;
         int mat;
+        int has_r = cJSON_GetObjectItemCaseSensitive(p, "radius") != NULL;
+        int has_m = cJSON_GetObjectItemCaseSensitive(p, "mass_kg") != NULL;
         if (nc_json_vec3(p, where, "position", pos, err) ||
-            nc_json_positive(p, where, "radius", &r, err) ||
-            nc_json_vec3_opt(p, where, "velocity", zero, vel, err) ||
+            (has_r && nc_json_positive(p, where, "radius", &r, err)) ||
+            (has_m && nc_json_positive(p, where, "mass_kg", &mass, err)) ||
             nc_json_vec3_opt(p, where, "angular_velocity", zero, omega, err) ||
             find_material(s, p, where, &mat, err))
+            return -1;
+        if (!has_r && !has_m)
+            return nc_error_set(err, 1, "%s.radius: missing (give radius or mass_kg)", where);
+        double rho = s->model.materials[mat].density_kg_m3;
+        if (has_m) {
+            /* the sphere of that mass in the particle's material: m = 4/3 π r³ ρ */
+            double rm = cbrt(3.0 * mass / (4.0 * M_PI * rho));
+            if (has_r && !(fabs(rm - r) <= 1e-9 * r))
+                return nc_error_set(err, 1, "%s: radius %.10g m and mass_kg %.10g kg disagree "
+                                            "(a sphere of %.10g kg of material \"%s\", %g kg/m³, "
+                                            "has radius %.10g m); give one of them", where, r,
+                                    mass, mass, s->model.materials[mat].name, rho, rm);
+            if (!has_r) r = rm;
+        }
+        warn_radius(sink, where, has_r ? "radius" : "mass_kg", r);
+        if (parse_initial_velocity(p, where, s->model.prm.gravity, sphere_mass_kg(r, rho), sink,
+                                   vel, err))
             return -1;
         if (dem_sim_add_sphere(s, pos, r, mat, vel, omega, err)) return nc_error_prefix(err, "%s", where);
     }
@@ -216,12 +358,13 @@ static int generate_random(dem_sim *s, const cJSON *g, const char *where, const 
     return rc;
 }
 
-static int parse_generators(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+static int parse_generators(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
+                            nc_error *err)
 {
     static const char *const keys[] = {"type", "min", "max", "radius", "radius_max", "material",
-                                       "velocity", "spacing", "count", "seed", "max_attempts", NULL};
+                                       "velocity", "drop_height_m", "spacing", "count", "seed",
+                                       "max_attempts", NULL};
     static const char *const types[] = {"lattice", "random", NULL};
-    static const double zero[3] = {0, 0, 0};
     const cJSON *arr;
     int count;
     if (nc_json_array_opt(root, file, "generators", &arr, &count, err)) return -1;
@@ -238,9 +381,10 @@ static int parse_generators(dem_sim *s, const cJSON *root, const char *file, nc_
         if (nc_json_choice_opt(g, where, "type", types, 0, &type, err) ||
             nc_json_vec3(g, where, "min", lo, err) || nc_json_vec3(g, where, "max", hi, err) ||
             nc_json_positive(g, where, "radius", &r, err) ||
-            nc_json_vec3_opt(g, where, "velocity", zero, vel, err) ||
+            parse_initial_velocity(g, where, s->model.prm.gravity, 0.0, sink, vel, err) ||
             find_material(s, g, where, &mat, err))
             return -1;
+        warn_radius(sink, where, "radius", r);
         for (int d = 0; d < 3; d++)
             if (hi[d] - lo[d] < 2.0 * r)
                 return nc_error_set(err, 1, "%s: max - min must be at least one diameter (%g m) "
@@ -254,9 +398,12 @@ static int parse_generators(dem_sim *s, const cJSON *root, const char *file, nc_
     return 0;
 }
 
-static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
+                          nc_error *err)
 {
-    static const char *const keys[] = {"spheres", "material", "velocity", "angular_velocity", NULL};
+    static const char *const keys[] = {"spheres", "material", "velocity", "drop_height_m",
+                                       "impact_energy_j", "impact_direction", "angular_velocity",
+                                       NULL};
     static const char *const skeys[] = {"position", "radius", NULL};
     static const double zero[3] = {0, 0, 0};
     const cJSON *arr;
@@ -272,7 +419,6 @@ static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_er
         int ns, mat;
         double vel[3], omega[3];
         if (nc_json_array(c, where, "spheres", &sp, &ns, err) ||
-            nc_json_vec3_opt(c, where, "velocity", zero, vel, err) ||
             nc_json_vec3_opt(c, where, "angular_velocity", zero, omega, err) ||
             find_material(s, c, where, &mat, err))
             return -1;
@@ -291,7 +437,13 @@ static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, nc_er
             else rc = nc_json_check_keys(o, sw, skeys, err) ||
                       nc_json_vec3(o, sw, "position", pos + 3 * q, err) ||
                       nc_json_positive(o, sw, "radius", rad + q, err) ? -1 : 0;
+            if (rc == 0) warn_radius(sink, sw, "radius", rad[q]);
         }
+        /* the body's mass as dem_sim_prepare sums it: the spheres' volumes times ρ */
+        double mass = 0.0;
+        for (int j = 0; j < ns && rc == 0; j++)
+            mass += sphere_mass_kg(rad[j], s->model.materials[mat].density_kg_m3);
+        if (rc == 0) rc = parse_initial_velocity(c, where, s->model.prm.gravity, mass, sink, vel, err);
         if (rc == 0) rc = dem_sim_add_cluster(s, (size_t)ns, pos, rad, mat, vel, omega, err);
         free(pos);
         free(rad);
@@ -358,7 +510,8 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
     return 0;
 }
 
-static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_error *err)
+static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
+                          nc_error *err)
 {
     static const char *const keys[] = {"youngs_modulus_pa", "poisson_ratio", "friction",
                                        "restitution", "cable_radius_m", "near_distance_m",
@@ -381,11 +534,12 @@ static int parse_net_wall(dem_sim *s, const cJSON *root, const char *file, nc_er
         nc_json_choice_opt(w, where, "coupling_force", force_kinds, 0, &n->force_at_end, err) ||
         nc_json_choice_opt(w, where, "wall_position", wall_positions, 0, &n->wall_at_middle, err))
         return -1;
+    warn_modulus(sink, where, n->youngs_modulus_pa);
     return 0;
 }
 
 static int parse_root(dem_sim *s, const cJSON *root, const char *file, const char *base_dir,
-                      nc_error *err)
+                      FILE *sink, nc_error *err)
 {
     static const char *const keys[] = {"description", "materials", "particles", "generators",
                                        "clusters", "planes", "meshes", "gravity", "dt_s",
@@ -456,10 +610,10 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
         return nc_error_set(err, 1, "%s.%s: missing (the %s contact law needs %s)", file,
                             law_ops->section, law_ops->name, law_ops->section_example);
     }
-    if (parse_materials(s, root, file, err) || parse_particles(s, root, file, err) ||
-        parse_generators(s, root, file, err) || parse_clusters(s, root, file, err) ||
+    if (parse_materials(s, root, file, sink, err) || parse_particles(s, root, file, sink, err) ||
+        parse_generators(s, root, file, sink, err) || parse_clusters(s, root, file, sink, err) ||
         parse_planes(s, root, file, err) || parse_meshes(s, root, file, base_dir, err) ||
-        parse_net_wall(s, root, file, err))
+        parse_net_wall(s, root, file, sink, err))
         return -1;
     return 0;
 }
@@ -494,12 +648,32 @@ static int build_mesh_grids(dem_sim *s, nc_error *err)
     return 0;
 }
 
-int dem_config_parse_string(dem_sim *s, const char *json, const char *where,
-                            const char *base_dir, nc_error *err)
+int dem_config_parse_string_opt(dem_sim *s, const char *json, const char *where,
+                                const char *base_dir, const dem_config_options *opt,
+                                nc_error *err)
 {
     cJSON *root;
     if (nc_json_parse_text(where, json, strlen(json), &root, err)) return -1;
-    int rc = parse_root(s, root, where, base_dir, err);
+    int rc = parse_root(s, root, where, base_dir, opt ? opt->warnings : NULL, err);
+    cJSON_Delete(root);
+    if (rc == 0) rc = build_mesh_grids(s, err);
+    return rc;
+}
+
+int dem_config_parse_string(dem_sim *s, const char *json, const char *where,
+                            const char *base_dir, nc_error *err)
+{
+    return dem_config_parse_string_opt(s, json, where, base_dir, NULL, err);
+}
+
+int dem_config_load_opt(dem_sim *s, const char *path, const dem_config_options *opt,
+                        nc_error *err)
+{
+    cJSON *root;
+    if (nc_json_load_file(path, &root, err)) return -1;
+    char dir[1024];
+    nc_file_dir(path, dir, sizeof dir);
+    int rc = parse_root(s, root, path, dir, opt ? opt->warnings : NULL, err);
     cJSON_Delete(root);
     if (rc == 0) rc = build_mesh_grids(s, err);
     return rc;
@@ -507,12 +681,5 @@ int dem_config_parse_string(dem_sim *s, const char *json, const char *where,
 
 int dem_config_load(dem_sim *s, const char *path, nc_error *err)
 {
-    cJSON *root;
-    if (nc_json_load_file(path, &root, err)) return -1;
-    char dir[1024];
-    nc_file_dir(path, dir, sizeof dir);
-    int rc = parse_root(s, root, path, dir, err);
-    cJSON_Delete(root);
-    if (rc == 0) rc = build_mesh_grids(s, err);
-    return rc;
+    return dem_config_load_opt(s, path, NULL, err);
 }

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "dem_config.h"
+#include "dem_contact_hertz.h"
 #include "dem_output.h"
 #include "dem_participant.h"
 #include "dem_sim.h"
@@ -121,6 +122,97 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
     return 0;
 }
 
+/* The impact contact of a body on the wall it will hit (the net wall when configured, else a
+ * rigid flat wall): rigid wall, so m* = m and R* = R (the body's largest sphere), at the speed
+ * v (at least 1 m/s, as for the automatic dt). Hertz: t_c = 2.87 (m*² / (R* E*² v))^(1/5)
+ * with E* of the sphere's material and the wall's (E* = E / (1 − ν²) of the sphere alone for a
+ * rigid one); linear law: half an undamped period π sqrt(m / kn). */
+static double impact_contact_time_s(const dem_sim *s, size_t b, double speed)
+{
+    const dem_model *m = &s->model;
+    int32_t first = m->bod.first_sphere[b];
+    double r = 0.0;
+    for (int32_t q = first; q < first + m->bod.n_spheres[b]; q++) r = fmax(r, m->sph.radius[q]);
+    double mass = m->bod.mass[b];
+    if (m->prm.law == DEM_LAW_LINEAR) return M_PI * sqrt(mass / m->prm.linear_kn_n_per_m);
+    const dem_material *mat = &m->materials[m->sph.material[first]];
+    double compliance = (1.0 - mat->poisson_ratio * mat->poisson_ratio) / mat->youngs_modulus_pa;
+    if (m->net.youngs_modulus_pa > 0.0)
+        compliance += (1.0 - m->net.poisson_ratio * m->net.poisson_ratio) / m->net.youngs_modulus_pa;
+    double e_star = 1.0 / compliance, v = fmax(1.0, speed);
+    return 2.87 * pow(mass * mass / (r * e_star * e_star * v), 0.2);
+}
+
+/* The start-up summary on `out` (one block): what dem.json built, the heaviest-hitting bodies
+ * with mass, size, speed, kinetic energy and estimated contact time, and the DEM step; a user
+ * step that resolves a contact with fewer than 20 steps is a warning on `warn`. */
+static void print_summary(const dem_sim *s, const char *input, FILE *out, FILE *warn)
+{
+    const dem_model *m = &s->model;
+    enum { SHOWN = 5 };
+    size_t order[SHOWN], n_shown = 0;
+    double total_mass = 0.0, total_ke = 0.0;
+    for (size_t b = 0; b < m->bod.n; b++) {
+        const double *v = m->bod.vel + 3 * b;
+        double ke = 0.5 * m->bod.mass[b] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        total_mass += m->bod.mass[b];
+        total_ke += ke;
+        /* keep the SHOWN bodies of largest kinetic energy (then mass), in that order */
+        size_t at = n_shown;
+        while (at > 0) {
+            size_t o = order[at - 1];
+            const double *w = m->bod.vel + 3 * o;
+            double ko = 0.5 * m->bod.mass[o] * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            if (ke > ko || (ke == ko && m->bod.mass[b] > m->bod.mass[o])) at--;
+            else break;
+        }
+        if (at >= SHOWN) continue;
+        if (n_shown < SHOWN) n_shown++;
+        for (size_t k = n_shown - 1; k > at; k--) order[k] = order[k - 1];
+        order[at] = b;
+    }
+    fprintf(out, "dem_solver: %s: %zu bod%s (%zu sphere%s), total mass %.6g kg, kinetic energy "
+                 "%.6g J\n", input, m->bod.n, m->bod.n == 1 ? "y" : "ies", m->sph.n,
+            m->sph.n == 1 ? "" : "s", total_mass, total_ke);
+    const char *wall = m->net.youngs_modulus_pa > 0.0 ? "the net wall" : "a rigid wall";
+    double tc_min = INFINITY;
+    size_t b_min = 0;
+    for (size_t k = 0; k < n_shown; k++) {
+        size_t b = order[k];
+        const double *v = m->bod.vel + 3 * b;
+        double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        int32_t first = m->bod.first_sphere[b], ns = m->bod.n_spheres[b];
+        double r = 0.0;
+        for (int32_t q = first; q < first + ns; q++) r = fmax(r, m->sph.radius[q]);
+        double tc = impact_contact_time_s(s, b, speed);
+        if (tc < tc_min) {
+            tc_min = tc;
+            b_min = b;
+        }
+        if (ns == 1)
+            fprintf(out, "  body %zu: sphere radius %.6g m, ", b, r);
+        else
+            fprintf(out, "  body %zu: cluster of %d spheres (largest radius %.6g m), ", b, ns, r);
+        fprintf(out, "mass %.6g kg, material %s, speed %.6g m/s, kinetic energy %.6g J, "
+                     "contact time on %s ~%.3g s%s\n",
+                m->bod.mass[b], m->materials[m->sph.material[first]].name, speed,
+                0.5 * m->bod.mass[b] * speed * speed, wall, tc, speed < 1.0 ? " (at 1 m/s)" : "");
+    }
+    if (m->bod.n > n_shown)
+        fprintf(out, "  ... and %zu more bodies (the %zu of largest kinetic energy shown)\n",
+                m->bod.n - n_shown, n_shown);
+    double dt = m->prm.dt_s;
+    fprintf(out, "  DEM step %.3e s (%s; critical step %.3e s)", dt,
+            m->prm.dt_auto ? "auto" : "dt_s", dem_sim_critical_dt(s));
+    if (isfinite(tc_min)) fprintf(out, ", %.0f steps per contact of body %zu", tc_min / dt, b_min);
+    fputc('\n', out);
+    if (!m->prm.dt_auto && isfinite(tc_min) && tc_min / dt < 20.0)
+        fprintf(warn, "warning: %s: dt_s: %g s resolves the contact of body %zu "
+                      "(~%.3g s) with only %.0f steps; 20 or more (\"auto\" gives >= 40) are "
+                      "needed for an accurate rebound\n", input, dt, b_min, tc_min, tc_min / dt);
+    fflush(out);
+}
+
 static int run_coupled(dem_sim *s, dem_output *out, const options *o,
                        const volatile sig_atomic_t *stop, nc_error *err)
 {
@@ -149,8 +241,10 @@ int main(int argc, char **argv)
     memset(&out, 0, sizeof out);
     out.h5.file = H5I_INVALID_HID;
     int rc = 0;
-    if (dem_config_load(&s, o.input, &err) || dem_sim_prepare(&s, &err) ||
-        nc_file_make_dirs(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
+    dem_config_options copt = {.warnings = stderr};
+    int built = dem_config_load_opt(&s, o.input, &copt, &err) == 0 && dem_sim_prepare(&s, &err) == 0;
+    if (built) print_summary(&s, o.input, stdout, stderr);
+    if (!built || nc_file_make_dirs(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
         rc = -1;
     } else {
         rc = o.endpoint ? run_coupled(&s, &out, &o, stop, &err)

@@ -7,11 +7,41 @@
 #include "nc_time.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define WHERE_MAX 600
+
+/* Wide engineering ranges: a value outside is a warning (likely a unit mistake), not an
+ * error. The messages state the same numbers. */
+#define PLAUSIBLE_MODULUS_MIN_PA 1e5
+#define PLAUSIBLE_MODULUS_MAX_PA 1e12
+#define PLAUSIBLE_AREA_MIN_M2 1e-7
+#define PLAUSIBLE_AREA_MAX_M2 1e-2
+#define PLAUSIBLE_DENSITY_MIN 100.0
+#define PLAUSIBLE_DENSITY_MAX 25000.0
+#define PLAUSIBLE_PRESTRESS_MAX_PA 2e9   /* above the yield strength of any rope steel */
+#define PLAUSIBLE_STRENGTH_MIN_PA 1e7    /* breaking load / area */
+#define PLAUSIBLE_STRENGTH_MAX_PA 3e9
+/* Metallic area factor f = A / (π d² / 4) of a six-strand rope with a steel core
+ * (6x19, 6x36 IWRC: 0.57–0.59 by the factors C = f π/4 of EN 12385-4); fibre-core ropes are
+ * near 0.49, spiral strands 0.75–0.8. */
+#define DEFAULT_METALLIC_AREA_FACTOR 0.58
+
+/* One warning line "warning: <field>: <text>" to the caller's sink (none: dropped). */
+static void warn(FILE *sink, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void warn(FILE *sink, const char *fmt, ...)
+{
+    if (!sink) return;
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("warning: ", sink);
+    vfprintf(sink, fmt, ap);
+    fputc('\n', sink);
+    va_end(ap);
+}
 
 /* Resolves a node reference: an index, a node-set name, or an array of those.
  * *out is malloc'ed (caller frees). */
@@ -70,14 +100,47 @@ static int parse_node_ref(const fem_model *m, const cJSON *item, const char *whe
     return 0;
 }
 
-static int parse_sets(fem_model *m, const cJSON *root, const char *file, nc_error *err)
+/* The section of a set: area_m2, or diameter_m with metallic_area_factor (A = f π d² / 4). */
+static int parse_area(const cJSON *o, const char *w, FILE *sink, double *area, nc_error *err)
+{
+    int has_a = cJSON_GetObjectItemCaseSensitive(o, "area_m2") != NULL;
+    int has_d = cJSON_GetObjectItemCaseSensitive(o, "diameter_m") != NULL;
+    if (has_a && has_d)
+        return nc_error_set(err, 1, "%s: give either area_m2 or diameter_m, not both", w);
+    if (!has_d && cJSON_GetObjectItemCaseSensitive(o, "metallic_area_factor"))
+        return nc_error_set(err, 1, "%s.metallic_area_factor: only used with diameter_m", w);
+    if (!has_d) {
+        if (nc_json_positive(o, w, "area_m2", area, err)) return -1;
+        if (*area < PLAUSIBLE_AREA_MIN_M2 || *area > PLAUSIBLE_AREA_MAX_M2)
+            warn(sink, "%s.area_m2: %g m² is outside the plausible range 1e-7..1e-2 m² for a "
+                       "cable (a 20 mm rope: 1.8e-4 m²)", w, *area);
+        return 0;
+    }
+    double d, f;
+    if (nc_json_positive(o, w, "diameter_m", &d, err) ||
+        nc_json_number_range_opt(o, w, "metallic_area_factor", DEFAULT_METALLIC_AREA_FACTOR,
+                                 1e-3, 1.0, &f, err))
+        return -1;
+    *area = f * M_PI * d * d / 4.0;
+    if (*area < PLAUSIBLE_AREA_MIN_M2 || *area > PLAUSIBLE_AREA_MAX_M2)
+        warn(sink, "%s.diameter_m: %g m gives an area of %g m², outside the plausible range "
+                   "1e-7..1e-2 m² for a cable (diameter in m: 20 mm is 0.02)", w, d, *area);
+    if (f < 0.4 || f > 0.85)
+        warn(sink, "%s.metallic_area_factor: %g is outside 0.4..0.85 (wire ropes: fibre core "
+                   "about 0.49, steel core 0.58, spiral strand 0.75..0.8)", w, f);
+    return 0;
+}
+
+static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *sink,
+                      nc_error *err)
 {
     const cJSON *arr;
     int n;
     if (nc_json_array(root, file, "element_sets", &arr, &n, err)) return -1;
     if (n < 1) return nc_error_set(err, 1, "%s: element_sets: expected at least one set", file);
-    static const char *const keys[] = {"name", "youngs_modulus_pa", "area_m2", "density_kg_m3",
-                                       "prestress_pa", "behaviour", NULL};
+    static const char *const keys[] = {"name", "youngs_modulus_pa", "area_m2", "diameter_m",
+                                       "metallic_area_factor", "density_kg_m3", "prestress_pa",
+                                       "pretension_n", "breaking_load_n", "behaviour", NULL};
     static const char *const behaviours[] = {"cable", "truss", NULL};
     int i = 0;
     for (const cJSON *o = arr->child; o; o = o->next, i++) {
@@ -91,17 +154,48 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, nc_erro
         int b;
         char defname[32];
         snprintf(defname, sizeof defname, "set%d", i);
+        int has_n = cJSON_GetObjectItemCaseSensitive(o, "pretension_n") != NULL;
+        if (has_n && cJSON_GetObjectItemCaseSensitive(o, "prestress_pa"))
+            return nc_error_set(err, 1, "%s: give either prestress_pa or pretension_n, not both", w);
+        double pretension = 0.0;
         if (nc_json_string_opt(o, w, "name", defname, &name, err) ||
             nc_json_positive(o, w, "youngs_modulus_pa", &set.youngs_modulus_pa, err) ||
-            nc_json_positive(o, w, "area_m2", &set.area_m2, err) ||
+            parse_area(o, w, sink, &set.area_m2, err) ||
             nc_json_number_range_opt(o, w, "density_kg_m3", 0.0, 0.0, INFINITY, &set.density_kg_m3, err) ||
             nc_json_number_opt(o, w, "prestress_pa", 0.0, &set.prestress_pa, err) ||
+            nc_json_number_opt(o, w, "pretension_n", 0.0, &pretension, err) ||
+            nc_json_number_range_opt(o, w, "breaking_load_n", 0.0, 0.0, INFINITY, &set.breaking_load_n, err) ||
             nc_json_choice_opt(o, w, "behaviour", behaviours, 0, &b, err))
             return -1;
+        if (cJSON_GetObjectItemCaseSensitive(o, "breaking_load_n") && !(set.breaking_load_n > 0.0))
+            return nc_error_set(err, 1, "%s.breaking_load_n: expected a number > 0, got 0", w);
+        /* the force N of the prestress in the reference configuration: S_pre = N / A */
+        if (has_n) set.prestress_pa = pretension / set.area_m2;
         if (strlen(name) >= FEM_NAME_MAX)
             return nc_error_set(err, 1, "%s.name: longer than %d characters", w, FEM_NAME_MAX - 1);
         if (fem_model_find_set(m, name) >= 0)
             return nc_error_set(err, 1, "%s.name: \"%s\" is used by an earlier set", w, name);
+        double e = set.youngs_modulus_pa, rho = set.density_kg_m3, a = set.area_m2;
+        if (e < PLAUSIBLE_MODULUS_MIN_PA || e > PLAUSIBLE_MODULUS_MAX_PA)
+            warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
+                       "(steel rope about 1e11..2.1e11)", w, e);
+        if (rho > 0.0 && (rho < PLAUSIBLE_DENSITY_MIN || rho > PLAUSIBLE_DENSITY_MAX))
+            warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
+                       "kg/m³ (steel 7850)", w, rho);
+        if (fabs(set.prestress_pa) > PLAUSIBLE_PRESTRESS_MAX_PA)
+            warn(sink, "%s.%s: a prestress of %g Pa is above 2e9 Pa, more than rope steel "
+                       "yields at", w, has_n ? "pretension_n" : "prestress_pa", set.prestress_pa);
+        if (set.breaking_load_n > 0.0) {
+            double strength = set.breaking_load_n / a, force = set.prestress_pa * a;
+            if (strength < PLAUSIBLE_STRENGTH_MIN_PA || strength > PLAUSIBLE_STRENGTH_MAX_PA)
+                warn(sink, "%s.breaking_load_n: %g N over the area %g m² is a strength of %g Pa, "
+                           "outside the plausible 1e7..3e9 Pa (rope grade 1770: about 1.4e9 "
+                           "of the metallic area; kN given as N?)", w, set.breaking_load_n, a,
+                     strength);
+            if (force > set.breaking_load_n)
+                warn(sink, "%s.%s: the pretension %g N exceeds breaking_load_n %g N", w,
+                     has_n ? "pretension_n" : "prestress_pa", force, set.breaking_load_n);
+        }
         snprintf(set.name, sizeof set.name, "%s", name);
         set.behaviour = b == 0 ? FEM_CABLE : FEM_TRUSS;
         if (fem_model_add_set(m, &set, err) < 0) return -1;
@@ -459,6 +553,13 @@ static int parse_rest(fem_model *m, const cJSON *root, const char *file, nc_erro
 
 int fem_input_load(const char *path, fem_model *m, nc_error *err)
 {
+    return fem_input_load_opt(path, m, NULL, err);
+}
+
+int fem_input_load_opt(const char *path, fem_model *m, const fem_input_options *opt,
+                       nc_error *err)
+{
+    FILE *sink = opt ? opt->warnings : NULL;
     fem_model_init(m, path);
     cJSON *root;
     if (nc_json_load_file(path, &root, err)) return -1;
@@ -472,7 +573,7 @@ int fem_input_load(const char *path, fem_model *m, nc_error *err)
         nc_error_set(err, 1, "%s: expected a JSON object {...} at the top level", path);
         goto out;
     }
-    if (nc_json_check_keys(root, file, keys, err) || parse_sets(m, root, file, err)) goto out;
+    if (nc_json_check_keys(root, file, keys, err) || parse_sets(m, root, file, sink, err)) goto out;
     const cJSON *net = cJSON_GetObjectItemCaseSensitive(root, "net");
     const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
     const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(root, "nodes");

@@ -24,6 +24,7 @@ typedef struct fem_element_set {
     double density_kg_m3;       /* rho */
     double prestress_pa;        /* S_pre (2nd Piola-Kirchhoff prestress) */
     fem_behaviour behaviour;    /* cable: no compression; truss: keeps compression */
+    double breaking_load_n;     /* minimum breaking force, reported and checked (0: not given) */
 } fem_element_set;
 
 typedef struct fem_node_set {

@@ -28,6 +28,43 @@ static void usage(FILE *f)
             "Input keys: fem_solver/README.md.\n");
 }
 
+/* The start-up summary on stdout (one block): the model's size and, per element set, its
+ * section and what it carries (EA, the pretension force A·S_pre, the breaking load if given)
+ * and its mass ρ A L, so a unit mistake shows before the run. */
+static void print_summary(const fem_model *m, const char *input, FILE *out)
+{
+    double total_mass = 0.0;
+    int fixed_nodes = 0;
+    for (int i = 0; i < m->n_nodes; i++)
+        fixed_nodes += m->fixed[3 * i] || m->fixed[3 * i + 1] || m->fixed[3 * i + 2];
+    for (int e = 0; e < m->n_elements; e++) total_mass += m->rhoA[e] * m->L0[e];
+    fprintf(out, "fem_solver: %s: %d nodes (%d supported), %d elements, %d element set%s, "
+                 "net mass %.6g kg, %s analysis\n", input, m->n_nodes, fixed_nodes,
+            m->n_elements, m->n_sets, m->n_sets == 1 ? "" : "s", total_mass,
+            m->settings.type == FEM_STATIC ? "static" : "dynamic");
+    for (int k = 0; k < m->n_sets; k++) {
+        const fem_element_set *set = &m->sets[k];
+        int count = 0;
+        double length = 0.0;
+        for (int e = 0; e < m->n_elements; e++)
+            if (m->element_set[e] == k) {
+                count++;
+                length += m->L0[e];
+            }
+        double a = set->area_m2, force = set->prestress_pa * a;
+        fprintf(out, "  set %s (%s): %d elements, length %.6g m, E %.4g Pa, A %.4g m², "
+                     "EA %.4g N, pretension %.4g N (%.4g Pa), mass %.6g kg",
+                set->name, set->behaviour == FEM_CABLE ? "cable" : "truss", count, length,
+                set->youngs_modulus_pa, a, set->youngs_modulus_pa * a,
+                force, set->prestress_pa, set->density_kg_m3 * a * length);
+        if (set->breaking_load_n > 0.0)
+            fprintf(out, ", breaking load %.4g N (pretension %.3g %% of it)", set->breaking_load_n,
+                    100.0 * force / set->breaking_load_n);
+        fputc('\n', out);
+    }
+    fflush(out);
+}
+
 int main(int argc, char **argv)
 {
     const char *input = NULL, *output = NULL, *endpoint = NULL, *endpoint_file = NULL;
@@ -72,11 +109,13 @@ int main(int argc, char **argv)
     nc_error err;
     nc_error_clear(&err);
     fem_model model;
-    if (fem_input_load(input, &model, &err)) {
+    fem_input_options iopt = {.warnings = stderr};
+    if (fem_input_load_opt(input, &model, &iopt, &err)) {
         fprintf(stderr, "fem_solver: %s\n", err.message);
         fem_model_free(&model);
         return 1;
     }
+    print_summary(&model, input, stdout);
     if (nc_file_make_dirs(output, &err)) {
         fprintf(stderr, "fem_solver: --output: %s\n", err.message);
         fem_model_free(&model);

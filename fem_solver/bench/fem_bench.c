@@ -12,7 +12,7 @@ static int build_net(fem_model *m, int count, nc_error *err)
 {
     fem_model_init(m, "bench-net");
     /* 3 m x 3 m net of the paper's prestressed cable (section 7.2 properties) */
-    fem_element_set set = {"net", 1e9, 1.26e-4, 7850, 1e6, FEM_CABLE};
+    fem_element_set set = {"net", 1e9, 1.26e-4, 7850, 1e6, FEM_CABLE, 0.0};
     if (fem_model_add_set(m, &set, err) < 0) return -1;
     double o[3] = {0, 0, 0}, e1[3] = {3, 0, 0}, e2[3] = {0, 3, 0};
     if (fem_model_generate_net(m, o, e1, e2, count, count, 0, err)) return -1;

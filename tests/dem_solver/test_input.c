@@ -1,5 +1,7 @@
 /* test_input — dem.json and STL reading: every malformed input is rejected with a message that
- * names the file/field; ASCII and binary STL give the same welded mesh; a sphere resting on
+ * names the file/field; the engineer's forms (mass_kg for radius, drop_height_m and
+ * impact_energy_j for velocity) against hand-computed values; implausible values give
+ * warnings naming file and field and nothing else; ASCII and binary STL give the same welded mesh; a sphere resting on
  * triangles sharing an edge or a vertex makes exactly one contact carrying its weight. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -12,6 +14,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <stdlib.h>
+
+#include "dem_config.h"
 #include "dem_stl.h"
 #include "dem_test_util.h"
 
@@ -74,6 +79,162 @@ static void test_malformed_json(void **state)
     expect_error("{" MAT ", \"clusters\": [{\"spheres\": []}]}", "clusters[0].spheres");
     expect_error("{" MAT ", \"net_wall\": {\"youngs_modulus_pa\": 1e7, \"poisson_ratio\": 0.2}}",
                  "net_wall.friction");
+}
+
+/* Builds and prepares `json` with a warning sink; returns the warnings text (caller frees). */
+static char *build_with_warnings(dem_sim *s, const char *json)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *sink = open_memstream(&text, &size);
+    assert_non_null(sink);
+    dem_config_options opt = {.warnings = sink};
+    nc_error err;
+    nc_error_clear(&err);
+    dem_sim_init(s);
+    int rc = dem_config_parse_string_opt(s, json, "test.json", ".", &opt, &err);
+    if (rc == 0) rc = dem_sim_prepare(s, &err);
+    fclose(sink);
+    if (rc) {
+        print_error("build failed: %s\n", err.message);
+        free(text);
+        fail();
+    }
+    return text;
+}
+
+static double speed_of(const dem_sim *s, size_t b)
+{
+    const double *v = s->model.bod.vel + 3 * b;
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* mass_kg ↔ radius: m = 4/3 π r³ ρ. 1000 kg of ρ = 2500 kg/m³ is r = (3·1000 / (4π·2500))^(1/3)
+ * = 0.45707814973408 m (hand-computed); the prepared body carries the 1000 kg back. */
+static void test_mass_and_radius(void **state)
+{
+    (void)state;
+    dem_sim s;
+    dem_test_build(&s, "{" MAT ", \"particles\": [{\"position\": [0,0,0], \"mass_kg\": 1000},"
+                       " {\"position\": [5,0,0], \"radius\": 0.45707814973408323, \"mass_kg\": 1000}]}");
+    assert_near_rel(s.model.sph.radius[0], 0.45707814973408323, 1e-14);
+    assert_near_rel(s.model.bod.mass[0], 1000.0, 1e-13);
+    assert_near_rel(s.model.sph.radius[1], 0.45707814973408323, 1e-14);
+    dem_sim_free(&s);
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.45, \"mass_kg\": 1000}]}",
+                 "particles[0]: radius 0.45 m and mass_kg 1000 kg disagree");
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0]}]}", "particles[0].radius: missing");
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"mass_kg\": -5}]}",
+                 "particles[0].mass_kg");
+}
+
+/* drop_height_m ↔ velocity: v = sqrt(2 |g| h) along g. Default gravity, h = 5 m:
+ * sqrt(2·9.81·5) = 9.9045444115315 m/s downwards; gravity [0, -3, -4] (|g| = 5), h = 10 m:
+ * 10 m/s along (0, -0.6, -0.8). A cluster and a generator take it the same way. */
+static void test_drop_height(void **state)
+{
+    (void)state;
+    dem_sim s;
+    dem_test_build(&s, "{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3, \"drop_height_m\": 5}],"
+                       " \"clusters\": [{\"spheres\": [{\"position\": [2,0,0], \"radius\": 0.1},"
+                       " {\"position\": [2.2,0,0], \"radius\": 0.1}], \"drop_height_m\": 5}],"
+                       " \"generators\": [{\"type\": \"lattice\", \"min\": [5,5,5], \"max\": [5.2,5.2,5.2],"
+                       " \"radius\": 0.1, \"drop_height_m\": 5}]}");
+    assert_int_equal(s.model.bod.n, 3);
+    for (size_t b = 0; b < 3; b++) {
+        assert_near(s.model.bod.vel[3 * b + 0], 0.0, 0.0);
+        assert_near(s.model.bod.vel[3 * b + 1], 0.0, 0.0);
+        assert_near_rel(s.model.bod.vel[3 * b + 2], -9.904544411531507, 1e-14);
+    }
+    dem_sim_free(&s);
+    dem_test_build(&s, "{" MAT ", \"gravity\": [0, -3, -4], \"particles\": [{\"position\": [0,0,0],"
+                       " \"radius\": 0.3, \"drop_height_m\": 10}]}");
+    assert_near(s.model.bod.vel[0], 0.0, 0.0);
+    assert_near(s.model.bod.vel[1], -6.0, 1e-13);
+    assert_near(s.model.bod.vel[2], -8.0, 1e-13);
+    dem_sim_free(&s);
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3, \"drop_height_m\": 5,"
+                 " \"velocity\": [0,0,-1]}]}", "particles[0]: give only one of velocity");
+    expect_error("{" MAT ", \"gravity\": [0,0,0], \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3,"
+                 " \"drop_height_m\": 5}]}", "particles[0].drop_height_m: needs a non-zero gravity");
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3, \"drop_height_m\": -1}]}",
+                 "particles[0].drop_height_m");
+}
+
+/* impact_energy_j ↔ velocity: v = sqrt(2 E / m). 800 kg with 100 kJ: sqrt(250) =
+ * 15.811388300842 m/s, along [1, 0, -1] normalised: ±11.180339887499 m/s; default direction
+ * along gravity. A cluster of two spheres r = 0.1 m (m = 20.943951023932 kg) given 1 kJ:
+ * sqrt(2000 / m) = 9.7720502380584 m/s, i.e. exactly 1 kJ with the mass dem_sim_prepare sums. */
+static void test_impact_energy(void **state)
+{
+    (void)state;
+    dem_sim s;
+    dem_test_build(&s, "{" MAT ", \"particles\": [{\"position\": [0,0,0], \"mass_kg\": 800,"
+                       " \"impact_energy_j\": 1e5, \"impact_direction\": [1, 0, -1]},"
+                       " {\"position\": [5,0,0], \"mass_kg\": 800, \"impact_energy_j\": 1e5}],"
+                       " \"clusters\": [{\"spheres\": [{\"position\": [9,0,0], \"radius\": 0.1},"
+                       " {\"position\": [9.2,0,0], \"radius\": 0.1}], \"impact_energy_j\": 1000}]}");
+    assert_near_rel(s.model.bod.vel[0], 11.180339887498947, 1e-14);
+    assert_near(s.model.bod.vel[1], 0.0, 0.0);
+    assert_near_rel(s.model.bod.vel[2], -11.180339887498947, 1e-14);
+    assert_near_rel(s.model.bod.vel[5], -15.811388300841896, 1e-14);
+    assert_near_rel(s.model.bod.mass[2], 20.943951023931955, 1e-14);
+    assert_near_rel(speed_of(&s, 2), 9.772050238058398, 1e-14);
+    assert_near_rel(0.5 * s.model.bod.mass[2] * speed_of(&s, 2) * speed_of(&s, 2), 1000.0, 1e-13);
+    dem_sim_free(&s);
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3,"
+                 " \"impact_direction\": [1,0,0]}]}", "particles[0].impact_direction: only used with impact_energy_j");
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3, \"impact_energy_j\": 10,"
+                 " \"impact_direction\": [0,0,0]}]}", "particles[0].impact_direction: expected a non-zero vector");
+    expect_error("{" MAT ", \"gravity\": [0,0,0], \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3,"
+                 " \"impact_energy_j\": 10}]}", "particles[0].impact_direction: missing");
+    expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.3, \"impact_energy_j\": 10,"
+                 " \"drop_height_m\": 2}]}", "particles[0]: give only one of");
+}
+
+static void expect_warning(const char *warnings, const char *needle)
+{
+    if (!strstr(warnings, needle)) {
+        print_error("warnings \"%s\" do not contain \"%s\"\n", warnings, needle);
+        fail();
+    }
+}
+
+/* The unit mistakes of a new user (a 500 m sphere, E = 100 Pa, ρ = 2.65 kg/m³, 150 m/s) are
+ * read, with one warning each naming file and field; a realistic rock gives none. */
+static void test_plausibility_warnings(void **state)
+{
+    (void)state;
+    dem_sim s;
+    char *w = build_with_warnings(&s,
+        "{\"materials\": [{\"name\": \"rock\", \"youngs_modulus_pa\": 100, \"poisson_ratio\": 0.2,"
+        " \"density_kg_m3\": 2.65, \"restitution\": 0.5, \"friction\": 0.5}],"
+        " \"particles\": [{\"position\": [0,0,0], \"radius\": 500},"
+        " {\"position\": [2000,0,0], \"radius\": 0.5, \"velocity\": [150, 0, 0]},"
+        " {\"position\": [4000,0,0], \"mass_kg\": 1e-9}],"
+        " \"net_wall\": {\"youngs_modulus_pa\": 1e13, \"poisson_ratio\": 0.3, \"friction\": 0.3}}");
+    print_message("%s", w);
+    expect_warning(w, "warning: test.json: materials[0].youngs_modulus_pa: 100 Pa is outside the plausible range 1e5..1e12 Pa");
+    expect_warning(w, "warning: test.json: materials[0].density_kg_m3: 2.65 kg/m³ is outside the plausible range 100..25000");
+    expect_warning(w, "warning: test.json: particles[0].radius: 500 m is outside the plausible range 1e-3..20 m for a rock");
+    expect_warning(w, "warning: test.json: particles[1].velocity: gives a speed of 150 m/s, above the plausible 100 m/s");
+    expect_warning(w, "warning: test.json: particles[2].mass_kg: gives a radius of 0.000448286 m, outside the plausible range");
+    expect_warning(w, "warning: test.json: net_wall.youngs_modulus_pa: 1e+13 Pa");
+    int lines = 0;
+    for (const char *c = w; *c; c++) lines += *c == '\n';
+    assert_int_equal(lines, 6);
+    assert_int_equal(s.model.sph.n, 3);    /* warnings do not stop the reading */
+    free(w);
+    dem_sim_free(&s);
+    w = build_with_warnings(&s,
+        "{\"materials\": [{\"name\": \"rock\", \"youngs_modulus_pa\": 3e10, \"poisson_ratio\": 0.2,"
+        " \"density_kg_m3\": 2650, \"restitution\": 0.3, \"friction\": 0.5}],"
+        " \"particles\": [{\"position\": [0,0,0], \"mass_kg\": 800, \"impact_energy_j\": 1e5}],"
+        " \"clusters\": [{\"spheres\": [{\"position\": [3,0,0], \"radius\": 0.3}], \"drop_height_m\": 20}],"
+        " \"net_wall\": {\"youngs_modulus_pa\": 1e11, \"poisson_ratio\": 0.3, \"friction\": 0.3}}");
+    assert_string_equal(w, "");
+    free(w);
+    dem_sim_free(&s);
 }
 
 static const char *ascii_square =
@@ -179,6 +340,10 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_malformed_json),
+        cmocka_unit_test(test_mass_and_radius),
+        cmocka_unit_test(test_drop_height),
+        cmocka_unit_test(test_impact_energy),
+        cmocka_unit_test(test_plausibility_warnings),
         cmocka_unit_test(test_stl_ascii_and_binary),
         cmocka_unit_test(test_mesh_shared_features_once),
     };

@@ -209,7 +209,7 @@ static void test_restore_bitwise(void **state)
     (void)state;
     fem_model m;
     nc_error err;
-    fem_element_set set = {"net", 1e8, 1e-5, 7850, 1e5, FEM_CABLE};
+    fem_element_set set = {"net", 1e8, 1e-5, 7850, 1e5, FEM_CABLE, 0.0};
     if (!fem_test_net(&m, 9, &set, &err)) fail_msg("%s", err.message);
     m.self_weight = 1;
     m.tau_per_s = 3.0;

@@ -1,6 +1,7 @@
 /* test_input — fem.json and Gmsh reading: a full valid input, the regular-net generator
- * and node sets, Gmsh 2.2 and 4.1 meshes, and bad inputs whose messages must name the
- * file, the field and the expectation. */
+ * and node sets, Gmsh 2.2 and 4.1 meshes, bad inputs whose messages must name the
+ * file, the field and the expectation; a rope given by diameter and pretension force against
+ * hand-computed area and prestress; implausible values warned about by file and field. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -10,6 +11,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "../../fem_solver/fem_input.h"
@@ -186,12 +188,135 @@ static void test_bad_inputs(void **state)
     fem_model_free(&m);
 }
 
+#define LINE "\"nodes\": [[0,0,0],[1,0,0],[2,0,0]], \"elements\": [[0,1], {\"nodes\": [1,2], \"set\": \"b\"}], " \
+             "\"supports\": [{\"nodes\": [0, 2]}], \"analysis\": {\"type\": \"static\"}, "
+
+/* Loads `text` as `name` with a warning sink; returns the warnings (caller frees) and the
+ * status in *rc; the error message, if any, in err. */
+static char *load_with_warnings(const char *name, const char *text, fem_model *m, int *rc,
+                                nc_error *err)
+{
+    char *warnings = NULL;
+    size_t size = 0;
+    FILE *sink = open_memstream(&warnings, &size);
+    assert_non_null(sink);
+    fem_input_options opt = {.warnings = sink};
+    nc_error_clear(err);
+    *rc = fem_input_load_opt(fem_test_write(name, text), m, &opt, err);
+    fclose(sink);
+    return warnings;
+}
+
+/* diameter_m ↔ area_m2: A = f π d² / 4. A 20 mm rope with the default f = 0.58:
+ * 0.58 π 0.02² / 4 = 1.82212373908e-4 m²; with f = 0.75: 2.35619449019e-4 m² (hand-computed).
+ * pretension_n ↔ prestress_pa: S_pre = N / A, so A S_pre (the model's AS) is N itself. */
+static void test_rope_by_diameter_and_pretension(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    int rc;
+    char *w = load_with_warnings("rope.json",
+        "{" LINE "\"element_sets\": ["
+        "{\"name\": \"a\", \"youngs_modulus_pa\": 1e11, \"diameter_m\": 0.02, \"pretension_n\": 10000,"
+        " \"breaking_load_n\": 250000, \"density_kg_m3\": 7850},"
+        "{\"name\": \"b\", \"youngs_modulus_pa\": 1.2e11, \"diameter_m\": 0.02, \"metallic_area_factor\": 0.75,"
+        " \"prestress_pa\": 5e7}]}", &m, &rc, &err);
+    if (rc) fail_msg("%s", err.message);
+    assert_string_equal(w, "");   /* a realistic rope: no warnings */
+    free(w);
+    assert_near_rel(m.sets[0].area_m2, 1.82212373908208e-4, 1e-13);
+    assert_near_rel(m.sets[1].area_m2, 2.3561944901923448e-4, 1e-13);
+    assert_near_rel(m.EA[0], 1e11 * 1.82212373908208e-4, 1e-13);
+    assert_near_rel(m.EA[1], 1.2e11 * 2.3561944901923448e-4, 1e-13);
+    assert_near_rel(m.sets[0].prestress_pa, 10000.0 / 1.82212373908208e-4, 1e-13);
+    assert_near_rel(m.AS[0], 10000.0, 1e-13);
+    assert_near_rel(m.AS[1], 5e7 * 2.3561944901923448e-4, 1e-13);
+    assert_near(m.sets[0].breaking_load_n, 250000.0, 0.0);
+    assert_near(m.sets[1].breaking_load_n, 0.0, 0.0);
+    assert_near_rel(m.rhoA[0], 7850 * 1.82212373908208e-4, 1e-13);
+    fem_model_free(&m);
+
+    const char *bad[][2] = {
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"diameter_m\": 0.02, \"area_m2\": 1e-4}]}",
+         "element_sets[0]: give either area_m2 or diameter_m, not both"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"area_m2\": 1e-4, \"metallic_area_factor\": 0.6}]}",
+         "element_sets[0].metallic_area_factor: only used with diameter_m"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"diameter_m\": 0.02, \"metallic_area_factor\": 1.5}]}",
+         "element_sets[0].metallic_area_factor"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"diameter_m\": -0.02}]}",
+         "element_sets[0].diameter_m"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"area_m2\": 1e-4, \"pretension_n\": 1,"
+         " \"prestress_pa\": 1}]}", "element_sets[0]: give either prestress_pa or pretension_n, not both"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"area_m2\": 1e-4, \"breaking_load_n\": 0}]}",
+         "element_sets[0].breaking_load_n: expected a number > 0"},
+        {"{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11}]}", "element_sets[0].area_m2: missing"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        w = load_with_warnings("badrope.json", bad[k][0], &m, &rc, &err);
+        free(w);
+        print_message("%s\n", err.message);
+        assert_int_equal(rc, -1);
+        if (!strstr(err.message, "badrope.json") || !strstr(err.message, bad[k][1]))
+            fail_msg("case %zu: message lacks \"%s\": %s", k, bad[k][1], err.message);
+        fem_model_free(&m);
+    }
+}
+
+/* The unit mistakes of a new user (a cable area of 30 m², E = 100 Pa, a diameter in mm,
+ * a prestress above yield, a pretension above the breaking load, a breaking load in kN) are
+ * read, with one warning each naming file and field. */
+static void test_plausibility_warnings(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    int rc;
+    char *w = load_with_warnings("units.json",
+        "{" LINE "\"element_sets\": ["
+        "{\"name\": \"a\", \"youngs_modulus_pa\": 100, \"area_m2\": 30, \"density_kg_m3\": 7.85},"
+        "{\"name\": \"b\", \"youngs_modulus_pa\": 1e11, \"diameter_m\": 20, \"prestress_pa\": 3e9,"
+        " \"breaking_load_n\": 250}]}", &m, &rc, &err);
+    if (rc) fail_msg("%s", err.message);
+    print_message("%s", w);
+    const char *expect[] = {
+        "units.json: element_sets[0].area_m2: 30 m² is outside the plausible range 1e-7..1e-2 m²",
+        "units.json: element_sets[0].youngs_modulus_pa: 100 Pa is outside the plausible range 1e5..1e12 Pa",
+        "units.json: element_sets[0].density_kg_m3: 7.85 kg/m³ is outside the plausible range 100..25000",
+        "units.json: element_sets[1].diameter_m: 20 m gives an area of 182.212 m², outside",
+        "units.json: element_sets[1].prestress_pa: a prestress of 3e+09 Pa is above 2e9 Pa",
+        "units.json: element_sets[1].breaking_load_n: 250 N over the area 182.212 m²",
+        "units.json: element_sets[1].prestress_pa: the pretension 5.46637e+11 N exceeds breaking_load_n 250 N",
+    };
+    for (size_t k = 0; k < sizeof expect / sizeof *expect; k++)
+        if (!strstr(w, expect[k])) fail_msg("warnings lack \"%s\":\n%s", expect[k], w);
+    int lines = 0;
+    for (const char *c = w; *c; c++) lines += *c == '\n';
+    assert_int_equal(lines, 7);
+    for (const char *c = w; *c; c = strchr(c, '\n') + 1)   /* each line: "warning: <file>: ..." */
+        assert_int_equal(strncmp(c, "warning: ", 9), 0);
+    free(w);
+    assert_int_equal(m.n_elements, 2);   /* warnings do not stop the reading */
+    fem_model_free(&m);
+    w = load_with_warnings("pretension.json",
+        "{" LINE "\"element_sets\": [{\"youngs_modulus_pa\": 1e11, \"diameter_m\": 0.016, \"name\": \"b\","
+        " \"pretension_n\": 2e5, \"breaking_load_n\": 1.5e5}]}", &m, &rc, &err);
+    if (rc) fail_msg("%s", err.message);
+    if (!strstr(w, "pretension.json: element_sets[0].pretension_n: the pretension 200000 N "
+                   "exceeds breaking_load_n 150000 N"))
+        fail_msg("warnings: %s", w);
+    free(w);
+    fem_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_valid_net),
         cmocka_unit_test(test_gmsh),
         cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_rope_by_diameter_and_pretension),
+        cmocka_unit_test(test_plausibility_warnings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -226,7 +226,7 @@ static void test_monolithic_step_constant(void **state)
 
 static void net_model(fem_model *m, fem_integrator integ, int modified_newton, int step_constant)
 {
-    fem_element_set set = {"net", 1e9, 1.26e-4, 7850, 1e6, FEM_CABLE};
+    fem_element_set set = {"net", 1e9, 1.26e-4, 7850, 1e6, FEM_CABLE, 0.0};
     nc_error err;
     if (!fem_test_net(m, NET_N, &set, &err)) fail_msg("%s", err.message);
     m->settings.type = FEM_DYNAMIC;

@@ -132,7 +132,7 @@ static void test_flat_net_singular(void **state)
     (void)state;
     fem_model m;
     nc_error err;
-    fem_element_set set = {"net", 1e6, 1e-4, 1000, 0.0, FEM_CABLE};
+    fem_element_set set = {"net", 1e6, 1e-4, 1000, 0.0, FEM_CABLE, 0.0};
     const fem_node_set *b = fem_test_net(&m, 5, &set, &err);
     if (!b) fail_msg("%s", err.message);
     assert_int_equal(b->count, 16);
