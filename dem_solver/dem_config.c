@@ -1,4 +1,5 @@
 /* dem_config — dem.json parser with validated fields and named errors. */
+#include "nc_plausible.h"
 #include "dem_config.h"
 
 #include <cjson/cJSON.h>
@@ -18,37 +19,21 @@
 /* Wide engineering ranges: a value outside is a warning (likely a unit mistake), not an error. */
 #define PLAUSIBLE_RADIUS_MIN_M 1e-3
 #define PLAUSIBLE_RADIUS_MAX_M 20.0
-#define PLAUSIBLE_DENSITY_MIN 100.0
-#define PLAUSIBLE_DENSITY_MAX 25000.0
-#define PLAUSIBLE_MODULUS_MIN_PA 1e5
-#define PLAUSIBLE_MODULUS_MAX_PA 1e12
 #define PLAUSIBLE_SPEED_MAX_M_S 100.0
 
-/* One warning line "warning: <field>: <text>" to the caller's sink (none: dropped). */
-static void warn(FILE *sink, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void warn(FILE *sink, const char *fmt, ...)
-{
-    if (!sink) return;
-    va_list ap;
-    va_start(ap, fmt);
-    fputs("warning: ", sink);
-    vfprintf(sink, fmt, ap);
-    fputc('\n', sink);
-    va_end(ap);
-}
 
 static void warn_radius(FILE *sink, const char *where, const char *key, double r)
 {
     if (r < PLAUSIBLE_RADIUS_MIN_M || r > PLAUSIBLE_RADIUS_MAX_M)
-        warn(sink, "%s.%s: %s%g m%s outside the plausible range 1e-3..20 m for a rock", where,
+        nc_warn(sink, "%s.%s: %s%g m%s outside the plausible range 1e-3..20 m for a rock", where,
              key, strcmp(key, "radius") ? "gives a radius of " : "", r,
              strcmp(key, "radius") ? "," : " is");
 }
 
 static void warn_modulus(FILE *sink, const char *where, double e)
 {
-    if (e < PLAUSIBLE_MODULUS_MIN_PA || e > PLAUSIBLE_MODULUS_MAX_PA)
-        warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
+    if (e < NC_PLAUSIBLE_MODULUS_MIN_PA || e > NC_PLAUSIBLE_MODULUS_MAX_PA)
+        nc_warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
                    "(rock about 1e10..1e11, steel 2.1e11)", where, e);
 }
 
@@ -56,7 +41,7 @@ static void warn_speed(FILE *sink, const char *where, const char *key, const dou
 {
     double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     if (sp > PLAUSIBLE_SPEED_MAX_M_S)
-        warn(sink, "%s.%s: gives a speed of %g m/s, above the plausible 100 m/s for a rockfall",
+        nc_warn(sink, "%s.%s: gives a speed of %g m/s, above the plausible 100 m/s for a rockfall",
              where, key, sp);
 }
 
@@ -181,8 +166,8 @@ static int parse_materials(dem_sim *s, const cJSON *root, const char *file, FILE
                 return nc_error_set(err, 1, "%s.name: material \"%s\" defined twice", where, name);
         snprintf(mat.name, sizeof mat.name, "%s", name);
         warn_modulus(sink, where, mat.youngs_modulus_pa);
-        if (mat.density_kg_m3 < PLAUSIBLE_DENSITY_MIN || mat.density_kg_m3 > PLAUSIBLE_DENSITY_MAX)
-            warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
+        if (mat.density_kg_m3 < NC_PLAUSIBLE_DENSITY_MIN || mat.density_kg_m3 > NC_PLAUSIBLE_DENSITY_MAX)
+            nc_warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
                        "kg/m³ (rock 1000..5000)", where, mat.density_kg_m3);
         if (dem_sim_add_material(s, &mat, err) < 0) return -1;
     }

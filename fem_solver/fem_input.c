@@ -1,5 +1,6 @@
 /* fem_input — fem.json -> fem_model: mesh (explicit lists, regular-net generator or Gmsh
  * file), element sets, supports, loads, damping, interface, monitors, analysis settings. */
+#include "nc_plausible.h"
 #include "fem_input.h"
 #include "fem_mesh_gmsh.h"
 #include "nc_file.h"
@@ -16,12 +17,8 @@
 
 /* Wide engineering ranges: a value outside is a warning (likely a unit mistake), not an
  * error. The messages state the same numbers. */
-#define PLAUSIBLE_MODULUS_MIN_PA 1e5
-#define PLAUSIBLE_MODULUS_MAX_PA 1e12
 #define PLAUSIBLE_AREA_MIN_M2 1e-7
 #define PLAUSIBLE_AREA_MAX_M2 1e-2
-#define PLAUSIBLE_DENSITY_MIN 100.0
-#define PLAUSIBLE_DENSITY_MAX 25000.0
 #define PLAUSIBLE_PRESTRESS_MAX_PA 2e9   /* above the yield strength of any rope steel */
 #define PLAUSIBLE_STRENGTH_MIN_PA 1e7    /* breaking load / area */
 #define PLAUSIBLE_STRENGTH_MAX_PA 3e9
@@ -30,18 +27,6 @@
  * near 0.49, spiral strands 0.75–0.8. */
 #define DEFAULT_METALLIC_AREA_FACTOR 0.58
 
-/* One warning line "warning: <field>: <text>" to the caller's sink (none: dropped). */
-static void warn(FILE *sink, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void warn(FILE *sink, const char *fmt, ...)
-{
-    if (!sink) return;
-    va_list ap;
-    va_start(ap, fmt);
-    fputs("warning: ", sink);
-    vfprintf(sink, fmt, ap);
-    fputc('\n', sink);
-    va_end(ap);
-}
 
 /* Resolves a node reference: an index, a node-set name, or an array of those.
  * *out is malloc'ed (caller frees). */
@@ -112,7 +97,7 @@ static int parse_area(const cJSON *o, const char *w, FILE *sink, double *area, n
     if (!has_d) {
         if (nc_json_positive(o, w, "area_m2", area, err)) return -1;
         if (*area < PLAUSIBLE_AREA_MIN_M2 || *area > PLAUSIBLE_AREA_MAX_M2)
-            warn(sink, "%s.area_m2: %g m² is outside the plausible range 1e-7..1e-2 m² for a "
+            nc_warn(sink, "%s.area_m2: %g m² is outside the plausible range 1e-7..1e-2 m² for a "
                        "cable (a 20 mm rope: 1.8e-4 m²)", w, *area);
         return 0;
     }
@@ -123,10 +108,10 @@ static int parse_area(const cJSON *o, const char *w, FILE *sink, double *area, n
         return -1;
     *area = f * M_PI * d * d / 4.0;
     if (*area < PLAUSIBLE_AREA_MIN_M2 || *area > PLAUSIBLE_AREA_MAX_M2)
-        warn(sink, "%s.diameter_m: %g m gives an area of %g m², outside the plausible range "
+        nc_warn(sink, "%s.diameter_m: %g m gives an area of %g m², outside the plausible range "
                    "1e-7..1e-2 m² for a cable (diameter in m: 20 mm is 0.02)", w, d, *area);
     if (f < 0.4 || f > 0.85)
-        warn(sink, "%s.metallic_area_factor: %g is outside 0.4..0.85 (wire ropes: fibre core "
+        nc_warn(sink, "%s.metallic_area_factor: %g is outside 0.4..0.85 (wire ropes: fibre core "
                    "about 0.49, steel core 0.58, spiral strand 0.75..0.8)", w, f);
     return 0;
 }
@@ -176,24 +161,24 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
         if (fem_model_find_set(m, name) >= 0)
             return nc_error_set(err, 1, "%s.name: \"%s\" is used by an earlier set", w, name);
         double e = set.youngs_modulus_pa, rho = set.density_kg_m3, a = set.area_m2;
-        if (e < PLAUSIBLE_MODULUS_MIN_PA || e > PLAUSIBLE_MODULUS_MAX_PA)
-            warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
+        if (e < NC_PLAUSIBLE_MODULUS_MIN_PA || e > NC_PLAUSIBLE_MODULUS_MAX_PA)
+            nc_warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
                        "(steel rope about 1e11..2.1e11)", w, e);
-        if (rho > 0.0 && (rho < PLAUSIBLE_DENSITY_MIN || rho > PLAUSIBLE_DENSITY_MAX))
-            warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
+        if (rho > 0.0 && (rho < NC_PLAUSIBLE_DENSITY_MIN || rho > NC_PLAUSIBLE_DENSITY_MAX))
+            nc_warn(sink, "%s.density_kg_m3: %g kg/m³ is outside the plausible range 100..25000 "
                        "kg/m³ (steel 7850)", w, rho);
         if (fabs(set.prestress_pa) > PLAUSIBLE_PRESTRESS_MAX_PA)
-            warn(sink, "%s.%s: a prestress of %g Pa is above 2e9 Pa, more than rope steel "
+            nc_warn(sink, "%s.%s: a prestress of %g Pa is above 2e9 Pa, more than rope steel "
                        "yields at", w, has_n ? "pretension_n" : "prestress_pa", set.prestress_pa);
         if (set.breaking_load_n > 0.0) {
             double strength = set.breaking_load_n / a, force = set.prestress_pa * a;
             if (strength < PLAUSIBLE_STRENGTH_MIN_PA || strength > PLAUSIBLE_STRENGTH_MAX_PA)
-                warn(sink, "%s.breaking_load_n: %g N over the area %g m² is a strength of %g Pa, "
+                nc_warn(sink, "%s.breaking_load_n: %g N over the area %g m² is a strength of %g Pa, "
                            "outside the plausible 1e7..3e9 Pa (rope grade 1770: about 1.4e9 "
                            "of the metallic area; kN given as N?)", w, set.breaking_load_n, a,
                      strength);
             if (force > set.breaking_load_n)
-                warn(sink, "%s.%s: the pretension %g N exceeds breaking_load_n %g N", w,
+                nc_warn(sink, "%s.%s: the pretension %g N exceeds breaking_load_n %g N", w,
                      has_n ? "pretension_n" : "prestress_pa", force, set.breaking_load_n);
         }
         snprintf(set.name, sizeof set.name, "%s", name);
