@@ -330,9 +330,9 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
 }
 
 /* Strong coupling repeats a step from its saved start: a participant that does not restore
- * would converge to nonsense without a sign. So the first solve of each participant is sent
- * twice with the same input (the second SOLVE of a step restores first, protocol/README.md
- * §3) and the two answers must be identical. */
+ * would converge to nonsense without a sign. So the first solve of each participant with a
+ * non-zero answer is sent again with the same input (the second SOLVE of a step restores
+ * first, protocol/README.md §3) and the two answers must be identical. */
 static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *call,
                           const double *in0, const double *in1, const double *out0,
                           const double *out1)
