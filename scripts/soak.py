@@ -31,7 +31,9 @@ Expected exit status and verdict line (the first line of run_case.sh's output th
     SIGTERM run_case.sh                 130   run_case: stopped by user (SIGTERM)...
     SIGSTOP run_case.sh (resumed)         0   run_case: done...
     SIGKILL run_case.sh                  -9   (no verdict; its orphans must end by themselves)
-    a fault that found its victim gone    0   run_case: done...  ("missed")
+    a fault that found its victim gone    0   run_case: done...  ("missed": the trial is
+                                              then repeated, at most twice, at the same
+                                              fraction of the run time the missed run took)
 
 also accepted: "done" (exit 0) for a SIGTERM, SIGINT or a solver's SIGKILL sent once the run
 was complete (the coupler finishing or ended: the victim may have exited cleanly first);
@@ -229,6 +231,8 @@ class Trial:
         self.verdict = ""
         self.problems = {}        # kind -> text
         self.note = ""
+        self.attempts = 1
+        self.exit_s = None        # when run_case.sh ended, from its start
 
     @property
     def name(self):
@@ -303,29 +307,42 @@ class Soak:
         self.run_s, self.run_max_s = min(times), max(times)
         return times
 
-    def trial(self, t):
+    def trial(self, plan):
+        """One trial of the plan; a fault that missed its victim (the run ended first, which
+        under a varying load is frequent) is tried again, at most twice, at the same fraction
+        of the run time that missed run took."""
+        run_s = self.run_s
+        for attempt in range(1, 4):
+            t = Trial(plan.index, plan.fault, plan.victim, plan.fraction)
+            t.attempts = attempt
+            self.attempt(t, run_s)
+            if self.stop.is_set() or not t.missed or t.failed() or t.exit_s is None:
+                break
+            run_s = t.exit_s
+        return t
+
+    def attempt(self, t, run_s):
         t.folder = os.path.join(self.args.dir, "trial-%03d" % t.index)
         run = os.path.join(t.folder, "run")
         t.bound_s = bound_s(t.fault, t.victim, self.run_max_s)
         proc, marker, t0 = self.start(t.folder)
         try:
-            self.hit(t, proc, marker, t0, run)
+            self.hit(t, proc, marker, t0, run, run_s)
             if not self.stop.is_set():
-                self.judge(t, proc, marker, run)
+                self.judge(t, proc, marker, run, t0)
         finally:
             self.finish(proc, marker)
         if self.stop.is_set():
-            return t
+            return
         bad = unreadable_files(run)
         if bad:
             t.problems["unreadable"] = "; ".join(bad)
         if not t.failed() or not self.args.keep:
             shutil.rmtree(t.folder, ignore_errors=True)
-        return t
 
-    def hit(self, t, proc, marker, t0, run):
-        """Sends the fault at t0 + fraction x T (or when the victim appears)."""
-        moment = t0 + t.fraction * self.run_s
+    def hit(self, t, proc, marker, t0, run, run_s):
+        """Sends the fault at t0 + fraction x run_s (or when the victim appears)."""
+        moment = t0 + t.fraction * run_s
         seen = {}    # comm -> pid of the programs seen so far
         while not self.stop.is_set():
             ended = proc.poll() is not None
@@ -364,7 +381,7 @@ class Soak:
                 return
             time.sleep(min(POLL_S, moment - now))
 
-    def judge(self, t, proc, marker, run):
+    def judge(self, t, proc, marker, run, start):
         sent = t0 = time.monotonic()
         if t.fault == "SIGSTOP" and t.victim == "run_case.sh" and not t.missed:
             # a stopped supervisor reports nothing: resume it after the stall limit
@@ -383,6 +400,7 @@ class Soak:
             return
         t.rc = rc
         t.latency_s = end - t0
+        t.exit_s = end - start
         if t.fault == "SIGKILL" and t.victim == "run_case.sh" and not t.missed:
             t.latency_s = None
             # the orphans carry on: the coupler finishes the run and shuts the solvers down
@@ -528,8 +546,9 @@ def main():
             status = ", ".join(sorted(t.problems)) if t.failed() else \
                 ("ok (missed)" if t.missed else "ok")
             lat = "%.1f s" % t.latency_s if t.latency_s is not None else t.note or "-"
-            print("  %3d/%d trial %3d %-20s at %5.2f s (%s): exit %s, %s: %s"
-                  % (len(done), args.trials, t.index, t.name, t.moment_s or 0, t.phase,
+            again = " (try %d)" % t.attempts if t.attempts > 1 else ""
+            print("  %3d/%d trial %3d %-20s at %5.2f s%s (%s): exit %s, %s: %s"
+                  % (len(done), args.trials, t.index, t.name, t.moment_s or 0, again, t.phase,
                      t.rc, lat, status), flush=True)
     except KeyboardInterrupt:
         soak.stop.set()
@@ -552,9 +571,10 @@ def main():
     print()
     print("soak: %d trials (seed %d): %d hangs, %d leftovers, %d unreadable files, %d wrong "
           "verdicts, %d over the latency bound (largest latency/bound %.2f); %d faults missed "
-          "their victim" % (len(done), seed, count["hang"], count["leftover"],
-                            count["unreadable"], count["verdict"], count["late"],
-                            max(over) if over else 0, sum(t.missed for t in done)))
+          "their victim (%d trials repeated after a miss)"
+          % (len(done), seed, count["hang"], count["leftover"], count["unreadable"],
+             count["verdict"], count["late"], max(over) if over else 0,
+             sum(t.missed for t in done), sum(t.attempts > 1 for t in done)))
     return 1 if failed else 0
 
 
