@@ -70,7 +70,8 @@ a finding). --keep keeps the folders of failed trials (run_case.out: run_case.sh
 run/: the run with its logs).
 
 Exit status 0 when no trial hung, was late, left a process, left an unreadable file or got a
-wrong verdict; 1 otherwise; 2 when the undisturbed run does not succeed; 130 on Ctrl-C.
+wrong verdict; 1 otherwise; 2 when the undisturbed run does not succeed; 130 on Ctrl-C or
+SIGTERM (the running trials are killed).
 """
 import argparse
 import concurrent.futures
@@ -492,6 +493,10 @@ def table(trials):
     return {k: sum(k in t.problems for t in trials) for k in KINDS}
 
 
+def on_terminate(*_):
+    raise KeyboardInterrupt
+
+
 def main():
     ap = argparse.ArgumentParser(description="kill and stall trials of scripts/run_case.sh "
                                  "(see the header of this file)")
@@ -527,6 +532,10 @@ def main():
         if name.startswith(("trial-", "undisturbed-")):
             shutil.rmtree(os.path.join(args.dir, name), ignore_errors=True)
 
+    # a handler, not an inherited SIG_IGN (as for a background job of a script): the trials
+    # start with the default dispositions, and run_case.sh can trap SIGINT
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, on_terminate)
     soak = Soak(args)
     print("soak: %d trials, seed %d (SOAK_SEED=%d repeats the plan), %d at a time, in %s"
           % (args.trials, seed, seed, args.jobs, args.dir))
