@@ -4,6 +4,9 @@
 #   make test       install missing Debian packages (as root), build, run every test
 #   make bench      benchmarks (protocol latency, FEM, DEM, coupling overhead)
 #   make demo       run the default case and make its plots
+#   make soak       kill and stall trials of scripts/run_case.sh at random moments (not part of
+#                   make test): SOAK_TRIALS (default 100), SOAK_SEED (default random, printed),
+#                   SOAK_JOBS trials at a time (default 2); failed trials stay in build/release/soak
 #   make fuzz       run the libFuzzer targets of the protocol decoder and the input readers (clang)
 #   make fuzz-replay   replay their corpora once (CI)
 #   make install PREFIX=/usr/local
@@ -48,7 +51,7 @@ LDFLAGS += -fopenmp $(SAN_FLAGS)
 MODULES := common protocol fem_solver dem_solver coupler
 PROGRAMS := fem_solver dem_solver coupler
 
-.PHONY: all test run-tests bench run-bench demo fuzz install clean deps check-deps check-bench-deps
+.PHONY: all test run-tests bench run-bench demo soak fuzz install clean deps check-deps check-bench-deps
 # The user-facing targets install missing packages first, then run a fresh make: compiler
 # flags come from pkg-config when the Makefile is read, which on a new machine is before the
 # packages exist.
@@ -66,6 +69,14 @@ run-tests: programs tests
 demo: check-deps
 	@$(MAKE) --no-print-directory programs
 	@scripts/demo.sh
+
+# Fault trials of the launcher (scripts/soak.py says what each trial does and checks).
+SOAK_TRIALS ?= 100
+SOAK_JOBS ?= 2
+soak: check-deps
+	@$(MAKE) --no-print-directory programs
+	@/usr/bin/python3 scripts/soak.py --trials $(SOAK_TRIALS) --jobs $(SOAK_JOBS) --keep \
+	  --bin $(BIN) --dir $(BUILD)/soak $(if $(SOAK_SEED),--seed $(SOAK_SEED))
 
 check-deps:
 	@scripts/check_deps.sh >/dev/null 2>&1 || scripts/install_deps.sh
