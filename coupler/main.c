@@ -254,7 +254,8 @@ static int shutdown_all(app *a, const cpl_participant *failed)
         int failed_shutdown = cpl_remote_shutdown(r, timeout_s, &err);
         cpl_heartbeat_wait_end(a->heartbeat);
         if (failed_shutdown) {
-            cpl_progress_message(&a->progress, "coupler: %s did not acknowledge SHUTDOWN: %s",
+            /* an error line naming it: the launcher blames that participant, not the coupler */
+            cpl_progress_message(&a->progress, "coupler: error: %s: did not acknowledge SHUTDOWN: %s",
                                  r->name, err.message);
             rc = -1;
         }
@@ -508,6 +509,15 @@ int main(int argc, char **argv)
 fail:
     beat(&a, "stopping");
     cpl_progress_finish(&a.progress);
+    /* a signal during start-up (connecting, interface) is the user's stop too; the loop's
+     * own failures were reworded above */
+    if (*a.stop_signal && !strstr(err.message, "interrupted by SIG")) {
+        char reason[NC_ERROR_MESSAGE_MAX];
+        snprintf(reason, sizeof reason, "%s", err.message);
+        nc_error_set(&err, CPL_ERR_INTERRUPTED, "interrupted by %s (%s)",
+                     *a.stop_signal == SIGINT ? "SIGINT" : "SIGTERM", reason);
+        failure.participant = NULL;
+    }
     fprintf(stderr, "coupler: error: %s\n", err.message);
     shutdown_all(&a, failure.participant);
     if (a.loop) print_timing(&a);
