@@ -92,9 +92,11 @@ int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, cons
         j->nodes[2 * b] = ni;
         j->nodes[2 * b + 1] = nj;
     }
-    memcpy(j->K, K_blocks, 9 * (size_t)n_blocks * sizeof(double));
-    if (C_blocks) memcpy(j->C, C_blocks, 9 * (size_t)n_blocks * sizeof(double));
-    else memset(j->C, 0, 9 * (size_t)n_blocks * sizeof(double));
+    if (n_blocks > 0) {   /* (no blocks: the block arrays may not exist yet) */
+        memcpy(j->K, K_blocks, 9 * (size_t)n_blocks * sizeof(double));
+        if (C_blocks) memcpy(j->C, C_blocks, 9 * (size_t)n_blocks * sizeof(double));
+        else memset(j->C, 0, 9 * (size_t)n_blocks * sizeof(double));
+    }
     memcpy(j->u_ref, u_ref, (size_t)ndof * sizeof(double));
     memcpy(j->v_ref, v_ref, (size_t)ndof * sizeof(double));
     memset(j->df, 0, (size_t)ndof * sizeof(double));
