@@ -102,8 +102,9 @@ int fem_analysis_restore(fem_analysis *s, nc_error *err);
  * u_ref = u^k, v_ref = v^k: [ndof] full dof vectors (only the dofs of block columns are
  * read); blocks: n_blocks 3x3 blocks, block b couples block_nodes[2b] (force node i) to
  * block_nodes[2b+1] (motion node j), K_blocks/C_blocks [9 n_blocks] row-major (N/m, N s/m;
- * C_blocks NULL = 0); repeated (i, j) are summed. i and j must be one node or two nodes of
- * one element (fixed pattern; anything else is rejected with an error naming the block).
+ * C_blocks NULL = 0); repeated (i, j) are summed. A pair (i, j) of nodes that share no
+ * element is added to the matrix pattern (once; the factorisations then start afresh, also
+ * the saved one); nodes outside the model are rejected with an error naming the block.
  * Everything is copied. Where F is evaluated:
  *  - dynamics (Newmark, generalized-alpha, Bossak): at the end-of-step state u_n+1, v_n+1
  *    and with full weight, exactly where f_coupling acts (F_ext at t_n+1 for every method),
