@@ -206,6 +206,11 @@ static void print_summary(const dem_sim *s, const char *input, FILE *out, FILE *
             m->prm.dt_auto ? "auto" : "dt_s", dem_sim_critical_dt(s));
     if (isfinite(tc_min)) fprintf(out, ", %.0f steps per contact of body %zu", tc_min / dt, b_min);
     fputc('\n', out);
+    /* a rule of thumb for accuracy, not a stability limit: about ten coupling steps per
+     * contact resolve its force history */
+    if (isfinite(tc_min) && m->net.youngs_modulus_pa > 0.0)
+        fprintf(out, "  coupling dt: %.3g s or less suggested (a tenth of the shortest contact "
+                     "with the net, body %zu)\n", 0.1 * tc_min, b_min);
     if (!m->prm.dt_auto && isfinite(tc_min) && tc_min / dt < 20.0)
         fprintf(warn, "warning: %s: dt_s: %g s resolves the contact of body %zu "
                       "(~%.3g s) with only %.0f steps; 20 or more (\"auto\" gives >= 40) are "
