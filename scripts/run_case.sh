@@ -43,6 +43,7 @@ otherwise the coupler's log as it grows, with a plain status line every progress
 The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoint, so
 parallel runs never collide. Programs come from $NC_BIN if set, else <repo>/bin.
 $NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
+$NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their endpoints.
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
 or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged" /
 "accept_energy_growth": true, still reported as NOT reliable); 1 a program failed (named,
@@ -54,7 +55,7 @@ EOF
 die() { echo "run_case: $*" >&2; exit 2; }
 
 case_dir=""; out=""; sets=(); quiet=0
-stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}
+stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}; endpoint_wait=${NC_ENDPOINT_WAIT_S:-60}
 fem_program="$bin/fem_solver"; dem_program="$bin/dem_solver"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -74,6 +75,7 @@ positive='^[0-9]+([.][0-9]+)?$'
 [[ $stall_limit =~ $positive ]] && [[ $stall_limit != 0 ]] \
   || die "--stall-limit / NC_STALL_LIMIT_S: expected seconds > 0, got '$stall_limit'"
 [[ $grace =~ $positive ]] || die "NC_STOP_GRACE_S: expected seconds >= 0, got '$grace'"
+[[ $endpoint_wait =~ $positive ]] || die "NC_ENDPOINT_WAIT_S: expected seconds >= 0, got '$endpoint_wait'"
 [ -d "$case_dir" ] || die "$case_dir: no such case folder"
 for f in fem.json dem.json coupler.json; do
   [ -f "$case_dir/$f" ] || die "$case_dir/$f: missing (a case folder holds fem.json, dem.json, coupler.json)"
@@ -268,7 +270,7 @@ $dem_program dem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file 
   >dem.log 2>&1 &
 pid[dem]=$!
 
-now_ms; endpoint_until=$((NOW_MS + 60000))
+now_ms; endpoint_until=$((NOW_MS + $(ms "$endpoint_wait")))
 while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   reap
   for p in fem dem; do
@@ -281,7 +283,7 @@ while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   now_ms
   if [ "$NOW_MS" -gt "$endpoint_until" ]; then
     for p in fem dem; do
-      [ -s "$p.endpoint" ] || fail_first "$p" "did not publish its endpoint in 60 s"
+      [ -s "$p.endpoint" ] || fail_first "$p" "did not publish its endpoint in $endpoint_wait s (NC_ENDPOINT_WAIT_S)"
     done
     report
   fi

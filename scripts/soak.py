@@ -7,7 +7,7 @@
 Each trial runs a short real coupled case (default tests/coupler/cases/small_net: fem_solver,
 dem_solver and the coupler, 2-4 s) through scripts/run_case.sh into its own folder, with
 short timeouts: coupler.json timeouts connect 4 s, reply 4 s, shutdown 2 s (--set); stall
-limit NC_STALL_LIMIT_S 6 s; grace NC_STOP_GRACE_S 3 s; OMP_NUM_THREADS 1. run_case.sh passes
+limit NC_STALL_LIMIT_S 6 s (and the endpoint wait NC_ENDPOINT_WAIT_S); grace NC_STOP_GRACE_S 3 s; OMP_NUM_THREADS 1. run_case.sh passes
 no --idle-timeout, so the solvers keep their default of 300 s. At a random moment, uniform
 over the undisturbed run time measured at the start (the shortest of --jobs runs side by
 side; start-up included), one fault hits one victim; the 13 classes are equally likely:
@@ -255,6 +255,7 @@ class Soak:
         shutil.rmtree(folder, ignore_errors=True)
         os.makedirs(folder)
         env = dict(os.environ, NC_BIN=self.args.bin, NC_STALL_LIMIT_S=str(STALL_S),
+                   NC_ENDPOINT_WAIT_S=str(STALL_S),
                    NC_STOP_GRACE_S=str(GRACE_S), OMP_NUM_THREADS="1",
                    NC_SOAK_TRIAL=folder)
         cmd = [os.path.join(ROOT, "scripts", "run_case.sh"), self.args.case,
