@@ -29,7 +29,8 @@ static void usage(FILE *f)
             "                  [--idle-timeout SECONDS]\n"
             "  without --endpoint: standalone run with rigid walls (planes, STL meshes) until\n"
             "  end_time_s; with --endpoint: coupling participant (role \"dem\") serving the\n"
-            "  coupler; results in DIR/dem.h5 and DIR/dem.xdmf. See dem_solver/README.md.\n");
+            "  coupler; results in DIR/dem.h5 with DIR/particles.xdmf (the particles) and,\n"
+            "  coupled, DIR/dem_net.xdmf (the net wall). See dem_solver/README.md.\n");
 }
 
 typedef struct options {
