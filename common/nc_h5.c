@@ -78,6 +78,29 @@ int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err)
     return 0;
 }
 
+int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err)
+{
+    nc_h5_quiet();
+    memset(f, 0, sizeof *f);
+    f->file = H5I_INVALID_HID;
+    snprintf(f->path, sizeof f->path, "%s", path);
+    errno = 0;
+    htri_t is_hdf5 = H5Fis_hdf5(path);
+    if (is_hdf5 <= 0) {
+        char why[200];
+        reason(why, errno);
+        return nc_error_set(err, 1, "%s: cannot open the HDF5 file to append to it: %s", path,
+                            is_hdf5 == 0 ? "not an HDF5 file" : why);
+    }
+    f->file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    if (f->file < 0) {
+        char why[200];
+        reason(why, errno);
+        return nc_error_set(err, 1, "%s: cannot open the HDF5 file to append to it: %s", path, why);
+    }
+    return 0;
+}
+
 int nc_h5_flush(nc_h5_file *f, nc_error *err)
 {
     if (f->file < 0) return 0;
@@ -123,6 +146,9 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
     if (f->failed) return nc_error_set(err, 1, "%s: %s not written after an earlier write error", f->path, path);
     if (make_parents(f, path, err)) return -1;
+    /* a file reopened to append to (a resumed run) already holds the end-of-run datasets */
+    if (H5Lexists(f->file, path, H5P_DEFAULT) > 0 && H5Ldelete(f->file, path, H5P_DEFAULT) < 0)
+        return fail(f, err, "cannot replace dataset", path);
     errno = 0;
     hid_t space = H5Screate_simple(rank, dims, NULL);
     hid_t dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, H5P_DEFAULT,
@@ -211,6 +237,56 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     H5Sclose(space);
     if (s->dataset < 0) return fail(f, err, "cannot create dataset", path);
     return 0;
+}
+
+int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                      int rank, const hsize_t *row_dims, hsize_t keep_rows, nc_error *err)
+{
+    memset(s, 0, sizeof *s);
+    s->dataset = H5I_INVALID_HID;
+    if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not opened after an earlier write error", f->path, path);
+    s->type = type;
+    s->rank = rank;
+    s->owner = f;
+    snprintf(s->name, sizeof s->name, "%s", path);
+    if (H5Lexists(f->file, path, H5P_DEFAULT) <= 0)
+        return nc_error_set(err, 1, "%s: has no dataset %s to append to", f->path, path);
+    s->dataset = H5Dopen2(f->file, path, H5P_DEFAULT);
+    if (s->dataset < 0) return nc_error_set(err, 1, "%s: cannot open dataset %s", f->path, path);
+    hid_t space = H5Dget_space(s->dataset);
+    int file_rank = H5Sget_simple_extent_ndims(space);
+    hsize_t dims[3] = {0, 0, 0};
+    if (file_rank == rank) H5Sget_simple_extent_dims(space, dims, NULL);
+    H5Sclose(space);
+    hid_t stored = H5Dget_type(s->dataset);
+    int same_type = stored >= 0 && H5Tequal(stored, file_type(type)) > 0;
+    if (stored >= 0) H5Tclose(stored);
+    if (file_rank != rank || !same_type)
+        return nc_error_set(err, 1, "%s: dataset %s has another type or rank than this run writes",
+                            f->path, path);
+    for (int i = 1; i < rank; i++) {
+        hsize_t want = row_dims[i - 1] ? row_dims[i - 1] : 1;
+        if (dims[i] != want)
+            return nc_error_set(err, 1, "%s: dataset %s has rows of %llu values in dimension %d, "
+                                "this run writes %llu", f->path, path, (unsigned long long)dims[i],
+                                i, (unsigned long long)want);
+        s->dims[i] = dims[i];
+    }
+    if (dims[0] < keep_rows)
+        return nc_error_set(err, 1, "%s: dataset %s has %llu rows, the checkpoint needs %llu "
+                            "(the file is older than the checkpoint)", f->path, path,
+                            (unsigned long long)dims[0], (unsigned long long)keep_rows);
+    s->dims[0] = keep_rows;
+    errno = 0;
+    if (dims[0] != keep_rows && H5Dset_extent(s->dataset, s->dims) < 0)
+        return fail(f, err, "cannot truncate", path);
+    return 0;
+}
+
+hsize_t nc_h5_series_rows(const nc_h5_series *s)
+{
+    return s->dataset > 0 ? s->dims[0] : 0;
 }
 
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)

@@ -1,6 +1,6 @@
 /* nc_h5 — small HDF5 writing layer shared by the three programs.
  *
- * Files are created fresh (truncating), datasets are addressed by absolute paths whose
+ * Files are created fresh (truncating) or reopened to append (nc_h5_open), datasets are addressed by absolute paths whose
  * parent groups are created on demand, and time series grow along their first dimension
  * one row at a time. nc_h5_flush() after each output step keeps everything written so far
  * readable if the process is later stopped or killed (the file stays in the default,
@@ -38,6 +38,9 @@ typedef struct nc_h5_series {
 } nc_h5_series;
 
 int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
+/* Opens an existing file for writing (a resumed run appends to its results); nc_h5_write of
+ * a dataset that exists replaces it, attributes are replaced too. */
+int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err);
 int nc_h5_flush(nc_h5_file *f, nc_error *err);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
 
@@ -56,6 +59,12 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
 /* Appends one row of prod(row_dims) values. */
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err);
 void nc_h5_series_close(nc_h5_series *s);
+/* Opens an existing series of an opened file for appending, checking type, rank and row_dims,
+ * and cuts it to its first keep_rows rows (what it held at a checkpoint; an error when it
+ * holds fewer). */
+int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
+                      int rank, const hsize_t *row_dims, hsize_t keep_rows, nc_error *err);
+hsize_t nc_h5_series_rows(const nc_h5_series *s);   /* rows written (0 if not open) */
 
 /* The same with a "units" string attribute on the dataset ("m", "N", "m/s", "1", ...). */
 int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,

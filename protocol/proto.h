@@ -53,6 +53,8 @@ typedef enum {
     PROTO_MSG_SOLVE,        /* solve iteration k of the step with the given input arrays */
     PROTO_MSG_ACCEPT_STEP,  /* commit the step, write output when due */
     PROTO_MSG_SHUTDOWN,     /* finish: close files, exit */
+    PROTO_MSG_CHECKPOINT,   /* version 2: save the complete state under a name, durably */
+    PROTO_MSG_RESUME,       /* version 2: continue from a named checkpoint (before any step) */
     PROTO_MSG_ERROR,        /* reply only: the command failed; `text` says why */
     PROTO_MSG_COUNT
 } proto_msg_type;

@@ -10,6 +10,7 @@ static const char *const type_names[PROTO_MSG_COUNT] = {
     [PROTO_MSG_INTERFACE] = "interface",   [PROTO_MSG_BEGIN_STEP] = "begin_step",
     [PROTO_MSG_SOLVE] = "solve",           [PROTO_MSG_ACCEPT_STEP] = "accept_step",
     [PROTO_MSG_SHUTDOWN] = "shutdown",     [PROTO_MSG_ERROR] = "error",
+    [PROTO_MSG_CHECKPOINT] = "checkpoint", [PROTO_MSG_RESUME] = "resume",
 };
 
 const char *proto_type_name(proto_msg_type type)

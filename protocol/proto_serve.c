@@ -8,6 +8,7 @@ typedef struct step_state {
     int open;         /* BEGIN_STEP done, no ACCEPT_STEP yet */
     int solved;       /* a SOLVE handler ran in the open step: the state is not the saved one */
     int last_ok;      /* the last SOLVE of the open step succeeded */
+    int stepped;      /* a BEGIN_STEP or a RESUME was carried out: too late to resume */
 } step_state;
 
 /* "solve (step 12, iteration 2)", "begin_step (step 3)", "interface". */
@@ -58,6 +59,7 @@ static int dispatch(const proto_serve_handlers *h, void *ctx, const proto_messag
         st->open = 0;
         st->solved = 0;
         st->last_ok = 0;
+        st->stepped = 1;
         if (h->save_state && h->save_state(ctx, cmd, e)) return -1;
         st->open = 1;
         return 0;
@@ -87,6 +89,21 @@ static int dispatch(const proto_serve_handlers *h, void *ctx, const proto_messag
         return h->accept_step ? h->accept_step(ctx, cmd, reply, e) : 0;
     case PROTO_MSG_SHUTDOWN:
         return h->shutdown ? h->shutdown(ctx, cmd, e) : 0;
+    case PROTO_MSG_CHECKPOINT:
+        if (!h->checkpoint) return nc_error_set(e, PROTO_ERR_USAGE, "this participant cannot checkpoint");
+        if (st->open) return nc_error_set(e, PROTO_ERR_USAGE, "refused: a step is open (checkpoint after accept_step)");
+        if (!cmd->text[0]) return nc_error_set(e, PROTO_ERR_USAGE, "refused: the checkpoint has no name (text)");
+        if (h->checkpoint(ctx, cmd, reply, e)) return -1;
+        sum->checkpoints++;
+        return 0;
+    case PROTO_MSG_RESUME:
+        if (!h->resume) return nc_error_set(e, PROTO_ERR_USAGE, "this participant cannot resume");
+        if (st->stepped) return nc_error_set(e, PROTO_ERR_USAGE, "refused: resume comes before the first begin_step, once");
+        if (!cmd->text[0]) return nc_error_set(e, PROTO_ERR_USAGE, "refused: the checkpoint to resume has no name (text)");
+        if (h->resume(ctx, cmd, reply, e)) return -1;
+        st->stepped = 1;
+        sum->resumed = 1;
+        return 0;
     default:
         return nc_error_set(e, PROTO_ERR_USAGE, "refused: '%s' is not a command", proto_type_name(cmd->type));
     }
@@ -97,7 +114,7 @@ int proto_serve(proto_participant *p, const proto_serve_handlers *h, void *ctx,
 {
     proto_serve_summary sum;
     memset(&sum, 0, sizeof sum);
-    step_state st = {0, 0, 0};
+    step_state st = {0, 0, 0, 0};
     proto_message cmd, reply;
     memset(&cmd, 0, sizeof cmd);
     memset(&reply, 0, sizeof reply);

@@ -6,7 +6,10 @@
  *                a step begun again without ACCEPT_STEP starts from the last accepted state);
  *   SOLVE        refused outside a begun step; the first SOLVE of a step runs from the saved
  *                state, every further SOLVE of the same step calls restore_state first;
- *   ACCEPT_STEP  refused outside a begun step or when its last SOLVE failed; closes the step.
+ *   ACCEPT_STEP  refused outside a begun step or when its last SOLVE failed; closes the step;
+ *   CHECKPOINT   refused inside a begun step (the state saved is an accepted one);
+ *   RESUME       refused after the first BEGIN_STEP or a RESUME (a run resumes once, before
+ *                it steps).
  * A handler that fails, and a command refused by the loop, get an error reply naming the
  * command, step and iteration with the reason (marked retryable when the handler's error
  * code is PROTO_ERR_STEP_FAILED); serving continues. HELLO and malformed
@@ -30,6 +33,11 @@ typedef struct proto_serve_handlers {
     int (*solve)(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err);
     int (*accept_step)(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err);
     int (*shutdown)(void *ctx, const proto_message *cmd, nc_error *err);
+    /* version 2, capability `checkpoint` (protocol/README.md §3.3): save the complete state
+     * under the name in cmd->text, durably, before returning; load it again and reopen the
+     * result files as they were at that checkpoint. NULL: the command is refused. */
+    int (*checkpoint)(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err);
+    int (*resume)(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err);
     /* Each error reply sent, e.g. "solve (step 12, iteration 2): Newton did not converge ...";
      * for the program's log. */
     void (*report)(void *ctx, const char *message);
@@ -40,6 +48,8 @@ typedef struct proto_serve_summary {
     long steps_accepted;
     long solves;            /* SOLVE handler calls */
     long restores;          /* restore_state calls */
+    long checkpoints;       /* CHECKPOINT commands carried out */
+    int resumed;            /* a RESUME was carried out */
     long failed;            /* error replies: handler failures and refused commands */
     long retryable;         /* error replies marked retryable (PROTO_ERR_STEP_FAILED): the
                                coupler retries the step; not counted in failed */

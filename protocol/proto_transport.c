@@ -84,7 +84,8 @@ static void buffer_close(frame_buffer *b)
 static void describe(const proto_message *m, char *out, size_t size)
 {
     if (m->type == PROTO_MSG_BEGIN_STEP || m->type == PROTO_MSG_SOLVE ||
-        m->type == PROTO_MSG_ACCEPT_STEP)
+        m->type == PROTO_MSG_ACCEPT_STEP || m->type == PROTO_MSG_CHECKPOINT ||
+        m->type == PROTO_MSG_RESUME)
         snprintf(out, size, "%s (step %ld, iteration %d, t = %.6g s)", proto_type_name(m->type),
                  m->step, m->iteration, m->time_s);
     else

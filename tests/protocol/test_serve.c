@@ -3,7 +3,8 @@
  * through a proto_peer (and a raw ZeroMQ socket for garbage). Checked: restore_state exactly
  * on the repeated SOLVEs of a step; SOLVE / ACCEPT_STEP outside a begun step refused while
  * serving continues; a failing handler answered with an error naming command, step and
- * iteration; SHUTDOWN ends the loop with 0; the idle timeout and the stop flag end it. */
+ * iteration; CHECKPOINT only between steps and RESUME only once before the first step;
+ * SHUTDOWN ends the loop with 0; the idle timeout and the stop flag end it. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -89,6 +90,22 @@ static int f_shutdown(void *ctx, const proto_message *cmd, nc_error *err)
     return 0;
 }
 
+static int f_checkpoint(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    (void)err;
+    record(ctx, "checkpoint %ld %s; ", cmd->step, cmd->text);
+    return 0;
+}
+
+static int f_resume(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    (void)err;
+    record(ctx, "resume %ld %s; ", cmd->step, cmd->text);
+    return 0;
+}
+
 static void f_report(void *ctx, const char *message)
 {
     fake *f = ctx;
@@ -98,7 +115,8 @@ static void f_report(void *ctx, const char *message)
 
 static const proto_serve_handlers fake_handlers = {
     .interface = f_interface, .save_state = f_save, .restore_state = f_restore,
-    .solve = f_solve, .accept_step = f_accept, .shutdown = f_shutdown, .report = f_report};
+    .solve = f_solve, .accept_step = f_accept, .shutdown = f_shutdown, .report = f_report,
+    .checkpoint = f_checkpoint, .resume = f_resume};
 
 /* ---- the serving thread and the coupler side ------------------------------------------ */
 
@@ -148,6 +166,7 @@ typedef struct coupler {
     proto_peer *peer;
     proto_message req, rep;
     nc_error err;
+    char text[64];             /* the next command's text (a checkpoint name) */
 } coupler;
 
 static void connect_coupler(coupler *c, const server *s)
@@ -177,6 +196,7 @@ static int command(coupler *c, proto_msg_type type, long step, int iteration)
     c->req.iteration = iteration;
     c->req.time_s = 0.01 * (double)(step > 0 ? step : 0);
     c->req.dt_s = 0.01;
+    snprintf(c->req.text, sizeof c->req.text, "%s", c->text);
     nc_error_clear(&c->err);
     return proto_peer_request(c->peer, &c->req, &c->rep, &c->err);
 }
@@ -275,6 +295,35 @@ static void test_out_of_order_refused_and_serving_continues(void **state)
     assert_int_equal(s.sum.failed, 5);
     assert_int_equal(s.f.n_reports, 5);
     assert_non_null(strstr(s.f.reports[0], "solve (step 0, iteration 1): refused"));
+}
+
+static void test_checkpoint_between_steps_resume_once_first(void **state)
+{
+    (void)state;
+    server s;
+    start(&s, 10000);
+    run(&s);
+    coupler c;
+    connect_coupler(&c, &s);
+    refused(&c, PROTO_MSG_RESUME, 3, 0, "resume (step 3", "has no name");
+    snprintf(c.text, sizeof c.text, "step_000003");
+    ok(&c, PROTO_MSG_RESUME, 3, 0);
+    refused(&c, PROTO_MSG_RESUME, 3, 0, "resume (step 3", "before the first begin_step, once");
+    ok(&c, PROTO_MSG_BEGIN_STEP, 3, 0);
+    refused(&c, PROTO_MSG_CHECKPOINT, 3, 0, "checkpoint (step 3", "a step is open");
+    ok(&c, PROTO_MSG_SOLVE, 3, 1);
+    ok(&c, PROTO_MSG_ACCEPT_STEP, 3, 0);
+    snprintf(c.text, sizeof c.text, "step_000004");
+    ok(&c, PROTO_MSG_CHECKPOINT, 4, 0);
+    ok(&c, PROTO_MSG_SHUTDOWN, -1, 0);
+    finish(&s);
+    disconnect_coupler(&c);
+    assert_int_equal(s.rc, 0);
+    assert_string_equal(s.f.calls, "resume 3 step_000003; save 3; solve 3.1; accept 3; "
+                                   "checkpoint 4 step_000004; shutdown; ");
+    assert_int_equal(s.sum.checkpoints, 1);
+    assert_int_equal(s.sum.resumed, 1);
+    assert_int_equal(s.sum.failed, 3);
 }
 
 static void test_failing_handler_gets_error_reply(void **state)
@@ -385,6 +434,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_restore_exactly_on_repeated_solves),
         cmocka_unit_test(test_out_of_order_refused_and_serving_continues),
+        cmocka_unit_test(test_checkpoint_between_steps_resume_once_first),
         cmocka_unit_test(test_failing_handler_gets_error_reply),
         cmocka_unit_test(test_malformed_command_counted),
         cmocka_unit_test(test_shutdown_inside_a_step_reports_it),

@@ -1,0 +1,148 @@
+/* test_h5_append — reopening a result file to append to it, as a resumed run does: a series is
+ * cut back to the rows it held at the checkpoint and grows again from there, the rows before
+ * are untouched, a dataset written again is replaced, and a file or series that does not fit
+ * (missing, other row size, fewer rows than the checkpoint needs) is refused with a message
+ * naming the file and the dataset. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "nc_h5.h"
+
+static char path[256];
+
+static int setup(void **state)
+{
+    (void)state;
+    const char *dir = getenv("NC_TMP") ? getenv("NC_TMP") : "/tmp";
+    snprintf(path, sizeof path, "%s/test_h5_append_%d.h5", dir, (int)getpid());
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    unlink(path);
+    return 0;
+}
+
+static void write_rows(nc_h5_series *s, int first, int count)
+{
+    nc_error err;
+    for (int r = first; r < first + count; r++) {
+        double row[3] = {r, r + 0.25, r + 0.5};
+        assert_int_equal(nc_h5_series_append(s, row, &err), 0);
+    }
+}
+
+static void read_all(double *out, size_t expected_rows)
+{
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(file >= 0);
+    hid_t d = H5Dopen2(file, "/output/u", H5P_DEFAULT);
+    hid_t space = H5Dget_space(d);
+    hsize_t dims[2];
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    assert_int_equal(dims[0], expected_rows);
+    assert_int_equal(dims[1], 3);
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) >= 0);
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(file);
+}
+
+static void test_truncate_and_append(void **state)
+{
+    (void)state;
+    nc_error err;
+    nc_h5_file f;
+    nc_h5_series s;
+    hsize_t row_dims[1] = {3};
+    double one = 1.0;
+    hsize_t dims1[1] = {1};
+    assert_int_equal(nc_h5_create(&f, path, &err), 0);
+    assert_int_equal(nc_h5_series_create(&f, &s, "/output/u", NC_H5_F64, 2, row_dims, &err), 0);
+    write_rows(&s, 0, 7);
+    assert_int_equal(nc_h5_write(&f, "/summary/max", NC_H5_F64, 1, dims1, &one, &err), 0);
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+
+    /* the checkpoint was taken after 4 rows: rows 4..6 are dropped, then 4..9 written again */
+    assert_int_equal(nc_h5_open(&f, path, &err), 0);
+    assert_int_equal(nc_h5_series_open(&f, &s, "/output/u", NC_H5_F64, 2, row_dims, 4, &err), 0);
+    assert_int_equal(nc_h5_series_rows(&s), 4);
+    write_rows(&s, 4, 6);
+    double two = 2.0;
+    assert_int_equal(nc_h5_write(&f, "/summary/max", NC_H5_F64, 1, dims1, &two, &err), 0);
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+
+    double got[30];
+    read_all(got, 10);
+    for (int r = 0; r < 10; r++) {
+        assert_true(got[3 * r] == r);
+        assert_true(got[3 * r + 2] == r + 0.5);
+    }
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t d = H5Dopen2(file, "/summary/max", H5P_DEFAULT);
+    double max = 0;
+    H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &max);
+    H5Dclose(d);
+    H5Fclose(file);
+    assert_true(max == 2.0);
+}
+
+static void test_refusals(void **state)
+{
+    (void)state;
+    nc_error err;
+    nc_h5_file f;
+    nc_h5_series s;
+    hsize_t row_dims[1] = {3}, other_dims[1] = {4};
+
+    assert_int_not_equal(nc_h5_open(&f, path, &err), 0);           /* no file yet */
+    assert_non_null(strstr(err.message, path));
+
+    assert_int_equal(nc_h5_create(&f, path, &err), 0);
+    assert_int_equal(nc_h5_series_create(&f, &s, "/output/u", NC_H5_F64, 2, row_dims, &err), 0);
+    write_rows(&s, 0, 2);
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+
+    assert_int_equal(nc_h5_open(&f, path, &err), 0);
+    assert_int_not_equal(nc_h5_series_open(&f, &s, "/output/v", NC_H5_F64, 2, row_dims, 0, &err), 0);
+    assert_non_null(strstr(err.message, "/output/v"));
+    nc_h5_series_close(&s);
+    assert_int_not_equal(nc_h5_series_open(&f, &s, "/output/u", NC_H5_F64, 2, other_dims, 0, &err), 0);
+    assert_non_null(strstr(err.message, "/output/u"));
+    nc_h5_series_close(&s);
+    assert_int_not_equal(nc_h5_series_open(&f, &s, "/output/u", NC_H5_I32, 2, row_dims, 0, &err), 0);
+    nc_h5_series_close(&s);
+    assert_int_not_equal(nc_h5_series_open(&f, &s, "/output/u", NC_H5_F64, 2, row_dims, 5, &err), 0);
+    assert_non_null(strstr(err.message, "2 rows"));
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+
+    FILE *text = fopen(path, "w");
+    assert_non_null(text);
+    fputs("not hdf5\n", text);
+    fclose(text);
+    assert_int_not_equal(nc_h5_open(&f, path, &err), 0);
+    assert_non_null(strstr(err.message, "not an HDF5 file"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_truncate_and_append, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_refusals, setup, teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
