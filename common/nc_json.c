@@ -2,6 +2,7 @@
 #include "nc_json.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -144,6 +145,54 @@ static int check_tree(const cJSON *item, tree_path *p, const char *name, nc_erro
     return 0;
 }
 
+/* cJSON reads a literal too small for a double (1e-400) as 0 without a word: a user who
+ * wrote a wrong exponent would run with zero. Its tree keeps no text, so the literals are
+ * found in the source: outside strings, a number token with an exponent (or long enough to
+ * spell 300 zeros) that strtod reports as underflowing, although it is not zero, is refused
+ * with its line and column. Linear in the size of the text. */
+static int check_underflow(const char *name, const char *text, size_t size, nc_error *err)
+{
+    int in_string = 0, line = 1;
+    size_t line_start = 0;
+    for (size_t i = 0; i < size; i++) {
+        char c = text[i];
+        if (c == '\n') { line++; line_start = i + 1; }
+        if (in_string) {
+            if (c == '\\') i++;
+            else if (c == '"') in_string = 0;
+            continue;
+        }
+        if (c == '"') { in_string = 1; continue; }
+        if (c != '-' && (c < '0' || c > '9')) continue;
+        size_t end = i;
+        int exponent = 0, nonzero = 0, in_mantissa = 1;
+        while (end < size && text[end] && strchr("0123456789+-.eE", text[end])) {
+            if (text[end] == 'e' || text[end] == 'E') { exponent = 1; in_mantissa = 0; }
+            else if (in_mantissa && text[end] >= '1' && text[end] <= '9') nonzero = 1;
+            end++;
+        }
+        size_t length = end - i;
+        if (nonzero && (exponent || length > 300)) {
+            char small[64], *buf = length < sizeof small ? small : malloc(length + 1);
+            if (!buf) return nc_error_set(err, 1, "%s: out of memory checking the numbers", name);
+            memcpy(buf, text + i, length);
+            buf[length] = '\0';
+            errno = 0;
+            double v = strtod(buf, NULL);
+            int underflow = errno == ERANGE && fabs(v) < DBL_MIN;
+            if (underflow) {
+                nc_error_set(err, 1, "%s:%d:%zu: number %.40s%s is too small for a double "
+                             "(non-zero magnitudes must be at least 2.2e-308; it would be read as 0)",
+                             name, line, i - line_start + 1, buf, length > 40 ? "..." : "");
+            }
+            if (buf != small) free(buf);
+            if (underflow) return -1;
+        }
+        i = end - 1;
+    }
+    return 0;
+}
+
 int nc_json_parse_text(const char *name, const char *text, size_t size, cJSON **root,
                        nc_error *err)
 {
@@ -166,7 +215,7 @@ int nc_json_parse_text(const char *name, const char *text, size_t size, cJSON **
         return nc_error_set(err, 1, "%s: expected a JSON object at top level", name);
     }
     tree_path path = {{0}, 0};
-    if (check_tree(parsed, &path, name, err)) {
+    if (check_tree(parsed, &path, name, err) || check_underflow(name, text, size, err)) {
         cJSON_Delete(parsed);
         return -1;
     }

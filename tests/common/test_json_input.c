@@ -1,6 +1,7 @@
 /* test_json_input — what every JSON input refuses beyond cJSON's own syntax check: a key given
  * twice in one object (cJSON silently keeps the first) and a number beyond the range of a
- * double (cJSON keeps infinity and prints it as "null"); both named with the file and the
+ * double (cJSON keeps infinity and prints it as "null"), or too small for one (cJSON reads 1e-400
+ * as 0; named with line and column); named with the file and the
  * path of the value, at any depth. Large arrays are checked once per object in O(k log k). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -44,6 +45,24 @@ static void test_duplicate_keys(void **state)
     cJSON_Delete(root);
 }
 
+static void test_underflowing_numbers(void **state)
+{
+    (void)state;
+    /* 1e-400 would be read as 0 without a word: refused with its line and column */
+    static const char *const tiny[] = {"in.json:2:11: number 1e-400 is too small", "read as 0", NULL};
+    expect_refused("{\"a\": 1,\n  \"dt_s\": 1e-400}", tiny);
+    static const char *const neg[] = {"in.json:1:11: number -2.5E-330", NULL};
+    expect_refused("{\"x\": [1, -2.5E-330]}", neg);
+    /* zero spelled with an exponent, the smallest normal double, numbers inside strings and a
+     * string holding an escaped quote before a number stay accepted */
+    const char *ok = "{\"a\": 0e-400, \"b\": 2.3e-308, \"c\": \"1e-400\", \"d\": \"q\\\"1e-999\", "
+                     "\"e\": -0.0e-5000, \"f\": [true, false, null, 1e-307]}";
+    cJSON *root;
+    nc_error err;
+    if (nc_json_parse_text("ok.json", ok, strlen(ok), &root, &err)) fail_msg("%s", err.message);
+    cJSON_Delete(root);
+}
+
 static void test_out_of_range_numbers(void **state)
 {
     (void)state;
@@ -73,6 +92,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_duplicate_keys),
         cmocka_unit_test(test_out_of_range_numbers),
+        cmocka_unit_test(test_underflowing_numbers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
