@@ -122,6 +122,24 @@ static int grow_pattern(fem_analysis *s, int n_blocks, const int *block_nodes, n
     return build_pattern(s, err);
 }
 
+int fem_analysis_set_pattern_pairs(fem_analysis *s, int n_pairs, const int *pairs, nc_error *err)
+{
+    if (n_pairs < 0) return nc_error_set(err, 1, "%d node pairs", n_pairs);
+    for (int p = 0; p < 2 * n_pairs; p++)
+        if (pairs[p] < 0 || pairs[p] >= s->m->n_nodes)
+            return nc_error_set(err, 1, "node pair %d: node %d is not in the model (0..%d)", p / 2,
+                                pairs[p], s->m->n_nodes - 1);
+    if (n_pairs > s->cap_pairs) {
+        int *grown = realloc(s->pairs, 2 * (size_t)n_pairs * sizeof *grown);
+        if (!grown) return nc_error_set(err, 1, "out of memory for %d node pairs", n_pairs);
+        s->pairs = grown;
+        s->cap_pairs = n_pairs;
+    }
+    if (n_pairs > 0) memcpy(s->pairs, pairs, 2 * (size_t)n_pairs * sizeof *pairs);
+    s->n_pairs = n_pairs;
+    return build_pattern(s, err);
+}
+
 int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
 {
     memset(s, 0, sizeof *s);

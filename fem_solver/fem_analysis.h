@@ -119,6 +119,10 @@ int fem_analysis_restore(fem_analysis *s, nc_error *err);
 int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const double *v_ref,
                                    int n_blocks, const int *block_nodes, const double *K_blocks,
                                    const double *C_blocks, nc_error *err);
+/* Rebuilds the matrix pattern with exactly these extra node pairs [2 n_pairs] (those of a
+ * checkpoint, in their order): the same pairs give the same pattern, the same ordering and
+ * so the same factorisations. Every factorisation is dropped (fem_sparse_refactor). */
+int fem_analysis_set_pattern_pairs(fem_analysis *s, int n_pairs, const int *pairs, nc_error *err);
 /* Back to the plain coupling force f_coupling. */
 void fem_analysis_clear_linearisation(fem_analysis *s);
 /* Diagnostic (tangent checks): the residual of a dynamic step of dt_s from the current state

@@ -8,8 +8,14 @@
  * carries the DEM's linearisation solves with F(u, v) = force - K (u - u^k) - C (v - v^k)
  * (fem_analysis_set_linearisation); one without it, with the constant force. A Newton failure
  * is answered as retryable: the coupler may try the step again with a smaller dt.
+ * Checkpoint and resume (capability "checkpoint", protocol/README.md §3.3): CHECKPOINT saves
+ * the complete state (fem_checkpoint.h) as DIR/checkpoint/fem_<name>.h5; RESUME loads one
+ * and reopens fem.h5 cut back to the rows written at that checkpoint. So that a resumed run
+ * finds its results intact, fem.h5 and fem.xdmf are created only at the first BEGIN_STEP
+ * (with the initial state as their first rows), never before.
  */
 #include "fem_run.h"
+#include "fem_checkpoint.h"
 #include "fem_output.h"
 #include "nc_file.h"
 #include "nc_clock.h"
@@ -31,8 +37,10 @@ typedef struct coupled {
     int *lin_nodes;           /* [2 blocks] model node numbers of the symmetrised blocks */
     double *lin_K, *lin_C;    /* [9 blocks] their values */
     size_t lin_cap;
+    const char *dir;          /* output folder */
     long written_step;
     double next_output_s;     /* time of the next full output */
+    fem_ck_table run_entries; /* what of this driver a checkpoint holds */
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
 } coupled;
 
@@ -49,9 +57,26 @@ static int on_interface(void *ctx, const proto_message *cmd, proto_message *repl
     return 0;
 }
 
+/* A fresh run's results: fem.h5 and fem.xdmf with the initial state as their first rows
+ * (monitor and output at t = 0). Created at the first BEGIN_STEP (or CHECKPOINT) and not
+ * before, so that a run about to RESUME never truncates the results it continues. */
+static int start_output(coupled *c, nc_error *err)
+{
+    if (c->out.open) return 0;
+    if (fem_output_open(&c->out, c->m, c->dir, err) ||
+        fem_output_monitor(&c->out, &c->s, 0.0, err) || fem_output_step(&c->out, &c->s, 0.0, err)) {
+        fem_output_close(&c->out);   /* the next BEGIN_STEP tries again */
+        c->out.max_u_node = -1;
+        return -1;
+    }
+    c->written_step = 0;
+    return 0;
+}
+
 static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
 {
     coupled *c = ctx;
+    if (start_output(c, err)) return -1;
     if (isfinite(cmd->time_s)) c->s.cur.time_s = cmd->time_s;   /* the coupler owns time */
     return fem_analysis_save(&c->s, err);
 }
@@ -217,6 +242,45 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     return 0;
 }
 
+static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    coupled *c = ctx;
+    /* checkpointed before its first step: the run's results start now */
+    if (start_output(c, err)) return -1;
+    return fem_checkpoint_save(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
+                               &c->run_entries, err);
+}
+
+/* The state of a freshly started solver (what a failed RESUME leaves). */
+static int fresh_state(coupled *c, nc_error *err)
+{
+    fem_analysis_free(&c->s);
+    fem_output_close(&c->out);
+    c->out.max_u_node = -1;
+    c->written_step = -1;
+    c->next_output_s = c->m->settings.output_interval * c->m->settings.dt_s;
+    c->sum->steps = c->sum->newton_iterations = 0;
+    c->sum->failed_solves = 0;
+    if (fem_analysis_init(&c->s, c->m, err)) return -1;
+    if (c->m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) return -1;
+    return 0;
+}
+
+static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    coupled *c = ctx;
+    if (fem_checkpoint_load(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
+                            &c->run_entries, err) ||
+        fem_output_reopen(&c->out, c->m, c->dir, err)) {
+        nc_error again;
+        if (fresh_state(c, &again)) nc_error_prefix(err, "and starting afresh failed (%s)", again.message);
+        return -1;
+    }
+    return 0;
+}
+
 static void on_report(void *ctx, const char *message)
 {
     coupled *c = ctx;
@@ -233,9 +297,15 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     coupled *c = calloc(1, sizeof *c);
     if (!c) return nc_error_set(err, 1, "out of memory");
     c->m = m;
+    c->dir = output_dir;
     c->sum = &sum;
     c->written_step = -1;
     c->out.max_u_node = -1;
+    fem_ck_add(&c->run_entries, "run/written_step", FEM_CK_LONG, &c->written_step, 1);
+    fem_ck_add(&c->run_entries, "run/next_output_s", FEM_CK_F64, &c->next_output_s, 1);
+    fem_ck_add(&c->run_entries, "run/steps", FEM_CK_LONG, &sum.steps, 1);
+    fem_ck_add(&c->run_entries, "run/newton_iterations", FEM_CK_LONG, &sum.newton_iterations, 1);
+    fem_ck_add(&c->run_entries, "run/failed_solves", FEM_CK_I32, &sum.failed_solves, 1);
     proto_participant *p = NULL;
     proto_serve_summary served;
     memset(&served, 0, sizeof served);
@@ -255,22 +325,20 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
         c->node_ids[i] = m->iface_nodes[i];
         for (int d = 0; d < 3; d++) c->iface_X[3 * i + d] = m->X[3 * m->iface_nodes[i] + d];
     }
-    if (fem_analysis_init(&c->s, m, err) || fem_output_open(&c->out, m, output_dir, err)) goto done;
+    if (fem_analysis_init(&c->s, m, err)) goto done;
     if (m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) goto done;
-    if (fem_output_monitor(&c->out, &c->s, 0.0, err) || fem_output_step(&c->out, &c->s, 0.0, err))
-        goto done;
-    c->written_step = 0;
     c->next_output_s = m->settings.output_interval * m->settings.dt_s;
     proto_options po;
     proto_options_default(&po);
     po.idle_timeout_ms = opt->idle_timeout_ms;
-    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore jacobian", &po, err))
+    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore jacobian checkpoint", &po, err))
         goto done;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err))
         goto done;
     const proto_serve_handlers handlers = {
         .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
-        .solve = on_solve, .accept_step = on_accept, .report = on_report};
+        .solve = on_solve, .accept_step = on_accept, .checkpoint = on_checkpoint,
+        .resume = on_resume, .report = on_report};
     rc = proto_serve(p, &handlers, c, stop, &served, err);
     if (rc == 0 && served.failed + served.rejected > 0) {
         /* the coupler was told each time, but the run had errors: not a clean exit */

@@ -10,13 +10,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error *err)
+/* Buffers and the support list of model m; support_dofs [3 n_nodes] into *dofs (caller frees). */
+static int prepare(fem_output *o, const fem_model *m, const char *dir, const char *path,
+                   int **dofs, nc_error *err)
 {
-    memset(o, 0, sizeof *o);
-    o->max_u_node = -1;
     snprintf(o->dir, sizeof o->dir, "%s", dir);
-    char path[700];
-    snprintf(path, sizeof path, "%s/fem.h5", dir);
     size_t big = (size_t)(m->n_nodes > m->n_elements ? m->n_nodes : m->n_elements);
     o->buf = malloc(3 * big * sizeof(double) + 8);
     o->force = malloc(3 * big * sizeof(double) + 8);
@@ -26,12 +24,25 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
         free(support_dofs);
         return nc_error_set(err, 1, "%s: out of memory", path);
     }
+    o->n_support = 0;
     for (int i = 0; i < m->n_nodes; i++) {
         const unsigned char *fx = m->fixed + 3 * i;
         if (!(fx[0] || fx[1] || fx[2])) continue;
         for (int c = 0; c < 3; c++) support_dofs[3 * o->n_support + c] = fx[c] != 0;
         o->support_nodes[o->n_support++] = i;
     }
+    *dofs = support_dofs;
+    return 0;
+}
+
+int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error *err)
+{
+    memset(o, 0, sizeof *o);
+    o->max_u_node = -1;
+    char path[700];
+    snprintf(path, sizeof path, "%s/fem.h5", dir);
+    int *support_dofs = NULL;
+    if (prepare(o, m, dir, path, &support_dofs, err)) return -1;
     if (nc_h5_create(&o->h5, path, err)) {
         free(support_dofs);
         return -1;
@@ -70,6 +81,118 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
     return rc ? -1 : 0;
 }
 
+int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
+{
+    if (count <= o->cap) return 0;
+    double *t = realloc(o->times, (size_t)count * sizeof *t);
+    if (!t) return nc_error_set(err, 1, "out of memory for %d output times", count);
+    o->times = t;
+    o->cap = count;
+    return 0;
+}
+
+static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
+
+static void close_series(fem_output *o)
+{
+    nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
+                           &o->strain, &o->reaction, &o->mon_time, &o->mon_disp, &o->mon_vel};
+    for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
+}
+
+/* Closes without writing anything more (a reopen that failed). */
+static void discard(fem_output *o)
+{
+    close_series(o);
+    nc_h5_close(&o->h5);
+    free(o->times);
+    free(o->buf);
+    free(o->force);
+    free(o->support_nodes);
+    memset(o, 0, sizeof *o);
+    o->max_u_node = -1;
+}
+
+/* Rows of dataset `path` of an open file, -1 when it is missing. */
+static long rows_of(const nc_h5_file *h, const char *path)
+{
+    if (H5Lexists(h->file, path, H5P_DEFAULT) <= 0) return -1;
+    hid_t d = H5Dopen2(h->file, path, H5P_DEFAULT);
+    if (d < 0) return -1;
+    hid_t space = H5Dget_space(d);
+    hsize_t dims[3] = {0, 0, 0};
+    long rows = -1;
+    if (space >= 0 && H5Sget_simple_extent_ndims(space) >= 1 && H5Sget_simple_extent_ndims(space) <= 3 &&
+        H5Sget_simple_extent_dims(space, dims, NULL) >= 0)
+        rows = (long)dims[0];
+    if (space >= 0) H5Sclose(space);
+    H5Dclose(d);
+    return rows;
+}
+
+int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_error *err)
+{
+    char path[700];
+    snprintf(path, sizeof path, "%s/fem.h5", dir);
+    int *support_dofs = NULL;
+    if (o->n_out < 0 || o->n_out > o->cap || o->n_mon < 0)
+        return nc_error_set(err, 1, "%s: %d output rows and %ld monitor rows cannot be resumed",
+                            path, o->n_out, o->n_mon);
+    if (prepare(o, m, dir, path, &support_dofs, err)) return -1;
+    free(support_dofs);
+    if (nc_h5_open(&o->h5, path, err)) {
+        discard(o);
+        return -1;
+    }
+    /* every series holds at least the checkpoint's rows before any is cut (a file older than
+     * the checkpoint is left as it is) */
+    static const char *const out_series[] = {"/output/time", "/output/step", "/output/load_factor",
+        "/output/displacement", "/output/velocity", "/output/position", "/output/axial_force",
+        "/output/strain", "/output/reaction"};
+    static const char *const mon_series[] = {"/monitor/time", "/monitor/displacement",
+                                             "/monitor/velocity"};
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < (pass ? 3 : 9); i++) {
+            const char *name = pass ? mon_series[i] : out_series[i];
+            long have = rows_of(&o->h5, name), need = pass ? o->n_mon : o->n_out;
+            if (have < need) {
+                if (have < 0) nc_error_set(err, 1, "%s: has no dataset %s to append to", path, name);
+                else nc_error_set(err, 1, "%s: dataset %s has %ld rows, the checkpoint needs %ld "
+                                  "(the file is older than the checkpoint)", path, name, have, need);
+                discard(o);
+                return -1;
+            }
+        }
+    o->open = 1;
+    hsize_t n = (hsize_t)m->n_nodes, e = (hsize_t)m->n_elements, p = (hsize_t)m->n_monitor,
+            r = (hsize_t)o->n_support, k = (hsize_t)o->n_out, s = (hsize_t)o->n_mon;
+    hsize_t row_n3[2] = {n, 3}, row_e[1] = {e}, row_p3[2] = {p, 3}, row_r3[2] = {r, 3};
+    nc_h5_file *h = &o->h5;
+    /* rows written after the checkpoint are cut off; later output is appended */
+    int rc = nc_h5_series_open(h, &o->time, "/output/time", NC_H5_F64, 1, NULL, k, err) ||
+             nc_h5_series_open(h, &o->step, "/output/step", NC_H5_I32, 1, NULL, k, err) ||
+             nc_h5_series_open(h, &o->load, "/output/load_factor", NC_H5_F64, 1, NULL, k, err) ||
+             nc_h5_series_open(h, &o->disp, "/output/displacement", NC_H5_F64, 3, row_n3, k, err) ||
+             nc_h5_series_open(h, &o->vel, "/output/velocity", NC_H5_F64, 3, row_n3, k, err) ||
+             nc_h5_series_open(h, &o->pos, "/output/position", NC_H5_F64, 3, row_n3, k, err) ||
+             nc_h5_series_open(h, &o->axial, "/output/axial_force", NC_H5_F64, 2, row_e, k, err) ||
+             nc_h5_series_open(h, &o->strain, "/output/strain", NC_H5_F64, 2, row_e, k, err) ||
+             nc_h5_series_open(h, &o->reaction, "/output/reaction", NC_H5_F64, 3, row_r3, k, err) ||
+             nc_h5_series_open(h, &o->mon_time, "/monitor/time", NC_H5_F64, 1, NULL, s, err) ||
+             nc_h5_series_open(h, &o->mon_disp, "/monitor/displacement", NC_H5_F64, 3, row_p3, s, err) ||
+             nc_h5_series_open(h, &o->mon_vel, "/monitor/velocity", NC_H5_F64, 3, row_p3, s, err) ||
+             nc_h5_flush(h, err);
+    if (rc) {
+        discard(o);
+        return -1;
+    }
+    /* the XDMF index lists exactly the rows kept */
+    o->model = m;
+    o->last_xdmf_s = nc_clock_now_s();
+    o->xdmf_current = 1;
+    return write_xdmf(o, m, err);
+}
+
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
 {
     const fem_model *m = s->m;
@@ -84,6 +207,7 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
         }
     }
     if (nc_h5_series_append(&o->mon_time, &time_s, err)) return -1;
+    o->n_mon++;
     for (int i = 0; i < m->n_monitor; i++)
         for (int c = 0; c < 3; c++) b[3 * i + c] = s->cur.u[3 * m->monitor_nodes[i] + c];
     if (nc_h5_series_append(&o->mon_disp, b, err)) return -1;
@@ -188,13 +312,7 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     if (nc_h5_series_append(&o->strain, o->force, err)) return -1;
     fem_output_reactions(o, s, lambda, o->buf);
     if (nc_h5_series_append(&o->reaction, o->buf, err)) return -1;
-    if (o->n_out == o->cap) {
-        int cap = o->cap ? 2 * o->cap : 64;
-        double *t = realloc(o->times, (size_t)cap * sizeof *t);
-        if (!t) return nc_error_set(err, 1, "out of memory");
-        o->times = t;
-        o->cap = cap;
-    }
+    if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;
     o->times[o->n_out++] = time_s;
     if (nc_h5_flush(&o->h5, err)) return -1;
     /* The XDMF file grows with the number of output steps; rewriting it after each of
@@ -214,8 +332,6 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
 void fem_output_close(fem_output *o)
 {
     if (!o) return;
-    nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
-                           &o->strain, &o->reaction, &o->mon_time, &o->mon_disp, &o->mon_vel};
     if (o->open) {
         nc_error ignored;
         if (!o->xdmf_current && o->model) write_xdmf(o, o->model, &ignored);
@@ -224,7 +340,7 @@ void fem_output_close(fem_output *o)
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_node", o->max_u_node, &ignored);
         }
-        for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
+        close_series(o);
         nc_h5_flush(&o->h5, &ignored);
         nc_h5_close(&o->h5);
     }

@@ -17,6 +17,9 @@
  * The file is flushed after every output step and fem.xdmf (XDMF 3, read by ParaView's
  * default reader) is rewritten via a temporary file and rename (at most every 2 s beyond
  * 200 output steps) so both stay readable if the run stops.
+ * A run resumed from a checkpoint reopens the files (fem_output_reopen): the series are cut
+ * back to the rows they held at the checkpoint, fem.xdmf is rewritten for those rows, and
+ * later output is appended.
  */
 #ifndef FEM_OUTPUT_H
 #define FEM_OUTPUT_H
@@ -29,7 +32,8 @@ typedef struct fem_output {
     nc_h5_series time, step, load, disp, vel, pos, axial, strain, reaction;
     nc_h5_series mon_time, mon_disp, mon_vel;
     char dir[512];
-    int n_out;
+    int n_out;         /* output rows written (/output series) */
+    long n_mon;        /* monitor rows written (/monitor series) */
     int cap;
     double *times;     /* output times, for the XDMF file */
     double *buf;       /* [3 max(n_nodes, n_elements)] scratch */
@@ -44,7 +48,15 @@ typedef struct fem_output {
     int max_u_node;                 /* -1 before the first step */
 } fem_output;
 
+/* Creates DIR/fem.h5 (truncating) with the mesh and empty series. */
 int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error *err);
+/* Reopens DIR/fem.h5 of a resumed run to append to it: n_out, times[0..n_out), n_mon and the
+ * max |u| fields are those of the checkpoint (already set; times reserved with
+ * fem_output_reserve_times); every series is cut back to them and fem.xdmf is rewritten.
+ * o must not be open. */
+int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_error *err);
+/* Room for count output times in o->times. */
+int fem_output_reserve_times(fem_output *o, int count, nc_error *err);
 /* Appends the monitor rows of the current state (call every step); tracks the largest |u|. */
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 /* Appends one full output step, flushes, rewrites the XDMF file. */

@@ -4,7 +4,9 @@
  *
  * Both write DIR/fem.h5 + DIR/fem.xdmf (fem_output.h), check *stop between steps (set by
  * the program's signal handler) and then finish cleanly: the results written so far are
- * flushed and closed. Return 0 on success, 1 when stopped by *stop, -1 on error (err).
+ * flushed and closed. The coupled run creates them at the first BEGIN_STEP, or reopens them
+ * on RESUME (fem_coupled.c); never before, so that a resumed run finds them intact.
+ * Return 0 on success, 1 when stopped by *stop, -1 on error (err).
  */
 #ifndef FEM_RUN_H
 #define FEM_RUN_H

@@ -58,7 +58,9 @@ int fem_sparse_build(fem_sparse *s, int n, int n_elem, const int *elem_eq, int *
     s->c.error_handler = NULL;
     s->A = cholmod_allocate_sparse((size_t)n, (size_t)n, nu, 1, 1, 1, CHOLMOD_REAL, &s->c);
     s->diag = malloc((size_t)n * sizeof *s->diag);
-    if (!s->A || !s->diag) {
+    s->factor_x = malloc(nu * sizeof *s->factor_x);
+    s->saved_factor_x = malloc(nu * sizeof *s->saved_factor_x);
+    if (!s->A || !s->diag || !s->factor_x || !s->saved_factor_x) {
         free(keys);
         return nc_error_set(err, 1, "out of memory allocating a %d x %d sparse matrix", n, n);
     }
@@ -133,7 +135,9 @@ static int build_full(fem_sparse *s, nc_error *err)
     double control[UMFPACK_CONTROL], info[UMFPACK_INFO];
     umfpack_di_defaults(control);
     for (int k = 0; k < s->full_nnz; k++) s->full_x[k] = s->x[s->full_from[k]];
-    int status = umfpack_di_symbolic(n, n, s->full_colptr, s->full_rowind, s->full_x, &s->symbolic,
+    /* the pattern alone (no values): the analysis then depends on nothing but the pattern,
+     * so a run resumed from a checkpoint rebuilds the same one */
+    int status = umfpack_di_symbolic(n, n, s->full_colptr, s->full_rowind, NULL, &s->symbolic,
                                      control, info);
     if (status != UMFPACK_OK) return nc_error_set(err, 1, "UMFPACK symbolic analysis failed (status %d)", status);
     return 0;
@@ -162,6 +166,7 @@ int fem_sparse_factorize(fem_sparse *s, int *bad_eq, nc_error *err)
     cholmod_factorize(s->A, s->L, &s->c);
     if (s->c.status == CHOLMOD_OK) {
         s->have_factor = 1;
+        memcpy(s->factor_x, s->x, (size_t)s->nnz * sizeof *s->x);
         return 0;
     }
     if (s->c.status != CHOLMOD_NOT_POSDEF)
@@ -183,6 +188,7 @@ int fem_sparse_factorize(fem_sparse *s, int *bad_eq, nc_error *err)
     s->use_lu = 1;
     s->have_factor = 1;
     s->lu_count++;
+    memcpy(s->factor_x, s->x, (size_t)s->nnz * sizeof *s->x);
     return 0;
 }
 
@@ -214,6 +220,7 @@ int fem_sparse_save_factor(fem_sparse *s, nc_error *err)
     s->L_saved = cholmod_copy_factor(s->L, &s->c);
     if (!s->L_saved) return nc_error_set(err, 1, "out of memory copying the factorisation");
     s->saved_valid = 1;
+    memcpy(s->saved_factor_x, s->factor_x, (size_t)s->nnz * sizeof *s->x);
     return 0;
 }
 
@@ -229,6 +236,30 @@ int fem_sparse_restore_factor(fem_sparse *s, nc_error *err)
     s->L = copy;
     s->use_lu = 0;
     s->have_factor = 1;
+    memcpy(s->factor_x, s->saved_factor_x, (size_t)s->nnz * sizeof *s->x);
+    return 0;
+}
+
+int fem_sparse_refactor(fem_sparse *s, const double *values, const double *saved_values,
+                        nc_error *err)
+{
+    int bad;
+    size_t bytes = (size_t)s->nnz * sizeof *s->x;
+    if (s->L_saved) cholmod_free_factor(&s->L_saved, &s->c);
+    s->saved_valid = 0;
+    if (saved_values) {
+        memcpy(s->x, saved_values, bytes);
+        if (fem_sparse_factorize(s, &bad, err) || fem_sparse_save_factor(s, err))
+            return nc_error_prefix(err, "refactorising the saved matrix");
+        if (!s->saved_valid)
+            return nc_error_set(err, 1, "the saved factorisation is an LU one, which is never kept");
+    }
+    s->have_factor = 0;
+    s->use_lu = 0;
+    if (values) {
+        memcpy(s->x, values, bytes);
+        if (fem_sparse_factorize(s, &bad, err)) return nc_error_prefix(err, "refactorising the matrix");
+    }
     return 0;
 }
 
@@ -267,6 +298,7 @@ void fem_sparse_free(fem_sparse *s)
     if (s->numeric) umfpack_di_free_numeric(&s->numeric);
     if (s->symbolic) umfpack_di_free_symbolic(&s->symbolic);
     free(s->diag);
+    free(s->factor_x); free(s->saved_factor_x);
     free(s->full_colptr); free(s->full_rowind); free(s->full_from); free(s->full_x);
     memset(s, 0, sizeof *s);
 }

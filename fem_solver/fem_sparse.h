@@ -29,6 +29,9 @@ typedef struct fem_sparse {
     int have_factor;          /* the last numeric factorisation succeeded */
     cholmod_factor *L_saved;  /* copy of L made by fem_sparse_save_factor */
     int saved_valid;
+    double *factor_x;         /* [nnz] the values L (or the LU) was computed from, and ... */
+    double *saved_factor_x;   /* ... those of L_saved: a checkpoint stores them, since the
+                                 same values on the same pattern give the same factors */
     /* LU fallback */
     int use_lu;               /* the last factorisation is LU */
     int lu_count;             /* how many times LU was used */
@@ -58,6 +61,12 @@ void fem_sparse_matvec(const fem_sparse *s, const double *x, double *y);
  * restoring, no factorisation is available. */
 int fem_sparse_save_factor(fem_sparse *s, nc_error *err);
 int fem_sparse_restore_factor(fem_sparse *s, nc_error *err);
+/* Puts back a recorded factorisation state (a checkpoint's): saved_values (NULL: no saved
+ * factorisation) are factorised and kept as the saved one, then values (NULL: no current
+ * factorisation) as the current one. The same values on the same pattern give the same
+ * factors bit for bit, so the run continues as if it had never stopped. */
+int fem_sparse_refactor(fem_sparse *s, const double *values, const double *saved_values,
+                        nc_error *err);
 void fem_sparse_free(fem_sparse *s);
 
 #endif

@@ -4,6 +4,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 void fem_test_line(fem_model *m, int n_el, double length, double E, double A, double rho,
@@ -60,4 +62,49 @@ const char *fem_test_write(const char *name, const char *text)
         fclose(f);
     }
     return path;
+}
+
+pid_t fem_test_spawn(const char *json, const char *outdir, const char *epfile, const char *idle_s)
+{
+    const char *bin = getenv("NC_BIN");
+    char prog[1024];
+    snprintf(prog, sizeof prog, "%s/fem_solver", bin ? bin : "bin");
+    unlink(epfile);
+    pid_t pid = fork();
+    if (pid == 0) {
+        if (!freopen("/dev/null", "w", stdout)) _exit(126);
+        execl(prog, prog, json, "--endpoint", "tcp://127.0.0.1:*", "--endpoint-file", epfile,
+              "--output", outdir, "--idle-timeout", idle_s, (char *)NULL);
+        _exit(127);
+    }
+    return pid;
+}
+
+int fem_test_read_endpoint(const char *file, char *ep, size_t size)
+{
+    for (int i = 0; i < 300; i++) {   /* up to 30 s (sanitizer builds start slowly) */
+        FILE *f = fopen(file, "r");
+        if (f) {
+            int ok = fgets(ep, (int)size, f) != NULL;
+            fclose(f);
+            if (ok) {
+                ep[strcspn(ep, "\n")] = '\0';
+                return 0;
+            }
+        }
+        usleep(100000);
+    }
+    return -1;
+}
+
+int fem_test_wait_exit(pid_t pid, double timeout_s)
+{
+    for (int i = 0; i < (int)(timeout_s * 10); i++) {
+        int status;
+        if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+        usleep(100000);
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, NULL, 0);
+    return -1;
 }

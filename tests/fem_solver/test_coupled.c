@@ -295,7 +295,8 @@ static void test_newton_failure(void **state)
     proto_peer_close(peer);
 }
 
-/* No command within --idle-timeout: the solver exits non-zero with its results closed. */
+/* No command within --idle-timeout: the solver exits non-zero. It never began a step, so it
+ * created no results (a run that is about to RESUME must find its fem.h5 untouched). */
 static void test_idle_timeout(void **state)
 {
     (void)state;
@@ -309,7 +310,8 @@ static void test_idle_timeout(void **state)
     assert_int_equal(code, 1);
     char h5[700];
     snprintf(h5, sizeof h5, "%s/fem.h5", dir);
-    assert_int_equal(h5_rows(h5, "/monitor/time"), 1);
+    struct stat st;
+    assert_int_not_equal(stat(h5, &st), 0);
 }
 
 int main(void)
