@@ -3,19 +3,37 @@
 
 #include "nc_file.h"
 
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *err)
 {
     memset(o, 0, sizeof *o);
     o->h5.file = H5I_INVALID_HID;
     snprintf(o->dir, sizeof o->dir, "%s", dir);
+    /* the files come later (create_files, dem_output_resume): an unwritable folder is
+     * reported now */
+    if (access(dir, W_OK) != 0)
+        return nc_error_set(err, 1, "%s: cannot write results there: %s", dir, strerror(errno));
+    size_t scratch = 4 * s->model.bod.n + 3 * s->model.sph.n + 4;
+    o->scratch = malloc(scratch * sizeof *o->scratch);
+    if (!o->scratch) return nc_error_set(err, 1, "%s: out of memory", dir);
+    for (size_t b = 0; b < s->model.bod.n; b++) o->n_clusters += s->model.bod.is_cluster[b] != 0;
+    return 0;
+}
+
+/* Creates dem.h5 with its fixed datasets and empty series (the first output step). */
+static int create_files(dem_output *o, const dem_sim *s, nc_error *err)
+{
+    const char *dir = o->dir;
     char path[1100];
     snprintf(path, sizeof path, "%s/dem.h5", dir);
     if (nc_h5_create(&o->h5, path, err)) return -1;
+    o->created = 1;
     /* index files of an earlier run in this folder would show stale or missing data */
     static const char *const stale[] = {"dem.xdmf", "particles.xdmf", "dem_net.xdmf"};
     for (size_t i = 0; i < sizeof stale / sizeof *stale; i++) {
@@ -25,9 +43,6 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
     }
     nc_h5_file *h = &o->h5;
     hsize_t n = s->model.sph.n;
-    size_t scratch = 4 * s->model.bod.n + 3 * n + 4;
-    o->scratch = malloc(scratch * sizeof *o->scratch);
-    if (!o->scratch) return nc_error_set(err, 1, "%s: out of memory", path);
     if (n > 0) {
         int32_t *mat = malloc(n * sizeof *mat);
         if (!mat) return nc_error_set(err, 1, "%s: out of memory", path);
@@ -46,7 +61,6 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
         free(mat);
         if (rc) return -1;
     }
-    for (size_t b = 0; b < s->model.bod.n; b++) o->n_clusters += s->model.bod.is_cluster[b] != 0;
     if (o->n_clusters > 0) {
         hsize_t r3[2] = {o->n_clusters, 3}, r4[2] = {o->n_clusters, 4};
         if (nc_h5_series_create_units(h, &o->cl_pos, "/clusters/position", NC_H5_F64, 3, r3, "m", err) ||
@@ -182,6 +196,7 @@ static int write_xdmf(const dem_output *o, const char *name, const char *grid,
 
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err)
 {
+    if (!o->created && create_files(o, s, err)) return -1;
     long k = o->n_out;
     size_t n = s->model.sph.n;
     if (n > 0) {
@@ -240,12 +255,99 @@ int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, n
     return 0;
 }
 
-void dem_output_close(dem_output *o)
+static int reopen_files(dem_output *o, const dem_sim *s, nc_error *err)
+{
+    char path[1100];
+    snprintf(path, sizeof path, "%s/dem.h5", o->dir);
+    if (o->n_out == 0) { /* nothing was written yet: the first output step creates the files */
+        o->net_rows = 0;
+        o->net_written = 0;
+        return 0;
+    }
+    if (o->net_rows < 0 || o->net_rows > o->n_out || (o->net_rows > 0 && !o->net_written))
+        return nc_error_set(err, 1, "%s: the checkpoint's output counters do not fit (%ld steps, "
+                            "%ld net rows)", path, o->n_out, o->net_rows);
+    if (nc_h5_open(&o->h5, path, err)) return -1;
+    o->created = 1;
+    nc_h5_file *h = &o->h5;
+    hsize_t keep = (hsize_t)o->n_out, n = s->model.sph.n;
+    hsize_t row[2] = {n, 3}, wall_dims[2] = {s->n_walls, 3};
+    hsize_t r3[2] = {o->n_clusters, 3}, r4[2] = {o->n_clusters, 4};
+    if (n > 0 && (nc_h5_series_open(h, &o->pos, "/particles/position", NC_H5_F64, 3, row, keep, err) ||
+                  nc_h5_series_open(h, &o->vel, "/particles/velocity", NC_H5_F64, 3, row, keep, err) ||
+                  nc_h5_series_open(h, &o->omega, "/particles/angular_velocity", NC_H5_F64, 3, row, keep, err)))
+        return -1;
+    if (o->n_clusters > 0 &&
+        (nc_h5_series_open(h, &o->cl_pos, "/clusters/position", NC_H5_F64, 3, r3, keep, err) ||
+         nc_h5_series_open(h, &o->cl_quat, "/clusters/orientation", NC_H5_F64, 3, r4, keep, err)))
+        return -1;
+    if (nc_h5_series_open(h, &o->time, "/time", NC_H5_F64, 1, NULL, keep, err) ||
+        nc_h5_series_open(h, &o->wall_force, "/walls/force", NC_H5_F64, 3, wall_dims, keep, err) ||
+        nc_h5_series_open(h, &o->kinetic, "/energy/kinetic", NC_H5_F64, 1, NULL, keep, err))
+        return -1;
+    if (o->net_written) {
+        hsize_t net_row[2] = {s->model.net.n_nodes, 3};
+        if (nc_h5_series_open(h, &o->net_pos, "/net/position", NC_H5_F64, 3, net_row, (hsize_t)o->net_rows, err) ||
+            nc_h5_series_open(h, &o->net_force, "/net/force", NC_H5_F64, 3, net_row, (hsize_t)o->net_rows, err))
+            return -1;
+        o->net_nodes = s->model.net.n_nodes;
+        o->net_edges = s->model.net.n_edges;
+    } else if (H5Lexists(h->file, "/net", H5P_DEFAULT) > 0 && H5Ldelete(h->file, "/net", H5P_DEFAULT) < 0) {
+        return nc_error_set(err, 1, "%s: cannot remove /net, written after the checkpoint", path);
+    }
+    /* the XDMF text of the rows kept, formatted as the run formatted it */
+    double *times = malloc(keep * sizeof *times);
+    if (!times) return nc_error_set(err, 1, "%s: out of memory", path);
+    if (H5Dread(o->time.dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, times) < 0) {
+        free(times);
+        return nc_error_set(err, 1, "%s: cannot read /time", path);
+    }
+    o->xdmf_particles.len = 0;
+    o->xdmf_net.len = 0;
+    long first_net = o->n_out - o->net_rows;
+    int rc = 0;
+    for (long k = 0; k < o->n_out && rc == 0; k++)
+        rc = format_step(o, s, k, times[k], o->net_written && k >= first_net ? k - first_net : -1, err);
+    free(times);
+    if (rc || nc_h5_flush(h, err)) return -1;
+    if (n > 0 && write_xdmf(o, "particles.xdmf", "particles", &o->xdmf_particles, err)) return -1;
+    if (o->net_rows > 0) return write_xdmf(o, "dem_net.xdmf", "net", &o->xdmf_net, err);
+    char old[1100]; /* a later run's net grids (the net was not written at the checkpoint) */
+    snprintf(old, sizeof old, "%s/dem_net.xdmf", o->dir);
+    remove(old);
+    return 0;
+}
+
+static void close_files(dem_output *o)
 {
     nc_h5_series *all[] = {&o->time, &o->wall_force, &o->kinetic, &o->pos, &o->vel, &o->omega,
                            &o->cl_pos, &o->cl_quat, &o->net_pos, &o->net_force};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     nc_h5_close(&o->h5);
+}
+
+int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err)
+{
+    if (reopen_files(o, s, err) == 0) return 0;
+    close_files(o); /* a second RESUME may try again */
+    o->created = 0;
+    return -1;
+}
+
+int dem_output_sync(dem_output *o, nc_error *err)
+{
+    if (!o->created) return 0;
+    if (nc_h5_flush(&o->h5, err)) return -1;
+    void *handle = NULL;
+    if (H5Fget_vfd_handle(o->h5.file, H5P_DEFAULT, &handle) >= 0 && handle &&
+        fsync(*(int *)handle) != 0)
+        return nc_error_set(err, 1, "%s: cannot flush to the disk: %s", o->h5.path, strerror(errno));
+    return 0;
+}
+
+void dem_output_close(dem_output *o)
+{
+    close_files(o);
     free(o->scratch);
     free(o->xdmf_particles.data);
     free(o->xdmf_net.data);

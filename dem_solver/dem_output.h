@@ -17,6 +17,13 @@
  * temporal collections read by ParaView's default reader. The file is flushed after every
  * output step and the XDMF files are rewritten (temp file + rename), so all stay valid if
  * the run is stopped.
+ *
+ * dem_output_open() only prepares the writer: dem.h5 is created (truncating) by the first
+ * dem_output_write(), so a coupled participant touches no result file before its first
+ * BEGIN_STEP; dem_output_resume() instead reopens the files of a run continued from a
+ * checkpoint (protocol/README.md §3.3): every series is cut back to the rows the checkpoint
+ * counted (n_out, net_rows), the XDMF files are written again for exactly those rows, and
+ * later output is appended.
  */
 #ifndef DEM_OUTPUT_H
 #define DEM_OUTPUT_H
@@ -33,6 +40,7 @@ typedef struct dem_output {
     nc_h5_file h5;
     char dir[512];
     nc_h5_series time, wall_force, kinetic, pos, vel, omega, cl_pos, cl_quat, net_pos, net_force;
+    int created;           /* dem.h5 created or reopened */
     long n_out;
     long net_rows;         /* rows of /net/position */
     size_t n_clusters;
@@ -42,7 +50,13 @@ typedef struct dem_output {
     dem_text xdmf_particles, xdmf_net; /* formatted grids of every output step so far */
 } dem_output;
 
+/* Prepares writing into the folder dir (which must exist and be writable); creates no file. */
 int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *err);
+/* Reopens dir/dem.h5 as it was at a checkpoint whose counters o->n_out, o->net_rows and
+ * o->net_written were loaded (dem_checkpoint_load); nothing to open when n_out is 0. */
+int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err);
+/* Flushes dem.h5 to the disk (fsync): the rows a checkpoint counts survive a crash. */
+int dem_output_sync(dem_output *o, nc_error *err);
 /* net_force: the nodal forces of the last coupling step (3 per node) or NULL. */
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err);
 void dem_output_close(dem_output *o);

@@ -1,10 +1,14 @@
 /* dem_participant — the DEM's serve-loop handlers (dem_participant.h). */
 #include "dem_participant.h"
 
+#include <ctype.h>
+#include <dirent.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "dem_checkpoint.h"
 #include "dem_energy.h"
 #include "dem_net_jacobian.h"
 #include "nc_file.h"
@@ -19,7 +23,20 @@ typedef struct participant {
     double next_out_s;      /* next output time */
     double e_start_j;       /* mechanical energy at BEGIN_STEP (dem_energy.h) */
     dem_net_jacobian jac;   /* the linearisation of the last solve, when asked for */
+    char last_checkpoint[PROTO_TEXT_MAX]; /* the newest checkpoint saved or resumed from */
+    int resume_failed;      /* a RESUME failed: the state may be neither the old nor the new */
 } participant;
+
+/* The participant's own state in a checkpoint (dem_checkpoint.h): the nodal force of the last
+ * step (output), the next output time and the energy at the last BEGIN_STEP. */
+static size_t own_items(participant *c, dem_ck_item *it)
+{
+    size_t nn = c->s->model.net.active ? c->s->model.net.n_nodes : 0;
+    it[0] = (dem_ck_item){"/participant/net_force", DEM_CK_F64, c->force, nn, 3, 0};
+    it[1] = (dem_ck_item){"/participant/next_output_s", DEM_CK_F64, &c->next_out_s, 1, 1, 0};
+    it[2] = (dem_ck_item){"/participant/energy_at_begin_j", DEM_CK_F64, &c->e_start_j, 1, 1, 0};
+    return 3;
+}
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
@@ -42,7 +59,6 @@ static int on_interface(void *ctx, const proto_message *cmd, proto_message *repl
     memset(c->force, 0, 3 * n * sizeof *c->force);
     if (c->opt->progress)
         fprintf(c->opt->progress, "dem_solver: interface with %zu nodes and %zu elements\n", n, m);
-    if (c->out->n_out == 0) return dem_output_write(c->out, c->s, c->force, err);
     return 0;
 }
 
@@ -50,6 +66,12 @@ static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
 {
     (void)cmd;
     participant *c = ctx;
+    if (c->resume_failed)
+        return nc_error_set(err, 1, "dem: the RESUME before failed; the run cannot step from a "
+                                    "partly loaded state");
+    /* output step 0 at the first BEGIN_STEP, not before: a participant that is to resume
+     * must not have created or truncated its result files (protocol/README.md §3.3) */
+    if (c->out->n_out == 0 && dem_output_write(c->out, c->s, c->force, err)) return -1;
     if (dem_sim_begin_step(c->s, err)) return -1;
     c->e_start_j = dem_sim_mechanical_energy(c->s);
     return 0;
@@ -134,6 +156,107 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     return rc;
 }
 
+/* A checkpoint name becomes part of a file name: letters, digits, '_' and '-' only. */
+static int check_name(const char *name, nc_error *err)
+{
+    size_t len = strlen(name);
+    if (len == 0 || len > 200)
+        return nc_error_set(err, 1, "dem: checkpoint name of %zu characters (1..200)", len);
+    for (size_t k = 0; k < len; k++)
+        if (!isalnum((unsigned char)name[k]) && name[k] != '_' && name[k] != '-')
+            return nc_error_set(err, 1, "dem: checkpoint name '%s': only letters, digits, '_' "
+                                        "and '-' are allowed", name);
+    return 0;
+}
+
+static void checkpoint_path(const participant *c, const char *name, char *out, size_t size)
+{
+    snprintf(out, size, "%s/checkpoint/dem_%s.h5", c->out->dir, name);
+}
+
+/* Keeps the two newest dem checkpoints of this run: the one just written (`keep`) and the one
+ * before it (saved or resumed from); removes the other dem_*.h5 (and temporary files a crash
+ * left). Checkpoints of the other participants are not touched. */
+static void prune_checkpoints(const participant *c, const char *keep)
+{
+    char dir[1100];
+    snprintf(dir, sizeof dir, "%s/checkpoint", c->out->dir);
+    DIR *d = opendir(dir);
+    if (!d) return;
+    char keep1[300], keep2[300];
+    snprintf(keep1, sizeof keep1, "dem_%s.h5", keep);
+    snprintf(keep2, sizeof keep2, "dem_%s.h5", c->last_checkpoint);
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        const char *f = e->d_name;
+        size_t len = strlen(f);
+        int ours = strncmp(f, "dem_", 4) == 0 &&
+                   ((len > 7 && strcmp(f + len - 3, ".h5") == 0) ||
+                    (len > 11 && strcmp(f + len - 7, ".h5.tmp") == 0));
+        if (!ours || strcmp(f, keep1) == 0 || (c->last_checkpoint[0] && strcmp(f, keep2) == 0))
+            continue;
+        char path[1500];
+        snprintf(path, sizeof path, "%s/%s", dir, f);
+        remove(path);
+    }
+    closedir(d);
+}
+
+static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    participant *c = ctx;
+    if (c->resume_failed)
+        return nc_error_set(err, 1, "dem: the RESUME before failed; nothing to checkpoint");
+    if (check_name(cmd->text, err)) return -1;
+    char dir[1100], path[1400];
+    snprintf(dir, sizeof dir, "%s/checkpoint", c->out->dir);
+    checkpoint_path(c, cmd->text, path, sizeof path);
+    dem_ck_item own[3];
+    size_t n_own = own_items(c, own);
+    /* the result rows the checkpoint counts are on the disk before it is */
+    if (nc_file_make_dirs(dir, err) || dem_output_sync(c->out, err) ||
+        dem_checkpoint_save(path, cmd->text, c->s, c->out, own, n_own, cmd->step, cmd->time_s, err))
+        return -1;
+    prune_checkpoints(c, cmd->text);
+    snprintf(c->last_checkpoint, sizeof c->last_checkpoint, "%s", cmd->text);
+    if (c->opt->progress) {
+        fprintf(c->opt->progress, "dem_solver: checkpoint %s (step %ld, t = %.9g s)\n", path,
+                cmd->step, cmd->time_s);
+        fflush(c->opt->progress);
+    }
+    return 0;
+}
+
+static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    (void)reply;
+    participant *c = ctx;
+    if (check_name(cmd->text, err)) return -1;
+    char path[1400];
+    checkpoint_path(c, cmd->text, path, sizeof path);
+    if (!c->s->model.net.active)
+        return nc_error_set(err, 1, "%s: RESUME before INTERFACE (the checkpoint holds the net "
+                                    "wall's state)", path);
+    dem_ck_item own[3];
+    size_t n_own = own_items(c, own);
+    if (dem_checkpoint_load(path, c->s, c->out, own, n_own, cmd->step, cmd->time_s, err))
+        return -1; /* the state is untouched */
+    /* the state is the checkpoint's from here: without its result files it must not step */
+    if (dem_output_resume(c->out, c->s, err)) {
+        c->resume_failed = 1;
+        return -1;
+    }
+    c->resume_failed = 0;
+    snprintf(c->last_checkpoint, sizeof c->last_checkpoint, "%s", cmd->text);
+    if (c->opt->progress) {
+        fprintf(c->opt->progress, "dem_solver: resumed from %s (step %ld, t = %.9g s, %ld output "
+                                  "steps kept)\n", path, cmd->step, cmd->time_s, c->out->n_out);
+        fflush(c->opt->progress);
+    }
+    return 0;
+}
+
 static void on_report(void *ctx, const char *message)
 {
     participant *c = ctx;
@@ -151,7 +274,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     proto_options_default(&popt);
     popt.idle_timeout_ms = opt->idle_timeout_ms;
     proto_participant *p;
-    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore jacobian", &popt, err))
+    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore jacobian checkpoint", &popt, err))
         return -1;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err)) {
         proto_participant_close(p);
@@ -167,7 +290,8 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     c.jac.particle_response = DEM_JAC_RESPOND;   /* the FEM grows its pattern for the pairs */
     const proto_serve_handlers handlers = {
         .interface = on_interface, .save_state = on_save, .restore_state = on_restore,
-        .solve = on_solve, .accept_step = on_accept, .report = on_report};
+        .solve = on_solve, .accept_step = on_accept, .checkpoint = on_checkpoint,
+        .resume = on_resume, .report = on_report};
     proto_serve_summary sum;
     int served = proto_serve(p, &handlers, &c, stop, &sum, err);
     int rc;

@@ -2,8 +2,12 @@
  * serve loop (protocol/proto_serve.h). INTERFACE builds the net wall, BEGIN_STEP saves the
  * complete state (dem_sim_begin_step), a repeated SOLVE restores it (dem_sim_restore; the
  * loop decides when), SOLVE sub-steps the coupling step and replies the time-averaged nodal
- * forces, ACCEPT_STEP writes output when due. The step order and the restore rule are the
- * serve loop's, shared with every other participant.
+ * forces, ACCEPT_STEP writes output when due. The result files are created at the first
+ * BEGIN_STEP (with output step 0), never before: CHECKPOINT saves the complete state to
+ * checkpoint/dem_<name>.h5 in the output folder (dem_checkpoint.h) and RESUME, before the
+ * first BEGIN_STEP, loads it and reopens the result files as they were then
+ * (dem_output_resume). The step order and the restore rule are the serve loop's, shared with
+ * every other participant.
  */
 #ifndef DEM_PARTICIPANT_H
 #define DEM_PARTICIPANT_H

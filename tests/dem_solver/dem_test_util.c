@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 #include "dem_test_util.h"
@@ -40,4 +41,36 @@ const char *dem_test_write_file(char *buf, size_t size, const char *name, const 
     assert_int_equal(fwrite(text, 1, length, f), length);
     fclose(f);
     return buf;
+}
+
+int dem_test_start_participant(const char *input, const char *outdir, char *endpoint,
+                               size_t size)
+{
+    const char *bin = getenv("NC_BIN");
+    assert_non_null(bin);
+    char exe[600], epfile[700], log[700];
+    snprintf(exe, sizeof exe, "%s/dem_solver", bin);
+    snprintf(epfile, sizeof epfile, "%s.endpoint", outdir);
+    snprintf(log, sizeof log, "%s.log", outdir);
+    remove(epfile);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        if (!freopen(log, "w", stdout)) _exit(126);
+        execl(exe, exe, input, "--endpoint", "tcp://127.0.0.1:*", "--endpoint-file", epfile,
+              "--output", outdir, "--idle-timeout", "60", (char *)NULL);
+        _exit(127);
+    }
+    endpoint[0] = '\0';
+    for (int k = 0; k < 300 && !endpoint[0]; k++) { /* sanitizer builds start slowly */
+        FILE *e = fopen(epfile, "r");
+        if (e) {
+            if (!fgets(endpoint, (int)size, e)) endpoint[0] = '\0';
+            fclose(e);
+            endpoint[strcspn(endpoint, "\n")] = '\0';
+        }
+        if (!endpoint[0]) usleep(100000);
+    }
+    assert_true(endpoint[0] != '\0');
+    return (int)pid;
 }

@@ -1,5 +1,5 @@
 /* dem_test_util — code shared by the dem_solver tests: building a prepared simulation from
- * JSON text, and a one-line rigid net wall. */
+ * JSON text, a file in the test folder, and bin/dem_solver started as a participant. */
 #ifndef DEM_TEST_UTIL_H
 #define DEM_TEST_UTIL_H
 
@@ -13,5 +13,11 @@ int dem_test_try_build(dem_sim *s, const char *json, nc_error *err);
 /* Writes `text` to NC_TMP (or /tmp)/name and returns the path in buf. */
 const char *dem_test_write_file(char *buf, size_t size, const char *name, const void *text,
                                 size_t length);
+
+/* Starts bin/dem_solver (NC_BIN) as a coupling participant on input with --output outdir,
+ * waits for its endpoint file (up to 30 s) and returns its pid with the endpoint in
+ * `endpoint`; stdout goes to outdir.log. Fails the test when it does not start. */
+int dem_test_start_participant(const char *input, const char *outdir, char *endpoint,
+                               size_t size);
 
 #endif
