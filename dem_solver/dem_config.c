@@ -383,12 +383,91 @@ static int parse_generators(dem_sim *s, const cJSON *root, const char *file, FIL
     return 0;
 }
 
+/* A 3×3 matrix [[a, b, c], [d, e, f], [g, h, i]] of finite numbers, row-major into m. */
+static int parse_matrix3(const cJSON *o, const char *where, const char *key, double m[9],
+                         nc_error *err)
+{
+    const cJSON *rows = cJSON_GetObjectItemCaseSensitive(o, key);
+    int ok = cJSON_IsArray(rows) && cJSON_GetArraySize(rows) == 3;
+    int r = 0;
+    for (const cJSON *row = ok ? rows->child : NULL; row && ok; row = row->next, r++) {
+        ok = cJSON_IsArray(row) && cJSON_GetArraySize(row) == 3;
+        int c = 0;
+        for (const cJSON *v = ok ? row->child : NULL; v && ok; v = v->next, c++) {
+            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
+                return nc_error_set(err, 1, "%s.%s[%d][%d]: expected a finite number", where, key,
+                                    r, c);
+            m[3 * r + c] = v->valuedouble;
+        }
+    }
+    if (!ok)
+        return nc_error_set(err, 1, "%s.%s: expected a 3x3 array [[Ixx, Ixy, Ixz], [Iyx, Iyy, "
+                                    "Iyz], [Izx, Izy, Izz]] (kg m²)", where, key);
+    return 0;
+}
+
+/* The optional true mass properties of cluster `where` (spheres at pos, rad): mass_kg alone, or
+ * mass_kg, center_of_mass and inertia_kg_m2 together. *given = 0 when none is given. The
+ * centre must lie within the spheres' bounding box; a mass far from the spheres' or a moment
+ * beyond m R² (R the spheres' extent from the centre) is warned about as a likely unit slip. */
+static int parse_cluster_mass(const cJSON *c, const char *where, int ns, const double *pos,
+                              const double *rad, double sphere_mass, FILE *sink, int *given,
+                              double *mass, double com[3], double inertia[9], nc_error *err)
+{
+    int has_m = cJSON_GetObjectItemCaseSensitive(c, "mass_kg") != NULL;
+    int has_c = cJSON_GetObjectItemCaseSensitive(c, "center_of_mass") != NULL;
+    int has_i = cJSON_GetObjectItemCaseSensitive(c, "inertia_kg_m2") != NULL;
+    *given = 0;
+    if (!has_m && !has_c && !has_i) return 0;
+    if (!has_m || has_c != has_i)
+        return nc_error_set(err, 1, "%s.%s: give mass_kg alone or mass_kg, center_of_mass and "
+                                    "inertia_kg_m2 together", where,
+                            !has_m ? (has_c ? "center_of_mass" : "inertia_kg_m2")
+                                   : (has_c ? "inertia_kg_m2" : "center_of_mass"));
+    if (nc_json_positive(c, where, "mass_kg", mass, err)) return -1;
+    if (!isfinite(*mass)) return nc_error_set(err, 1, "%s.mass_kg: expected a finite number", where);
+    /* overlapping fillings sum to several times the body; a factor 50 is a unit slip */
+    if (*mass > 50.0 * sphere_mass || *mass < sphere_mass / 50.0)
+        nc_warn(sink, "%s.mass_kg: %g kg is %.3g times the spheres' %g kg (wrong unit or "
+                      "material density?)", where, *mass, *mass / sphere_mass, sphere_mass);
+    *given = 1;
+    if (!has_c) return 0;
+    *given = 2;
+    if (nc_json_vec3(c, where, "center_of_mass", com, err) ||
+        parse_matrix3(c, where, "inertia_kg_m2", inertia, err))
+        return -1;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double extent = 0.0;
+    for (int q = 0; q < ns; q++) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], pos[3 * q + k] - rad[q]);
+            hi[k] = fmax(hi[k], pos[3 * q + k] + rad[q]);
+            d2 += (pos[3 * q + k] - com[k]) * (pos[3 * q + k] - com[k]);
+        }
+        extent = fmax(extent, sqrt(d2) + rad[q]);
+    }
+    for (int k = 0; k < 3; k++)
+        if (!(com[k] >= lo[k] && com[k] <= hi[k]))
+            return nc_error_set(err, 1, "%s.center_of_mass: [%g, %g, %g] m lies outside the "
+                                        "spheres' bounding box [%g, %g, %g]..[%g, %g, %g] m", where,
+                                com[0], com[1], com[2], lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    double principal[3];
+    if (dem_inertia_check(inertia, principal, err))
+        return nc_error_prefix(err, "%s.inertia_kg_m2", where);
+    if (principal[2] > *mass * extent * extent)
+        nc_warn(sink, "%s.inertia_kg_m2: principal moment %g kg m² exceeds m R² = %g kg m² "
+                      "(R = %g m, the spheres' extent from the centre of mass): wrong unit?",
+                where, principal[2], *mass * extent * extent, extent);
+    return 0;
+}
+
 static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, FILE *sink,
                           nc_error *err)
 {
     static const char *const keys[] = {"spheres", "material", "velocity", "drop_height_m",
                                        "impact_energy_j", "impact_direction", "angular_velocity",
-                                       NULL};
+                                       "mass_kg", "center_of_mass", "inertia_kg_m2", NULL};
     static const char *const skeys[] = {"position", "radius", NULL};
     static const double zero[3] = {0, 0, 0};
     const cJSON *arr;
@@ -425,11 +504,21 @@ static int parse_clusters(dem_sim *s, const cJSON *root, const char *file, FILE 
             if (rc == 0) warn_radius(sink, sw, "radius", rad[q]);
         }
         /* the body's mass as dem_sim_prepare sums it: the spheres' volumes times ρ */
-        double mass = 0.0;
+        double mass = 0.0, com[3], inertia[9];
+        int given = 0;
         for (int j = 0; j < ns && rc == 0; j++)
             mass += sphere_mass_kg(rad[j], s->model.materials[mat].density_kg_m3);
+        /* ... or the given one, which impact_energy_j then uses too */
+        if (rc == 0)
+            rc = parse_cluster_mass(c, where, ns, pos, rad, mass, sink, &given, &mass, com,
+                                    inertia, err);
         if (rc == 0) rc = parse_initial_velocity(c, where, s->model.prm.gravity, mass, sink, vel, err);
         if (rc == 0) rc = dem_sim_add_cluster(s, (size_t)ns, pos, rad, mat, vel, omega, err);
+        if (rc == 0 && given)
+            rc = dem_sim_set_cluster_mass(s, s->model.bod.n - 1, mass, given == 2 ? com : NULL,
+                                          given == 2 ? inertia : NULL, err)
+                     ? nc_error_prefix(err, "%s", where)
+                     : 0;
         free(pos);
         free(rad);
         if (rc) return -1;

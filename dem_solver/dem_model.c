@@ -54,6 +54,7 @@ void dem_model_free(dem_model *m)
     free(b->inv_mass); free(b->inv_inertia_body); free(b->inertia_body); free(b->inv_inertia_iso); free(b->pos);
     free(b->vel); free(b->omega); free(b->angmom); free(b->quat); free(b->force); free(b->torque);
     free(m->planes);
+    free(m->mass_overrides);
     for (size_t k = 0; k < m->n_meshes; k++) dem_mesh_free(&m->meshes[k]);
     free(m->meshes);
     dem_net_free(&m->net);

@@ -134,6 +134,18 @@ typedef struct dem_net {
     struct dem_item_grid *grid;
 } dem_net;
 
+/* Mass properties given for a cluster (dem.json `mass_kg`, `center_of_mass`, `inertia_kg_m2`)
+ * instead of the spheres' sum, which counts overlapping volume twice and cannot describe a
+ * polyhedron that the spheres only approximate. */
+typedef struct dem_mass_override {
+    int32_t body;          /* a cluster body */
+    int full;              /* 1: mass, centre and inertia given; 0: mass only (the spheres'
+                              centre of mass, their inertia scaled by mass_kg / their mass) */
+    double mass_kg;
+    double com[3];         /* centre of mass, world frame at t = 0 (m) */
+    double inertia[9];     /* about com, world frame at t = 0 = body frame, row-major (kg m²) */
+} dem_mass_override;
+
 /* The model: what dem_config_load() or the dem_sim_add_* builders fill in, completed by
  * dem_sim_prepare() (material shear moduli and damping ratios, body masses, r_max/r_min). */
 typedef struct dem_model {
@@ -149,6 +161,8 @@ typedef struct dem_model {
     dem_mesh *meshes;
     dem_net net;
     double r_max, r_min;           /* largest and smallest sphere radius (m), from prepare */
+    size_t n_mass_overrides;       /* given cluster mass properties, applied by prepare */
+    dem_mass_override *mass_overrides;
 } dem_model;
 
 /* Default parameters and wall material (everything else zero). */

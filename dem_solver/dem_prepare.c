@@ -1,7 +1,8 @@
 /* dem_prepare — completing a built model and allocating the step storage: material
- * properties and damping ratios, body mass properties, the overlap check at the start, the
- * critical time step and the contact time of the contact law (dem_contact_law.h) that limit
- * an automatic dt. */
+ * properties and damping ratios, body mass properties (summed from the spheres, or given for a
+ * cluster: dem_mass_override, checked by dem_inertia_check), the overlap check at the start,
+ * the critical time step and the contact time of the contact law (dem_contact_law.h) that
+ * limit an automatic dt. */
 #include "dem_sim.h"
 
 #include <math.h>
@@ -28,7 +29,78 @@ static int invert3(const double a[9], double inv[9])
     return 0;
 }
 
-static void body_mass_properties(dem_sim *s, size_t b)
+/* Eigenvalues of a symmetric 3×3 matrix by cyclic Jacobi rotations (converges quadratically;
+ * 50 sweeps are far more than a 3×3 needs), ascending. */
+static void symmetric_eigenvalues(const double m[9], double lambda[3])
+{
+    double a[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) a[i][j] = 0.5 * (m[3 * i + j] + m[3 * j + i]);
+    for (int sweep = 0; sweep < 50; sweep++) {
+        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+        double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+        if (!(off > 1e-300) || off <= 1e-17 * diag) break;
+        for (int p = 0; p < 2; p++)
+            for (int q = p + 1; q < 3; q++) {
+                if (a[p][q] == 0.0) continue;
+                double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+                double c = 1.0 / sqrt(t * t + 1.0), sn = t * c;
+                for (int k = 0; k < 3; k++) { /* columns p, q */
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - sn * akq;
+                    a[k][q] = sn * akp + c * akq;
+                }
+                for (int k = 0; k < 3; k++) { /* rows p, q */
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - sn * aqk;
+                    a[q][k] = sn * apk + c * aqk;
+                }
+            }
+    }
+    lambda[0] = a[0][0];
+    lambda[1] = a[1][1];
+    lambda[2] = a[2][2];
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2 - i; j++)
+            if (lambda[j] > lambda[j + 1]) {
+                double t = lambda[j];
+                lambda[j] = lambda[j + 1];
+                lambda[j + 1] = t;
+            }
+}
+
+int dem_inertia_check(const double inertia[9], double principal[3], nc_error *err)
+{
+    double big = 0.0;
+    for (int k = 0; k < 9; k++) {
+        if (!isfinite(inertia[k]))
+            return nc_error_set(err, 1, "entry [%d][%d] is not a finite number", k / 3, k % 3);
+        big = fmax(big, fabs(inertia[k]));
+    }
+    for (int a = 0; a < 3; a++)
+        for (int c = a + 1; c < 3; c++)
+            if (fabs(inertia[3 * a + c] - inertia[3 * c + a]) > 1e-9 * big)
+                return nc_error_set(err, 1, "not symmetric: [%d][%d] = %.10g but [%d][%d] = %.10g",
+                                    a, c, inertia[3 * a + c], c, a, inertia[3 * c + a]);
+    double l[3];
+    symmetric_eigenvalues(inertia, l);
+    if (!(l[0] > 1e-9 * l[2]))
+        return nc_error_set(err, 1, "not positive definite: principal moments %.6g, %.6g, %.6g "
+                                    "kg m² (each must be > 0)", l[0], l[1], l[2]);
+    /* I3 = ∫(x² + y²) dm <= ∫(x² + z²) dm + ∫(y² + z²) dm = I2 + I1 for any mass distribution */
+    if (l[2] > (l[0] + l[1]) * (1.0 + 1e-9))
+        return nc_error_set(err, 1, "no body has these principal moments %.6g, %.6g, %.6g kg m²: "
+                                    "the largest exceeds the sum of the other two (triangle "
+                                    "inequality)", l[0], l[1], l[2]);
+    if (principal) memcpy(principal, l, sizeof l);
+    return 0;
+}
+
+/* Mass, centre of mass, inertia and sphere offsets of body b: summed from its spheres (each
+ * sphere's volume times its density), then replaced by the given values `o` (may be NULL).
+ * Everything is in the world frame at t = 0, the body frame (orientation is the identity). */
+static void body_mass_properties(dem_sim *s, size_t b, const dem_mass_override *o)
 {
     dem_bodies *B = &s->model.bod;
     int32_t first = B->first_sphere[b], count = B->n_spheres[b];
@@ -52,12 +124,25 @@ static void body_mass_properties(dem_sim *s, size_t b)
                 I[3 * a + c] += (a == c ? 0.4 * m * r * r + m * d2 : 0.0) - m * d[a] * d[c];
         if (B->is_cluster[b]) memcpy(s->model.sph.offset + 3 * (size_t)q, d, sizeof d);
     }
+    if (o && o->full) {
+        /* the given body: centre and inertia as given; offsets from the given centre */
+        memcpy(com, o->com, sizeof com);
+        memcpy(I, o->inertia, sizeof I);
+        for (int32_t q = first; q < first + count; q++)
+            for (int k = 0; k < 3; k++)
+                s->model.sph.offset[3 * (size_t)q + k] = s->model.sph.pos[3 * (size_t)q + k] - com[k];
+    } else if (o) {
+        /* the spheres' shape at the given mass: a uniform density scale */
+        for (int k = 0; k < 9; k++) I[k] *= o->mass_kg / M;
+    }
+    if (o) M = o->mass_kg;
     B->mass[b] = M;
     B->inv_mass[b] = 1.0 / M;
     memcpy(B->inertia_body + 9 * b, I, sizeof I);
     if (B->is_cluster[b]) {
         memcpy(B->pos + 3 * b, com, sizeof com);
-        invert3(I, B->inv_inertia_body + 9 * b); /* each sphere adds 2/5 m r² 1: invertible */
+        invert3(I, B->inv_inertia_body + 9 * b); /* each sphere adds 2/5 m r² 1, a given
+                                                    tensor is positive definite: invertible */
         B->inv_inertia_iso[b] = 0.0;
         const double *w = B->omega + 3 * b;
         for (int a = 0; a < 3; a++)
@@ -142,7 +227,18 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     }
     if (s->model.sph.n == 0) s->model.r_min = s->model.r_max = 1.0;
     if (net->near_distance_m < 0.0) net->near_distance_m = s->model.r_max;
-    for (size_t b = 0; b < s->model.bod.n; b++) body_mass_properties(s, b);
+    if (s->model.n_mass_overrides) {
+        int32_t *given = malloc(s->model.bod.n * sizeof *given);
+        if (!given) return nc_error_set(err, 1, "dem: out of memory for %zu bodies", s->model.bod.n);
+        for (size_t b = 0; b < s->model.bod.n; b++) given[b] = -1;
+        for (size_t k = 0; k < s->model.n_mass_overrides; k++)
+            given[s->model.mass_overrides[k].body] = (int32_t)k;
+        for (size_t b = 0; b < s->model.bod.n; b++)
+            body_mass_properties(s, b, given[b] >= 0 ? &s->model.mass_overrides[given[b]] : NULL);
+        free(given);
+    } else {
+        for (size_t b = 0; b < s->model.bod.n; b++) body_mass_properties(s, b, NULL);
+    }
     if (check_overlaps(s, err)) return -1;
     dem_update_spheres(s);
 

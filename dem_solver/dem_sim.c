@@ -107,6 +107,45 @@ int dem_sim_add_cluster(dem_sim *s, size_t n, const double *pos, const double *r
     return 0; /* mass, centre, inertia and offsets are derived in dem_sim_prepare */
 }
 
+int dem_sim_set_cluster_mass(dem_sim *s, size_t body, double mass_kg, const double com[3],
+                             const double inertia[9], nc_error *err)
+{
+    if (body >= s->model.bod.n || !s->model.bod.is_cluster[body])
+        return nc_error_set(err, 1, "dem: body %zu is not a cluster (a free sphere's mass is its "
+                                    "radius and density)", body);
+    if (!(mass_kg > 0.0) || !isfinite(mass_kg))
+        return nc_error_set(err, 1, "dem: cluster mass must be a finite number > 0, got %g", mass_kg);
+    if ((com == NULL) != (inertia == NULL))
+        return nc_error_set(err, 1, "dem: give the centre of mass and the inertia together");
+    if (com) {
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(com[k]))
+                return nc_error_set(err, 1, "dem: centre of mass must be finite");
+        if (dem_inertia_check(inertia, NULL, err)) return -1;
+    }
+    dem_mass_override *o = NULL;
+    for (size_t k = 0; k < s->model.n_mass_overrides && !o; k++)
+        if (s->model.mass_overrides[k].body == (int32_t)body) o = &s->model.mass_overrides[k];
+    if (!o) {
+        dem_mass_override *p = realloc(s->model.mass_overrides,
+                                       (s->model.n_mass_overrides + 1) * sizeof *p);
+        if (!p) return nc_error_set(err, 1, "dem: out of memory");
+        s->model.mass_overrides = p;
+        o = &p[s->model.n_mass_overrides++];
+    }
+    memset(o, 0, sizeof *o);
+    o->body = (int32_t)body;
+    o->mass_kg = mass_kg;
+    o->full = com != NULL;
+    if (com) {
+        memcpy(o->com, com, sizeof o->com);
+        /* the symmetric part (the check allowed asymmetry of 1e-9 of the largest entry) */
+        for (int a = 0; a < 3; a++)
+            for (int c = 0; c < 3; c++) o->inertia[3 * a + c] = 0.5 * (inertia[3 * a + c] + inertia[3 * c + a]);
+    }
+    return 0;
+}
+
 int dem_sim_add_plane(dem_sim *s, const double point[3], const double normal[3],
                       const double velocity[3], int material, nc_error *err)
 {

@@ -56,6 +56,18 @@ int dem_sim_add_sphere(dem_sim *s, const double pos[3], double radius, int mater
 int dem_sim_add_cluster(dem_sim *s, size_t n, const double *pos, const double *radius,
                         int material, const double vel[3], const double omega[3],
                         nc_error *err);
+/* Gives cluster `body` its true mass properties instead of the spheres' sum (applied by
+ * dem_sim_prepare): mass_kg > 0 and either com and inertia (about com, in the world frame at
+ * t = 0, which is the body frame; checked by dem_inertia_check) or both NULL (mass only: the
+ * spheres' centre of mass, their inertia scaled by mass_kg / their mass). Setting a body again
+ * replaces its values. Free spheres are refused (their mass is radius and density). */
+int dem_sim_set_cluster_mass(dem_sim *s, size_t body, double mass_kg, const double com[3],
+                             const double inertia[9], nc_error *err);
+/* Checks an inertia tensor (row-major 3×3): finite, symmetric to 1e-9 of its largest entry,
+ * positive definite (smallest principal moment > 1e-9 of the largest) and physical (each
+ * principal moment at most the sum of the other two). principal (may be NULL) gets the
+ * principal moments in ascending order. The message names no field; callers prefix it. */
+int dem_inertia_check(const double inertia[9], double principal[3], nc_error *err);
 int dem_sim_add_plane(dem_sim *s, const double point[3], const double normal[3],
                       const double velocity[3], int material, nc_error *err);
 
