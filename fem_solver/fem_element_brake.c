@@ -28,7 +28,7 @@ double fem_brake_force(const double *p, double delta, double sp0, double *kt, do
     }
     *sp = s;
     double e = delta - s;
-    if (e <= 0.0) {   /* shorter than its stroke has made it: slack, like the rope */
+    if (e < 0.0) {    /* shorter than its stroke has made it: slack, like the rope */
         *kt = 0.0;
         return 0.0;
     }
@@ -70,7 +70,7 @@ static double brake_energy(const fem_element_ctx *c)
     const double *p = c->param;
     double d[3], l;
     double sp = c->hist[0], e = brake_delta(c, d, &l) - sp;
-    if (e <= 0.0) return 0.0;
+    if (e < 0.0) return 0.0;
     const double ke = p[FEM_BRAKE_KE];
     if (sp >= p[FEM_BRAKE_SMAX]) {
         double fy = p[FEM_BRAKE_FA] + p[FEM_BRAKE_KH] * sp, ey = fy / ke;

@@ -5,7 +5,7 @@
  *   plateau      F = F_y(s_p) = F_a + k_h s_p, s_p grows    (activation force F_a, hardening k_h)
  *   locked       s_p = s_max: F = k_e e up to F_y(s_max) = F_y,max, beyond it
  *                F = F_y,max + k_lock (e - F_y,max / k_e),  e = delta - s_max
- *   no compression: F = 0 when delta < s_p (a brake is in a rope); unloading is elastic.
+ *   no compression: F = 0 (and no stiffness) when delta < s_p (a brake is in a rope); unloading is elastic.
  * History per member: [0] plastic stroke s_p (m), [1] dissipated energy (J), the plastic work
  * integral of F_y ds_p = F_a s_p + k_h s_p^2 / 2 accumulated step by step. */
 #ifndef FEM_ELEMENT_BRAKE_H
