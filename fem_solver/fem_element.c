@@ -8,6 +8,7 @@ extern const fem_element_ops fem_element_cable_ops;
 extern const fem_element_ops fem_element_post_ops;
 extern const fem_element_ops fem_element_brake_ops;
 extern const fem_element_ops fem_element_sliding_cable_ops;
+extern const fem_element_ops fem_element_ring_ops;
 
 /* FEM_TYPE_CABLE is the first entry (the default of an element set). */
 static const fem_element_ops *const registry[] = {
@@ -15,6 +16,7 @@ static const fem_element_ops *const registry[] = {
     &fem_element_post_ops,
     &fem_element_brake_ops,
     &fem_element_sliding_cable_ops,
+    &fem_element_ring_ops,
 };
 
 #define N_TYPES ((int)(sizeof registry / sizeof *registry))
