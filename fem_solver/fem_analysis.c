@@ -1181,12 +1181,11 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
     if (inertia && (m->tau_per_s != 0.0 || m->kappa_s != 0.0)) {
         for (int e = 0; e < m->n_elements; e++) {
             const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-            double vk[3], vl[3], dv[3], d[3], f[3], Kb[9], m11, m12;
+            double vk[3], vl[3], dv[3], f[3], Kb[9], m11, m12;
             for (int c = 0; c < 3; c++) {
                 vk[c] = 0.5 * (s->start.v[k + c] + s->cur.v[k + c]);
                 vl[c] = 0.5 * (s->start.v[l + c] + s->cur.v[l + c]);
                 dv[c] = vl[c] - vk[c];
-                d[c] = m->X[l + c] + s->cur.u[l + c] - m->X[k + c] - s->cur.u[k + c];
             }
             fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
             for (int c = 0; c < 3; c++)
@@ -1196,7 +1195,6 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
                 int slack;
                 fem_element_ctx ctx;
                 member_ctx(m, m->member_of[e], s->cur.u, s->cur.element_history, &ctx);
-                (void)d;
                 ops->pair_response(&ctx, f, Kb, &slack);
                 for (int i = 0; i < 3; i++)
                     for (int j = 0; j < 3; j++) rayleigh += m->kappa_s * dv[i] * Kb[3 * i + j] * dv[j];
