@@ -18,6 +18,7 @@
  * (statics: 1, 0).
  */
 #include "fem_analysis.h"
+#include "fem_element.h"
 #include "fem_element_cable.h"
 #include "nc_clock.h"
 
@@ -31,20 +32,22 @@ static const char *dof_name(int d)
     return d == 0 ? "x" : d == 1 ? "y" : "z";
 }
 
-static int state_alloc(fem_state *st, int ndof)
+static int state_alloc(fem_state *st, int ndof, int n_history)
 {
     memset(st, 0, sizeof *st);
+    st->n_history = n_history;
+    st->element_history = calloc((size_t)(n_history > 0 ? n_history : 1), sizeof(double));
     st->u = calloc((size_t)ndof, sizeof(double));
     st->v = calloc((size_t)ndof, sizeof(double));
     st->a = calloc((size_t)ndof, sizeof(double));
     st->fd = calloc((size_t)ndof, sizeof(double));
     st->fc = calloc((size_t)ndof, sizeof(double));
-    return (st->u && st->v && st->a && st->fd && st->fc) ? 0 : -1;
+    return (st->u && st->v && st->a && st->fd && st->fc && st->element_history) ? 0 : -1;
 }
 
 static void state_free(fem_state *st)
 {
-    free(st->u); free(st->v); free(st->a); free(st->fd); free(st->fc);
+    free(st->u); free(st->v); free(st->a); free(st->fd); free(st->fc); free(st->element_history);
     memset(st, 0, sizeof *st);
 }
 
@@ -58,6 +61,45 @@ static void state_copy(fem_state *dst, const fem_state *src, int ndof)
     memcpy(dst->a, src->a, bytes);
     memcpy(dst->fd, src->fd, bytes);
     memcpy(dst->fc, src->fc, bytes);
+    if (src->n_history > 0)
+        memcpy(dst->element_history, src->element_history, (size_t)src->n_history * sizeof(double));
+}
+
+static const fem_element_ops *element_ops(const fem_model *m, int e)
+{
+    return fem_element_type(m->set_types[m->element_set[e]].type);
+}
+
+/* The view of member b at displacement u with the committed history hist (whole array). */
+static void member_ctx(const fem_model *m, int b, const double *u, const double *hist,
+                       fem_element_ctx *c)
+{
+    c->m = m;
+    c->member = b;
+    c->first = m->member_first[b];
+    c->count = m->member_first[b + 1] - c->first;
+    c->set = &m->sets[m->element_set[c->first]];
+    c->param = m->set_types[m->element_set[c->first]].param;
+    c->u = u;
+    c->hist = hist ? hist + m->history_offset[b] : NULL;
+}
+
+/* model node of position j of a member's chain */
+static int chain_node(const fem_model *m, int first, int count, int j)
+{
+    return j < count ? m->conn[2 * (first + j)] : m->conn[2 * (first + count - 1) + 1];
+}
+
+/* Pseudo-elements of the pattern for the node pairs of a chain member that are not
+ * neighbours (its tangent is dense), in member order, rows i, columns j > i + 1. */
+static int chain_pair_count(const fem_model *m)
+{
+    int n = 0;
+    for (int b = 0; b < m->n_members; b++) {
+        int c = m->member_first[b + 1] - m->member_first[b] + 1;   /* nodes */
+        if (c > 2) n += (c - 1) * (c - 2) / 2;
+    }
+    return n;
 }
 
 /* The matrix pattern: the elements' couplings and the extra node pairs (each a 2-node
@@ -67,17 +109,31 @@ static void state_copy(fem_state *dst, const fem_state *src, int ndof)
 static int build_pattern(fem_analysis *s, nc_error *err)
 {
     const fem_model *m = s->m;
-    size_t ne = (size_t)m->n_elements + (size_t)s->n_pairs;
+    const size_t nel = (size_t)m->n_elements, ncp = (size_t)s->n_chain_pairs;
+    size_t ne = nel + ncp + (size_t)s->n_pairs;
     int *elem_eq = malloc(6 * ne * sizeof *elem_eq);
     int *slot = malloc(36 * ne * sizeof *slot);
-    if (!elem_eq || !slot) {
+    int *chain = malloc(2 * (ncp + 1) * sizeof *chain);
+    if (!elem_eq || !slot || !chain) {
         free(elem_eq);
         free(slot);
+        free(chain);
         return nc_error_set(err, 1, "out of memory for the matrix pattern");
     }
+    size_t q = 0;
+    for (int mb = 0; mb < m->n_members; mb++) {
+        int first = m->member_first[mb], count = m->member_first[mb + 1] - first;
+        for (int i = 0; i <= count; i++)
+            for (int j = i + 2; j <= count; j++) {
+                chain[2 * q] = chain_node(m, first, count, i);
+                chain[2 * q + 1] = chain_node(m, first, count, j);
+                q++;
+            }
+    }
     for (size_t e = 0; e < ne; e++) {
-        int a = e < (size_t)m->n_elements ? m->conn[2 * e] : s->pairs[2 * (e - m->n_elements)];
-        int b = e < (size_t)m->n_elements ? m->conn[2 * e + 1] : s->pairs[2 * (e - m->n_elements) + 1];
+        const int *pair = e < nel ? m->conn + 2 * e : e < nel + ncp ? chain + 2 * (e - nel)
+                                                                    : s->pairs + 2 * (e - nel - ncp);
+        int a = pair[0], b = pair[1];
         for (int c = 0; c < 3; c++) {
             elem_eq[6 * e + c] = s->eq[3 * a + c];
             elem_eq[6 * e + 3 + c] = s->eq[3 * b + c];
@@ -87,6 +143,7 @@ static int build_pattern(fem_analysis *s, nc_error *err)
     memset(&s->K, 0, sizeof s->K);
     int rc = fem_sparse_build(&s->K, s->neq, (int)ne, elem_eq, slot, m->settings.factorization, err);
     free(elem_eq);
+    free(chain);
     free(s->slot);
     s->slot = slot;
     return rc;
@@ -165,11 +222,18 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
     s->mass_x = calloc(nd, sizeof(double));
     s->mass_y = calloc(nd, sizeof(double));
     s->a_unshifted = calloc(nd, sizeof(double));
-    if (!s->mass_diag || !s->mass_x || !s->mass_y || !s->a_unshifted ||
+    s->n_chain_pairs = chain_pair_count(m);
+    size_t nc = 3 * (size_t)m->max_chain_nodes;
+    s->chain_f = calloc(nc, sizeof(double));
+    s->chain_v = calloc(nc, sizeof(double));
+    s->chain_K = calloc(nc * nc, sizeof(double));
+    if (!s->chain_f || !s->chain_v || !s->chain_K ||
+        !s->mass_diag || !s->mass_x || !s->mass_y || !s->a_unshifted ||
         !s->eq || !s->dof_of_eq || !elem_eq || !s->f_model || !s->f_coupling ||
         !s->r || !s->w || !s->rhs || !s->du || !s->u0 || !s->cg_r || !s->cg_z ||
-        !s->cg_p || !s->cg_q || !s->axial || state_alloc(&s->cur, s->ndof) ||
-        state_alloc(&s->start, s->ndof) || state_alloc(&s->saved, s->ndof)) {
+        !s->cg_p || !s->cg_q || !s->axial || state_alloc(&s->cur, s->ndof, m->history_count) ||
+        state_alloc(&s->start, s->ndof, m->history_count) ||
+        state_alloc(&s->saved, s->ndof, m->history_count)) {
         free(elem_eq);
         return nc_error_set(err, 1, "%s: out of memory for %d dofs", m->source, s->ndof);
     }
@@ -187,7 +251,7 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
         }
     for (int e = 0; e < m->n_elements; e++) {
         double m11, m12;
-        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
         for (int a = 0; a < 6; a++) {
             int q = elem_eq[6 * e + a];
             if (q >= 0) s->mass_diag[q] += m11;
@@ -221,6 +285,7 @@ void fem_analysis_free(fem_analysis *s)
     free(s->r); free(s->w); free(s->rhs); free(s->du); free(s->u0);
     free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
     free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
+    free(s->chain_f); free(s->chain_v); free(s->chain_K);
     memset(s, 0, sizeof *s);
 }
 
@@ -237,9 +302,106 @@ double fem_analysis_load_factor(const fem_analysis *s, double time_s)
  * (NULL: none), wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial, and
  * lin.df when a linearisation is set. Returns the force scale used by the relative
  * tolerance. */
+/* Adds scale * B (3x3, row-major) to the block of pseudo-element slots sl at node sides
+ * (ra, cb) (0: its first node, 1: its second). */
+static void scatter_block(double *x, const int *sl, int ra, int cb, const double *B, double scale)
+{
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) {
+            int slot = sl[6 * (3 * ra + a) + 3 * cb + b];
+            if (slot >= 0) x[slot] += scale * B[3 * a + b];
+        }
+}
+
+/* The slots of block (i, j) of a chain member (first segment `first`, count segments, its
+ * non-neighbour pairs from pseudo-element q0 on) and the sides to use. */
+static const int *chain_block_slots(const fem_analysis *s, int first, int count, int q0, int i,
+                                    int j, int *ra, int *cb)
+{
+    const int ne = s->m->n_elements;
+    if (i == j) {
+        *ra = *cb = i < count ? 0 : 1;
+        return s->slot + 36 * (size_t)(first + (i < count ? i : count - 1));
+    }
+    if (j == i + 1 || i == j + 1) {
+        int lo = i < j ? i : j;
+        *ra = i > j;
+        *cb = j > i;
+        return s->slot + 36 * (size_t)(first + lo);
+    }
+    int lo = i < j ? i : j, hi = i < j ? j : i, q = q0;
+    for (int r = 0; r < lo; r++) q += count - r - 1 > 0 ? count - r - 1 : 0;  /* row r: j = r+2..count */
+    q += hi - lo - 2;
+    *ra = i > j;
+    *cb = j > i;
+    return s->slot + 36 * (size_t)(ne + q);
+}
+
+/* A chain member's share of the assembly (see assemble): returns 1 when slack. */
+static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_element_ops *ops,
+                          int q0, double c_m, double c_k, const double *w, const double *v,
+                          int matrix, double *fd, double *scale2)
+{
+    const fem_model *m = s->m;
+    const int n = c->count + 1, dim = 3 * n;
+    const double kappa = m->kappa_s;
+    double *f = s->chain_f, *K = s->chain_K;
+    int slack = ops->chain_response(c, f, (matrix || (kappa != 0.0 && v)) ? K : NULL,
+                                    s->axial + c->first);
+    if (kappa != 0.0 && v) {
+        /* stiffness-proportional damping force kappa K_T v */
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < 3; i++) s->chain_v[3 * j + i] = v[3 * chain_node(m, c->first, c->count, j) + i];
+        for (int a = 0; a < dim; a++) {
+            double kv = 0;
+            for (int b = 0; b < dim; b++) kv += K[a * dim + b] * s->chain_v[b];
+            f[a] += kappa * kv;
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        const int node = 3 * chain_node(m, c->first, c->count, j);
+        for (int i = 0; i < 3; i++) {
+            fd[node + i] += f[3 * j + i];
+            *scale2 += f[3 * j + i] * f[3 * j + i];
+        }
+    }
+    /* mass per segment, as for a two-node element */
+    for (int sg = 0; sg < c->count; sg++) {
+        const int e = c->first + sg, k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+        double m11 = 0, m12 = 0;
+        if (c_m != 0.0 || w) fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        if (w)
+            for (int i = 0; i < 3; i++) {
+                double ik = m11 * w[k + i] + m12 * w[l + i], il = m12 * w[k + i] + m11 * w[l + i];
+                s->r[k + i] -= ik;
+                s->r[l + i] -= il;
+                *scale2 += ik * ik + il * il;
+            }
+        if (matrix && c_m != 0.0) {
+            const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+            const int *sl = s->slot + 36 * (size_t)e;
+            scatter_block(s->K.x, sl, 0, 0, I, c_m * m11);
+            scatter_block(s->K.x, sl, 1, 1, I, c_m * m11);
+            scatter_block(s->K.x, sl, 0, 1, I, c_m * m12);
+            scatter_block(s->K.x, sl, 1, 0, I, c_m * m12);
+        }
+    }
+    if (matrix)
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) {
+                double B[9];
+                for (int a = 0; a < 3; a++)
+                    for (int b = 0; b < 3; b++) B[3 * a + b] = K[(3 * i + a) * dim + 3 * j + b];
+                int ra, cb;
+                const int *sl = chain_block_slots(s, c->first, c->count, q0, i, j, &ra, &cb);
+                scatter_block(s->K.x, sl, ra, cb, B, c_k);
+            }
+    return slack;
+}
+
 static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, double l_k,
                        double l_c, const double *w, const double *v, double wf,
-                       const double *fd_n, int matrix)
+                       const double *fd_n, int matrix, const double *hist)
 {
     const fem_model *m = s->m;
     double t0 = nc_clock_now_s();
@@ -265,14 +427,21 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
             fext2 += s->r[i] * s->r[i];
         }
     }
-    int slack_count = 0;
-    for (int e = 0; e < m->n_elements; e++) {
+    int slack_count = 0, q0 = 0;
+    for (int mb = 0; mb < m->n_members; mb++) {
+        const int e = m->member_first[mb];
+        const fem_element_ops *ops = element_ops(m, e);
+        fem_element_ctx ctx;
+        member_ctx(m, mb, u, hist, &ctx);
+        if (ops->chain) {
+            slack_count += assemble_chain(s, &ctx, ops, q0, c_m, c_k, w, v, matrix, fd, &scale2);
+            if (ctx.count > 1) q0 += ctx.count * (ctx.count - 1) / 2;
+            continue;
+        }
         const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double d[3], f[3], Kb[9];
-        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
+        double f[3], Kb[9];
         int slack;
-        s->axial[e] = fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb,
-                                         &slack);
+        s->axial[e] = ops->pair_response(&ctx, f, Kb, &slack);
         slack_count += slack;
         if (kappa != 0.0 && v) {
             /* stiffness-proportional damping force kappa K_T (v_l - v_k) */
@@ -288,7 +457,7 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
             scale2 += 2 * f[c] * f[c];
         }
         double m11 = 0, m12 = 0;
-        if (c_m != 0.0 || w) fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        if (c_m != 0.0 || w) fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
         if (w)
             for (int c = 0; c < 3; c++) {
                 double ik = m11 * w[k + c] + m12 * w[l + c], il = m12 * w[k + c] + m11 * w[l + c];
@@ -457,8 +626,10 @@ static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, doub
         w = s->w;
         vk = s->cur.v;
     }
+    /* elements respond from the history committed at the start of the step */
     double scale = assemble(s, ns->lambda, c_m, c_k, l_k, l_c, w, vk, wf,
-                            ns->dynamic && ns->alpha_f != 0.0 ? s->start.fd : NULL, 1);
+                            ns->dynamic && ns->alpha_f != 0.0 ? s->start.fd : NULL, 1,
+                            s->start.element_history);
     *tol = fmax(m->settings.residual_tol_n, m->settings.relative_tol * scale);
     return residual_norm(s);
 }
@@ -576,6 +747,22 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
                         set->max_iterations, rnorm, tol, dunorm);
 }
 
+/* The step converged: every element with history writes it at the solution, from the
+ * history committed at the start of the step (cur.element_history = start's until now). */
+static void commit_history(fem_analysis *s)
+{
+    const fem_model *m = s->m;
+    if (m->history_count == 0) return;
+    for (int b = 0; b < m->n_members; b++) {
+        const fem_element_ops *ops = element_ops(m, m->member_first[b]);
+        if (!ops->commit) continue;
+        fem_element_ctx c;
+        member_ctx(m, b, s->cur.u, s->start.element_history, &c);
+        ops->commit(&c, s->cur.element_history + m->history_offset[b]);
+    }
+    fem_analysis_update_axial(s);
+}
+
 /* prescribed displacements at load factor lambda */
 static void apply_supports(fem_analysis *s, double lambda)
 {
@@ -595,6 +782,7 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err)
     }
     memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+    commit_history(s);
     s->cur.step++;
     s->cur.time_s = lambda;
     return 0;
@@ -645,7 +833,7 @@ int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
     s->factor_lin = s->lin_serial;
     double tau = m->tau_per_s;
     for (int i = 0; i < s->ndof; i++) s->w[i] = tau * s->cur.v[i];
-    assemble(s, lambda, 1.0, 0.0, 0.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1);
+    assemble(s, lambda, 1.0, 0.0, 0.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1, s->cur.element_history);
     if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
     for (int q = 0; q < s->neq; q++) s->cur.a[s->dof_of_eq[q]] = s->du[q];
@@ -661,7 +849,7 @@ static void mass_multiply(const fem_analysis *s, const double *x, double *y)
     for (int e = 0; e < m->n_elements; e++) {
         const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
         double m11, m12;
-        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
         for (int c = 0; c < 3; c++) {
             y[k + c] += m11 * x[k + c] + m12 * x[l + c];
             y[l + c] += m12 * x[k + c] + m11 * x[l + c];
@@ -752,6 +940,7 @@ int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
     s->cur.time_s = t1;
     s->cur.step = s->start.step + 1;
     store_coupling_force(s);
+    commit_history(s);
     return 0;
 }
 
@@ -817,52 +1006,164 @@ void fem_analysis_update_axial(fem_analysis *s)
 {
     const fem_model *m = s->m;
     int slack = 0;
-    for (int e = 0; e < m->n_elements; e++) {
-        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double d[3], f[3], Kb[9];
-        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + s->cur.u[l + c] - m->X[k + c] - s->cur.u[k + c];
+    for (int b = 0; b < m->n_members; b++) {
+        const int e = m->member_first[b];
+        const fem_element_ops *ops = element_ops(m, e);
+        fem_element_ctx c;
+        member_ctx(m, b, s->cur.u, s->cur.element_history, &c);
+        if (ops->chain) {
+            slack += ops->chain_response(&c, s->chain_f, NULL, s->axial + e);
+            continue;
+        }
+        double f[3], Kb[9];
         int sl;
-        s->axial[e] = fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb, &sl);
+        s->axial[e] = ops->pair_response(&c, f, Kb, &sl);
         slack += sl;
     }
     s->stats.slack_elements = slack;
 }
 
+void fem_analysis_node_balance(const fem_analysis *s, double lambda, double *f)
+{
+    /* the order of operations of the reactions before the element seam, so reactions are
+     * unchanged for cables */
+    const fem_model *m = s->m;
+    const double *u = s->cur.u, *v = s->cur.v, *a = s->cur.a;
+    const double tau = m->tau_per_s, kappa = m->kappa_s;
+    for (int i = 0; i < 3 * m->n_nodes; i++) f[i] = -lambda * s->f_model[i] - s->f_coupling[i];
+    for (int b = 0; b < m->n_members; b++) {
+        const int first = m->member_first[b];
+        const fem_element_ops *ops = element_ops(m, first);
+        fem_element_ctx ctx;
+        member_ctx(m, b, u, s->cur.element_history, &ctx);
+        if (ops->chain) {
+            const int n = ctx.count + 1, dim = 3 * n;
+            double *fc = s->chain_f, *K = s->chain_K, *axial = s->chain_v;
+            /* the work arrays are scratch: nothing of the state lives there */
+            ops->chain_response(&ctx, fc, K, axial);
+            for (int j = 0; j < n; j++) {
+                const int node = 3 * chain_node(m, first, ctx.count, j);
+                for (int c = 0; c < 3; c++) {
+                    double kv = 0.0;
+                    if (kappa != 0.0)
+                        for (int q = 0; q < n; q++)
+                            for (int d = 0; d < 3; d++)
+                                kv += K[(3 * j + c) * dim + 3 * q + d] * v[3 * chain_node(m, first, ctx.count, q) + d];
+                    f[node + c] += fc[3 * j + c] + kappa * kv;
+                }
+            }
+        }
+        for (int e = first; e < m->member_first[b + 1]; e++) {
+            const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+            double fl[3] = {0, 0, 0}, Kb[9] = {0};
+            int slack;
+            if (!ops->chain) ops->pair_response(&ctx, fl, Kb, &slack);
+            double m11, m12;
+            fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+            for (int c = 0; c < 3; c++) {
+                double kv = 0.0;
+                if (kappa != 0.0)
+                    for (int j = 0; j < 3; j++) kv += Kb[3 * c + j] * (v[l + j] - v[k + j]);
+                f[l + c] += fl[c] + kappa * kv;
+                f[k + c] -= fl[c] + kappa * kv;
+                double wk = a[k + c] + tau * v[k + c], wl = a[l + c] + tau * v[l + c];
+                f[k + c] += m11 * wk + m12 * wl;
+                f[l + c] += m12 * wk + m11 * wl;
+            }
+        }
+    }
+}
+
+int fem_analysis_element_history_output(const fem_analysis *s, double *stroke, double *dissipated)
+{
+    const fem_model *m = s->m;
+    int any = 0;
+    for (int b = 0; b < m->n_members; b++) {
+        const int first = m->member_first[b];
+        const fem_element_ops *ops = element_ops(m, first);
+        fem_element_ctx c;
+        member_ctx(m, b, s->cur.u, s->cur.element_history, &c);
+        double st = ops->stroke ? ops->stroke(&c) : 0.0;
+        double di = ops->dissipated ? ops->dissipated(&c) : 0.0;
+        any |= ops->stroke || ops->dissipated;
+        for (int e = first; e < m->member_first[b + 1]; e++) {
+            if (stroke) stroke[e] = st;
+            if (dissipated) dissipated[e] = di;
+        }
+    }
+    return any;
+}
+
 static void method_weights(const fem_settings *set, double *beta, double *gamma, double *am,
                            double *af);
 
-/* Kinetic and strain energy of the state u, v. */
-static void state_energy(const fem_analysis *s, const double *u, const double *v, double *kinetic,
-                         double *strain)
+/* Kinetic and strain energy of the state u, v with history hist, and the energy the
+ * elements have dissipated up to that history (NULL: not wanted). */
+static void state_energy(const fem_analysis *s, const double *u, const double *v,
+                         const double *hist, double *kinetic, double *strain, double *dissipated)
 {
     const fem_model *m = s->m;
-    double T = 0, W = 0;
+    double T = 0, W = 0, D = 0;
     for (int e = 0; e < m->n_elements; e++) {
         const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double m11, m12, l2 = 0;
-        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
-        for (int c = 0; c < 3; c++) {
+        double m11, m12;
+        fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+        for (int c = 0; c < 3; c++)
             T += 0.5 * (m11 * (v[k + c] * v[k + c] + v[l + c] * v[l + c]) + 2.0 * m12 * v[k + c] * v[l + c]);
-            double d = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
-            l2 += d * d;
-        }
-        double L2 = m->L0[e] * m->L0[e];
-        double AS_tot = m->EA[e] * (l2 - L2) / (2.0 * L2) + m->AS[e];
-        if (m->is_cable[e] && AS_tot < 0) AS_tot = 0;
-        /* W = A L int S dE = L ((A S_tot)^2 - (A S_pre)^2) / (2 E A) */
-        if (m->EA[e] > 0) W += m->L0[e] * (AS_tot * AS_tot - m->AS[e] * m->AS[e]) / (2.0 * m->EA[e]);
+    }
+    for (int b = 0; b < m->n_members; b++) {
+        const fem_element_ops *ops = element_ops(m, m->member_first[b]);
+        fem_element_ctx c;
+        member_ctx(m, b, u, hist, &c);
+        W += ops->strain_energy(&c);
+        if (ops->dissipated) D += ops->dissipated(&c);
     }
     *kinetic = T;
     *strain = W;
+    if (dissipated) *dissipated = D;
 }
 
 double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain)
 {
     double T, W;
-    state_energy(s, s->cur.u, s->cur.v, &T, &W);
+    state_energy(s, s->cur.u, s->cur.v, s->cur.element_history, &T, &W, NULL);
     if (kinetic) *kinetic = T;
     if (strain) *strain = W;
     return T + W;
+}
+
+/* kappa v_m^T K_T v_m of the chain members (mid-step velocity, tangent at the end) */
+static int rayleigh_chains(const fem_analysis *s, double *rayleigh)
+{
+    const fem_model *m = s->m;
+    double *K = NULL, *f = NULL, *vm = NULL, *axial = NULL;
+    int rc = 0;
+    for (int b = 0; b < m->n_members && !rc; b++) {
+        const int first = m->member_first[b], count = m->member_first[b + 1] - first;
+        const fem_element_ops *ops = element_ops(m, first);
+        if (!ops->chain) continue;
+        const size_t nc = 3 * (size_t)m->max_chain_nodes;
+        if (!K) {
+            K = malloc(nc * nc * sizeof *K);
+            f = malloc(nc * sizeof *f);
+            vm = malloc(nc * sizeof *vm);
+            axial = malloc((size_t)m->max_chain_nodes * sizeof *axial);
+            if (!K || !f || !vm || !axial) { rc = -1; break; }
+        }
+        fem_element_ctx c;
+        member_ctx(m, b, s->cur.u, s->cur.element_history, &c);
+        ops->chain_response(&c, f, K, axial);
+        const int dim = 3 * (count + 1);
+        for (int j = 0; j <= count; j++)
+            for (int i = 0; i < 3; i++) {
+                int d = 3 * chain_node(m, first, count, j) + i;
+                vm[3 * j + i] = 0.5 * (s->start.v[d] + s->cur.v[d]);
+            }
+        for (int a = 0; a < dim; a++)
+            for (int q = 0; q < dim; q++) *rayleigh += m->kappa_s * vm[a] * K[a * dim + q] * vm[q];
+    }
+    free(K); free(f); free(vm); free(axial);
+    return rc;
 }
 
 int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy *e)
@@ -870,9 +1171,9 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
     const fem_model *m = s->m;
     const double dt = s->cur.time_s - s->start.time_s;
     if (!(dt > 0.0)) return -1;
-    double T0 = 0, W0, T1 = 0, W1;
-    state_energy(s, s->start.u, s->start.v, &T0, &W0);
-    state_energy(s, s->cur.u, s->cur.v, &T1, &W1);
+    double T0 = 0, W0, D0, T1 = 0, W1, D1;
+    state_energy(s, s->start.u, s->start.v, s->start.element_history, &T0, &W0, &D0);
+    state_energy(s, s->cur.u, s->cur.v, s->cur.element_history, &T1, &W1, &D1);
     if (!inertia) T0 = T1 = 0.0;
     /* quasi-static coupling solves at the full load (fem_analysis_static(s, 1, ...)) */
     const double lam0 = inertia ? fem_analysis_load_factor(s, s->start.time_s) : 1.0;
@@ -898,23 +1199,26 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
     if (inertia && (m->tau_per_s != 0.0 || m->kappa_s != 0.0)) {
         for (int e = 0; e < m->n_elements; e++) {
             const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-            double vk[3], vl[3], dv[3], d[3], f[3], Kb[9], m11, m12;
+            double vk[3], vl[3], dv[3], f[3], Kb[9], m11, m12;
             for (int c = 0; c < 3; c++) {
                 vk[c] = 0.5 * (s->start.v[k + c] + s->cur.v[k + c]);
                 vl[c] = 0.5 * (s->start.v[l + c] + s->cur.v[l + c]);
                 dv[c] = vl[c] - vk[c];
-                d[c] = m->X[l + c] + s->cur.u[l + c] - m->X[k + c] - s->cur.u[k + c];
             }
-            fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
+            fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
             for (int c = 0; c < 3; c++)
                 rayleigh += m->tau_per_s * (m11 * (vk[c] * vk[c] + vl[c] * vl[c]) + 2.0 * m12 * vk[c] * vl[c]);
-            if (m->kappa_s != 0.0) {
+            const fem_element_ops *ops = element_ops(m, e);
+            if (m->kappa_s != 0.0 && !ops->chain) {
                 int slack;
-                fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f, Kb, &slack);
+                fem_element_ctx ctx;
+                member_ctx(m, m->member_of[e], s->cur.u, s->cur.element_history, &ctx);
+                ops->pair_response(&ctx, f, Kb, &slack);
                 for (int i = 0; i < 3; i++)
                     for (int j = 0; j < 3; j++) rayleigh += m->kappa_s * dv[i] * Kb[3 * i + j] * dv[j];
             }
         }
+        if (m->kappa_s != 0.0 && rayleigh_chains(s, &rayleigh)) return -1;
         rayleigh *= dt;
     }
     e->kinetic_j = T1;
@@ -924,6 +1228,8 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
     e->load_input_j = load_work + (v1 - v0);
     e->coupling_work_j = coupling_work;
     e->rayleigh_j = rayleigh;
-    e->numerical_j = load_work + coupling_work - (T1 + W1 - T0 - W0) - rayleigh;
+    e->element_dissipation_j = D1 - D0;
+    e->element_dissipated_j = D1;
+    e->numerical_j = load_work + coupling_work - (T1 + W1 - T0 - W0) - rayleigh - (D1 - D0);
     return 0;
 }

@@ -32,6 +32,10 @@ typedef struct fem_state {
     double *fd;         /* [ndof] F_int(u) + kappa K_T(u) v at this state (alpha methods) */
     double *fc;         /* [ndof] coupling force the acceleration a was computed with (N);
                            with a linearisation, F(u, v) at this state */
+    int n_history;      /* = model history_count */
+    double *element_history; /* [n_history] the element types' history (brake stroke and
+                           dissipated energy, ...; fem_element.h), committed at this state:
+                           saved, restored and rolled back with u, v, a */
 } fem_state;
 
 typedef struct fem_stats {
@@ -66,6 +70,8 @@ typedef struct fem_analysis {
     double *mass_diag;     /* [neq] diagonal of M on the free equations (Jacobi preconditioner) */
     double *mass_x, *mass_y; /* [ndof] mass-matrix product work vectors */
     double *a_unshifted;   /* [ndof] start-of-step acceleration before the load shift */
+    int n_chain_pairs;     /* pattern pseudo-elements of chain members' non-neighbour nodes */
+    double *chain_f, *chain_v, *chain_K; /* chain member work arrays (3n, 3n, 3n x 3n) */
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
@@ -134,6 +140,14 @@ int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end
 
 /* Recomputes s->axial and stats.slack_elements at the current state. */
 void fem_analysis_update_axial(fem_analysis *s);
+/* The force balance of every dof at the current state into f [ndof] (N):
+ *   f = F_int(u) + kappa K_T(u) v + M (a + tau v) - lambda f_model - f_coupling,
+ * which is what a support takes on a prescribed dof (0 on free dofs at equilibrium). */
+void fem_analysis_node_balance(const fem_analysis *s, double lambda, double *f);
+/* Per element (mesh segment) at the current committed history: the member's stroke (m;
+ * brake: plastic stroke) into stroke and its dissipated energy (J) into dissipated, 0 for
+ * types without (either pointer may be NULL). Returns 1 when the model has such types. */
+int fem_analysis_element_history_output(const fem_analysis *s, double *stroke, double *dissipated);
 /* Total mechanical energy: kinetic (1/2 v^T M v) + strain energy of the elements. */
 double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strain);
 
@@ -144,7 +158,10 @@ double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strai
  *                   force (the trapezoid for Newmark); fc_n the coupling force the start-of-
  *                   step acceleration stands for (start.fc; f_coupling with "step_constant");
  *   rayleigh      = Δt v_m^T C v_m, v_m = (v_n + v_n+1) / 2, C = tau M + kappa K_T(u_n+1);
- *   numerical     = load_work + coupling_work - Δ(kinetic + strain) - rayleigh, the balance.
+ *   element_dissipation = Δ of the energy the elements dissipate (a brake's plastic work,
+ *                   fem_element.h), from the history at the start and the end;
+ *   numerical     = load_work + coupling_work - Δ(kinetic + strain) - rayleigh
+ *                   - element_dissipation, the balance.
  * Work sums run over the free dofs (reactions of prescribed displacements are left out).
  * For Newmark beta = 1/4, gamma = 1/2 on a linear system every term is exact and numerical
  * vanishes to round-off (the trapezoidal rule conserves the discrete energy); the alpha
@@ -158,6 +175,8 @@ double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strai
 typedef struct fem_step_energy {
     double kinetic_j, strain_j, load_potential_j;   /* at the end of the step */
     double load_work_j, load_input_j, coupling_work_j, rayleigh_j, numerical_j;   /* of the step */
+    double element_dissipation_j;   /* of the step: plastic work of the elements (brakes) */
+    double element_dissipated_j;    /* the elements' dissipated energy up to the end of the step */
 } fem_step_energy;
 int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy *e);
 

@@ -67,6 +67,9 @@ static void state_entries(fem_ck_table *t, const char *group, fem_state *st, siz
     fem_ck_add(t, name, FEM_CK_F64, st->fd, ndof);
     snprintf(name, sizeof name, "analysis/%s/fc", group);
     fem_ck_add(t, name, FEM_CK_F64, st->fc, ndof);
+    /* the element types' history: brake strokes and dissipated energies */
+    snprintf(name, sizeof name, "analysis/%s/element_history", group);
+    fem_ck_add(t, name, FEM_CK_F64, st->element_history, (size_t)st->n_history);
 }
 
 static void size_entries(fem_ck_table *t, ck_sizes *z)

@@ -199,7 +199,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         proto_message_set_value(reply, "potential_energy_j", e.load_potential_j, err) ||
         proto_message_set_value(reply, "interface_work_j", e.coupling_work_j, err) ||
         proto_message_set_value(reply, "external_work_j", e.load_input_j, err) ||
-        proto_message_set_value(reply, "dissipated_energy_j", e.rayleigh_j + e.numerical_j, err) ||
+        proto_message_set_value(reply, "dissipated_energy_j", e.rayleigh_j + e.numerical_j + e.element_dissipation_j, err) ||
         proto_message_set_value(reply, "rayleigh_dissipation_j", e.rayleigh_j, err) ||
         proto_message_set_value(reply, "numerical_dissipation_j", e.numerical_j, err) ||
         proto_message_set_value(reply, "newton_iterations", s->stats.iterations, err) ||

@@ -18,4 +18,12 @@ double fem_cable_response(const double d[3], double L0, double EA, double AS_pre
 /* Mass coefficients of eq. (11): *m11 (node with itself) and *m12 (node with the other). */
 void fem_cable_mass(double rhoA, double L0, int lumped, double *m11, double *m12);
 
+struct fem_element_ctx;
+struct fem_model;
+/* The current chord d = x_l - x_k of a two-node member. */
+void fem_cable_chord(const struct fem_element_ctx *c, double d[3]);
+/* Strain energy of segment e (cable/truss law, the model's L0, EA, AS, is_cable) at the
+ * squared current length l2. */
+double fem_cable_energy(const struct fem_model *m, int e, double l2);
+
 #endif

@@ -123,16 +123,35 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
     int n;
     if (nc_json_array(root, file, "element_sets", &arr, &n, err)) return -1;
     if (n < 1) return nc_error_set(err, 1, "%s: element_sets: expected at least one set", file);
-    static const char *const keys[] = {"name", "youngs_modulus_pa", "area_m2", "diameter_m",
-                                       "metallic_area_factor", "density_kg_m3", "prestress_pa",
-                                       "pretension_n", "breaking_load_n", "behaviour", NULL};
+    static const char *const base_keys[] = {"name", "youngs_modulus_pa", "area_m2", "diameter_m",
+                                            "metallic_area_factor", "density_kg_m3", "prestress_pa",
+                                            "pretension_n", "breaking_load_n", "behaviour", "type",
+                                            NULL};
     static const char *const behaviours[] = {"cable", "truss", NULL};
     int i = 0;
     for (const cJSON *o = arr->child; o; o = o->next, i++) {
         char w[WHERE_MAX];
         snprintf(w, sizeof w, "%s: element_sets[%d]", file, i);
         if (!cJSON_IsObject(o)) return nc_error_set(err, 1, "%s: expected an object {...}", w);
+        /* the type first: it brings keys of its own */
+        const char *type_name;
+        if (nc_json_string_opt(o, w, "type", "cable", &type_name, err)) return -1;
+        fem_set_type st;
+        memset(&st, 0, sizeof st);
+        st.type = fem_element_find(type_name);
+        if (st.type < 0) {
+            char names[256];
+            return nc_error_set(err, 1, "%s.type: unknown element type \"%s\" (expected one of %s)", w,
+                                type_name, fem_element_names(names, sizeof names, ", "));
+        }
+        const fem_element_ops *ops = fem_element_type(st.type);
+        const char *keys[64];
+        int nk = 0;
+        for (int k = 0; base_keys[k]; k++) keys[nk++] = base_keys[k];
+        for (int k = 0; ops->keys && ops->keys[k] && nk < 63; k++) keys[nk++] = ops->keys[k];
+        keys[nk] = NULL;
         if (nc_json_check_keys(o, w, keys, err)) return -1;
+        if (ops->parse && ops->parse(o, w, sink, st.param, err)) return -1;
         fem_element_set set;
         memset(&set, 0, sizeof set);
         const char *name;
@@ -144,8 +163,12 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
             return nc_error_set(err, 1, "%s: give either prestress_pa or pretension_n, not both", w);
         double pretension = 0.0;
         if (nc_json_string_opt(o, w, "name", defname, &name, err) ||
-            nc_json_positive(o, w, "youngs_modulus_pa", &set.youngs_modulus_pa, err) ||
-            parse_area(o, w, sink, &set.area_m2, err) ||
+            (ops->uses_section ? nc_json_positive(o, w, "youngs_modulus_pa", &set.youngs_modulus_pa, err)
+                               : nc_json_number_range_opt(o, w, "youngs_modulus_pa", 0.0, 0.0, INFINITY,
+                                                          &set.youngs_modulus_pa, err)) ||
+            ((ops->uses_section || cJSON_GetObjectItemCaseSensitive(o, "area_m2") ||
+              cJSON_GetObjectItemCaseSensitive(o, "diameter_m")) &&
+             parse_area(o, w, sink, &set.area_m2, err)) ||
             nc_json_number_range_opt(o, w, "density_kg_m3", 0.0, 0.0, INFINITY, &set.density_kg_m3, err) ||
             nc_json_number_opt(o, w, "prestress_pa", 0.0, &set.prestress_pa, err) ||
             nc_json_number_opt(o, w, "pretension_n", 0.0, &pretension, err) ||
@@ -155,13 +178,15 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
         if (cJSON_GetObjectItemCaseSensitive(o, "breaking_load_n") && !(set.breaking_load_n > 0.0))
             return nc_error_set(err, 1, "%s.breaking_load_n: expected a number > 0, got 0", w);
         /* the force N of the prestress in the reference configuration: S_pre = N / A */
+        if (has_n && !(set.area_m2 > 0.0))
+            return nc_error_set(err, 1, "%s.pretension_n: needs area_m2 or diameter_m", w);
         if (has_n) set.prestress_pa = pretension / set.area_m2;
         if (strlen(name) >= FEM_NAME_MAX)
             return nc_error_set(err, 1, "%s.name: longer than %d characters", w, FEM_NAME_MAX - 1);
         if (fem_model_find_set(m, name) >= 0)
             return nc_error_set(err, 1, "%s.name: \"%s\" is used by an earlier set", w, name);
         double e = set.youngs_modulus_pa, rho = set.density_kg_m3, a = set.area_m2;
-        if (e < NC_PLAUSIBLE_MODULUS_MIN_PA || e > NC_PLAUSIBLE_MODULUS_MAX_PA)
+        if (ops->uses_section && (e < NC_PLAUSIBLE_MODULUS_MIN_PA || e > NC_PLAUSIBLE_MODULUS_MAX_PA))
             nc_warn(sink, "%s.youngs_modulus_pa: %g Pa is outside the plausible range 1e5..1e12 Pa "
                        "(steel rope about 1e11..2.1e11)", w, e);
         if (rho > 0.0 && (rho < NC_PLAUSIBLE_DENSITY_MIN || rho > NC_PLAUSIBLE_DENSITY_MAX))
@@ -170,7 +195,7 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
         if (fabs(set.prestress_pa) > PLAUSIBLE_PRESTRESS_MAX_PA)
             nc_warn(sink, "%s.%s: a prestress of %g Pa is above 2e9 Pa, more than rope steel "
                        "yields at", w, has_n ? "pretension_n" : "prestress_pa", set.prestress_pa);
-        if (set.breaking_load_n > 0.0) {
+        if (set.breaking_load_n > 0.0 && a > 0.0) {
             double strength = set.breaking_load_n / a, force = set.prestress_pa * a;
             if (strength < PLAUSIBLE_STRENGTH_MIN_PA || strength > PLAUSIBLE_STRENGTH_MAX_PA)
                 nc_warn(sink, "%s.breaking_load_n: %g N over the area %g m² is a strength of %g Pa, "
@@ -183,7 +208,9 @@ static int parse_sets(fem_model *m, const cJSON *root, const char *file, FILE *s
         }
         snprintf(set.name, sizeof set.name, "%s", name);
         set.behaviour = b == 0 ? FEM_CABLE : FEM_TRUSS;
-        if (fem_model_add_set(m, &set, err) < 0) return -1;
+        int index = fem_model_add_set(m, &set, err);
+        if (index < 0) return -1;
+        m->set_types[index] = st;
     }
     return 0;
 }

@@ -61,6 +61,10 @@ int fem_model_add_set(fem_model *m, const fem_element_set *set, nc_error *err)
     fem_element_set *grown = realloc(m->sets, (size_t)(m->n_sets + 1) * sizeof *grown);
     if (!grown) return nc_error_set(err, 1, "%s: out of memory", m->source);
     m->sets = grown;
+    fem_set_type *types = realloc(m->set_types, (size_t)(m->n_sets + 1) * sizeof *types);
+    if (!types) return nc_error_set(err, 1, "%s: out of memory", m->source);
+    m->set_types = types;
+    memset(&m->set_types[m->n_sets], 0, sizeof *types);
     m->sets[m->n_sets] = *set;
     return m->n_sets++;
 }
@@ -162,6 +166,58 @@ static const char *dof_name(int d)
     return d == 0 ? "x" : d == 1 ? "y" : "z";
 }
 
+/* Members of the element types: one per element, except a chain type's runs (consecutive
+ * elements of one set, each starting at the previous one's end node). */
+static int build_members(fem_model *m, nc_error *err)
+{
+    const int ne = m->n_elements;
+    free(m->member_first); free(m->member_of); free(m->history_offset);
+    m->member_first = malloc(((size_t)ne + 1) * sizeof *m->member_first);
+    m->member_of = malloc((size_t)ne * sizeof *m->member_of);
+    m->history_offset = malloc((size_t)ne * sizeof *m->history_offset);
+    if (!m->member_first || !m->member_of || !m->history_offset)
+        return nc_error_set(err, 1, "%s: out of memory", m->source);
+    for (int s = 0; s < m->n_sets; s++)
+        if (!fem_element_type(m->set_types[s].type))
+            return nc_error_set(err, 1, "%s: element_sets[%d]: unknown element type %d", m->source,
+                                s, m->set_types[s].type);
+    int nb = 0, hist = 0;
+    m->max_chain_nodes = 2;
+    for (int e = 0; e < ne; e++) {
+        const fem_element_ops *ops = fem_element_type(m->set_types[m->element_set[e]].type);
+        int extend = ops->chain && e > 0 && m->element_set[e - 1] == m->element_set[e] &&
+                     m->conn[2 * (e - 1) + 1] == m->conn[2 * e];
+        if (!extend) {
+            m->member_first[nb] = e;
+            m->history_offset[nb] = hist;
+            hist += ops->history_count;
+            nb++;
+        }
+        m->member_of[e] = nb - 1;
+        int nodes = e - m->member_first[nb - 1] + 2;
+        if (nodes > m->max_chain_nodes) m->max_chain_nodes = nodes;
+    }
+    m->member_first[nb] = ne;
+    m->n_members = nb;
+    m->history_count = hist;
+    /* a rope through a node twice would make its chain blocks overlap */
+    for (int b = 0; b < nb; b++) {
+        int first = m->member_first[b], count = m->member_first[b + 1] - first;
+        if (count < 2) continue;
+        for (int i = 0; i < count; i++)
+            for (int j = i + 1; j <= count; j++) {
+                int a = m->conn[2 * (first + i)];
+                int c = j < count ? m->conn[2 * (first + j)] : m->conn[2 * (first + count - 1) + 1];
+                if (a == c)
+                    return nc_error_set(err, 1, "%s: elements[%d..%d] (a %s of set \"%s\"): the rope passes node %d twice",
+                                        m->source, first, first + count - 1,
+                                        fem_element_type(m->set_types[m->element_set[first]].type)->name,
+                                        m->sets[m->element_set[first]].name, a);
+            }
+    }
+    return 0;
+}
+
 int fem_model_finalize(fem_model *m, nc_error *err)
 {
     if (m->n_sets < 1) return nc_error_set(err, 1, "%s: element_sets: at least one set is needed", m->source);
@@ -206,8 +262,12 @@ int fem_model_finalize(fem_model *m, nc_error *err)
         m->EA[e] = p->youngs_modulus_pa * p->area_m2;
         m->AS[e] = p->prestress_pa * p->area_m2;
         m->rhoA[e] = p->density_kg_m3 * p->area_m2;
-        m->is_cable[e] = p->behaviour == FEM_CABLE;
+        m->is_cable[e] = p->behaviour == FEM_CABLE && m->set_types[s].type == FEM_TYPE_CABLE;
         used[k] = used[l] = 1;
+    }
+    if (build_members(m, err)) {
+        free(used);
+        return -1;
     }
     for (int i = 0; i < m->n_nodes; i++)
         if (!used[i] && !(m->fixed[3 * i] && m->fixed[3 * i + 1] && m->fixed[3 * i + 2])) {
@@ -222,7 +282,8 @@ int fem_model_finalize(fem_model *m, nc_error *err)
         for (int i = 0; i < m->n_interface_sets; i++) in_set[m->interface_sets[i]] = 1;
     } else {
         int any = 0;
-        for (int s = 0; s < m->n_sets; s++) any |= (in_set[s] = m->sets[s].behaviour == FEM_CABLE);
+        for (int s = 0; s < m->n_sets; s++)
+            any |= (in_set[s] = m->sets[s].behaviour == FEM_CABLE && m->set_types[s].type == FEM_TYPE_CABLE);
         if (!any) memset(in_set, 1, (size_t)m->n_sets);
     }
     for (int i = 0; i < m->n_nodes; i++) used[i] = -1;
@@ -279,12 +340,13 @@ int fem_model_finalize(fem_model *m, nc_error *err)
 void fem_model_free(fem_model *m)
 {
     if (!m) return;
-    free(m->X); free(m->conn); free(m->element_set); free(m->sets);
+    free(m->X); free(m->conn); free(m->element_set); free(m->sets); free(m->set_types);
     for (int i = 0; i < m->n_node_sets; i++) free(m->node_sets[i].nodes);
     free(m->node_sets);
     free(m->fixed); free(m->u_prescribed); free(m->f_point);
     free(m->interface_sets); free(m->monitor_nodes);
     free(m->L0); free(m->EA); free(m->AS); free(m->rhoA); free(m->is_cable);
+    free(m->member_first); free(m->member_of); free(m->history_offset);
     free(m->iface_nodes); free(m->iface_conn);
     memset(m, 0, sizeof *m);
 }

@@ -3,12 +3,14 @@
  *
  * A model is filled by fem_input.c (from fem.json) or by hand (tests, benchmarks), then
  * fem_model_finalize() checks it and derives the per-element arrays used by the hot loops
- * (reference length, E·A, A·S_pre, ρ·A, cable flag) and the interface/monitor lists.
+ * (reference length, E·A, A·S_pre, ρ·A, cable flag), the members the element types work on
+ * (fem_element.h) with their history offsets, and the interface/monitor lists.
  * All arrays are flat (structure of arrays), node i has dofs 3i, 3i+1, 3i+2 (x, y, z).
  */
 #ifndef FEM_MODEL_H
 #define FEM_MODEL_H
 
+#include "fem_element.h"
 #include "nc_error.h"
 
 #define FEM_NAME_MAX 64
@@ -26,6 +28,13 @@ typedef struct fem_element_set {
     fem_behaviour behaviour;    /* cable: no compression; truss: keeps compression */
     double breaking_load_n;     /* minimum breaking force, reported and checked (0: not given) */
 } fem_element_set;
+
+/* The element type of a set (fem_element.h), kept beside fem_element_set so sets built by
+ * hand stay cables: zeroed = type 0, "cable". */
+typedef struct fem_set_type {
+    int type;                          /* registry index */
+    double param[FEM_ELEMENT_PARAMS];  /* the type's own parameters (its parse operation) */
+} fem_set_type;
 
 typedef struct fem_node_set {
     char name[FEM_NAME_MAX];
@@ -65,6 +74,7 @@ typedef struct fem_model {
     int *element_set;            /* [n_elements] index into sets */
     int n_sets;
     fem_element_set *sets;
+    fem_set_type *set_types;     /* [n_sets] (fem_model_add_set zeroes: cable) */
     int n_node_sets;
     fem_node_set *node_sets;     /* named node sets ("boundary", gmsh physical groups, ...) */
 
@@ -88,7 +98,16 @@ typedef struct fem_model {
     double *EA;                  /* E A */
     double *AS;                  /* A S_pre */
     double *rhoA;                /* rho A */
-    unsigned char *is_cable;
+    unsigned char *is_cable;     /* cable behaviour (posts: 0) */
+    /* members (fem_element.h): member b covers elements member_first[b] ..
+     * member_first[b+1] - 1; a two-node type has one element per member, a chain type the
+     * run of its set's consecutive elements that continue at the previous end node */
+    int n_members;
+    int *member_first;           /* [n_members + 1] */
+    int *member_of;              /* [n_elements] member of each element */
+    int max_chain_nodes;         /* nodes of the longest member */
+    int history_count;           /* length of fem_state.element_history */
+    int *history_offset;         /* [n_members] first history value of each member */
     int n_iface_nodes;
     int *iface_nodes;            /* model node index of each interface node */
     int n_iface_elements;

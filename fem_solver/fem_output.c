@@ -1,7 +1,6 @@
 /* fem_output — HDF5 results and the XDMF index ParaView opens (layout in fem_output.h). */
 #include "fem_output.h"
 
-#include "fem_element_cable.h"
 #include "nc_file.h"
 #include "nc_clock.h"
 
@@ -76,7 +75,11 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
                                        m->settings.type == FEM_STATIC ? "1" : "s", err) ||
              nc_h5_series_create_units(h, &o->mon_disp, "/monitor/displacement", NC_H5_F64, 3, row_p3, "m", err) ||
              nc_h5_series_create_units(h, &o->mon_vel, "/monitor/velocity", NC_H5_F64, 3, row_p3, "m/s", err) ||
+             (m->history_count > 0 &&
+              (nc_h5_series_create_units(h, &o->stroke, "/output/element_stroke", NC_H5_F64, 2, row_e, "m", err) ||
+               nc_h5_series_create_units(h, &o->dissipated, "/output/element_dissipated_energy", NC_H5_F64, 2, row_e, "J", err))) ||
              nc_h5_flush(h, err);
+    o->has_history = !rc && m->history_count > 0;
     free(support_dofs);
     return rc ? -1 : 0;
 }
@@ -98,6 +101,8 @@ static void close_series(fem_output *o)
     nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
                            &o->strain, &o->reaction, &o->mon_time, &o->mon_disp, &o->mon_vel};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
+    nc_h5_series_close(&o->stroke);       /* no-ops when the model has no element history */
+    nc_h5_series_close(&o->dissipated);
 }
 
 /* Closes without writing anything more (a reopen that failed). */
@@ -151,10 +156,12 @@ int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_err
         "/output/strain", "/output/reaction"};
     static const char *const mon_series[] = {"/monitor/time", "/monitor/displacement",
                                              "/monitor/velocity"};
-    for (int pass = 0; pass < 2; pass++)
-        for (int i = 0; i < (pass ? 3 : 9); i++) {
-            const char *name = pass ? mon_series[i] : out_series[i];
-            long have = rows_of(&o->h5, name), need = pass ? o->n_mon : o->n_out;
+    static const char *const history_series[] = {"/output/element_stroke",
+                                                 "/output/element_dissipated_energy"};
+    for (int pass = 0; pass < 3; pass++)
+        for (int i = 0; i < (pass == 2 ? (m->history_count > 0 ? 2 : 0) : pass ? 3 : 9); i++) {
+            const char *name = pass == 2 ? history_series[i] : pass ? mon_series[i] : out_series[i];
+            long have = rows_of(&o->h5, name), need = pass == 1 ? o->n_mon : o->n_out;
             if (have < need) {
                 if (have < 0) nc_error_set(err, 1, "%s: has no dataset %s to append to", path, name);
                 else nc_error_set(err, 1, "%s: dataset %s has %ld rows, the checkpoint needs %ld "
@@ -181,7 +188,11 @@ int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_err
              nc_h5_series_open(h, &o->mon_time, "/monitor/time", NC_H5_F64, 1, NULL, s, err) ||
              nc_h5_series_open(h, &o->mon_disp, "/monitor/displacement", NC_H5_F64, 3, row_p3, s, err) ||
              nc_h5_series_open(h, &o->mon_vel, "/monitor/velocity", NC_H5_F64, 3, row_p3, s, err) ||
+             (m->history_count > 0 &&
+              (nc_h5_series_open(h, &o->stroke, "/output/element_stroke", NC_H5_F64, 2, row_e, k, err) ||
+               nc_h5_series_open(h, &o->dissipated, "/output/element_dissipated_energy", NC_H5_F64, 2, row_e, k, err))) ||
              nc_h5_flush(h, err);
+    o->has_history = !rc && m->history_count > 0;
     if (rc) {
         discard(o);
         return -1;
@@ -222,28 +233,7 @@ void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, d
      * R = F_int(u) + M a + C v - lambda f_model - f_coupling, C = tau M + kappa K_T. */
     const fem_model *m = s->m;
     double *f = o->force;
-    const double *u = s->cur.u, *v = s->cur.v, *a = s->cur.a;
-    const double tau = m->tau_per_s, kappa = m->kappa_s;
-    for (int i = 0; i < 3 * m->n_nodes; i++) f[i] = -lambda * s->f_model[i] - s->f_coupling[i];
-    for (int e = 0; e < m->n_elements; e++) {
-        const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double d[3], fl[3], Kb[9];
-        int slack;
-        for (int c = 0; c < 3; c++) d[c] = m->X[l + c] + u[l + c] - m->X[k + c] - u[k + c];
-        fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], fl, Kb, &slack);
-        double m11, m12;
-        fem_cable_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
-        for (int c = 0; c < 3; c++) {
-            double kv = 0.0;
-            if (kappa != 0.0)
-                for (int j = 0; j < 3; j++) kv += Kb[3 * c + j] * (v[l + j] - v[k + j]);
-            f[l + c] += fl[c] + kappa * kv;
-            f[k + c] -= fl[c] + kappa * kv;
-            double wk = a[k + c] + tau * v[k + c], wl = a[l + c] + tau * v[l + c];
-            f[k + c] += m11 * wk + m12 * wl;
-            f[l + c] += m12 * wk + m11 * wl;
-        }
-    }
+    fem_analysis_node_balance(s, lambda, f);   /* every element type's forces */
     for (int i = 0; i < o->n_support; i++) {
         int node = o->support_nodes[i];
         for (int c = 0; c < 3; c++)
@@ -310,6 +300,12 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
         o->force[e] = (sqrt(len2) - m->L0[e]) / m->L0[e];
     }
     if (nc_h5_series_append(&o->strain, o->force, err)) return -1;
+    if (o->has_history) {
+        fem_analysis_element_history_output(s, o->force, NULL);
+        if (nc_h5_series_append(&o->stroke, o->force, err)) return -1;
+        fem_analysis_element_history_output(s, NULL, o->force);
+        if (nc_h5_series_append(&o->dissipated, o->force, err)) return -1;
+    }
     fem_output_reactions(o, s, lambda, o->buf);
     if (nc_h5_series_append(&o->reaction, o->buf, err)) return -1;
     if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;

@@ -11,6 +11,8 @@
  *   /output/strain [k,m] (engineering strain (l - L0)/L0 of each element from the reference
  *   geometry), /output/reaction [k,r,3] N (force the support exerts on the net at each
  *   support node: F_int + M a + C v - loads on the prescribed dofs, 0 on free dofs);
+ *   with element types that keep history (brakes): /output/element_stroke [k,m] m (plastic
+ *   stroke) and /output/element_dissipated_energy [k,m] J, 0 for the other elements;
  *   every step /monitor/time [s], /monitor/node_ids [p] i32, /monitor/displacement and
  *   /monitor/velocity [s,p,3]. /output/displacement holds the run's largest |u| as
  *   attributes max_magnitude (m), max_time (s) and max_node, over every monitored step.
@@ -31,6 +33,8 @@ typedef struct fem_output {
     nc_h5_file h5;
     nc_h5_series time, step, load, disp, vel, pos, axial, strain, reaction;
     nc_h5_series mon_time, mon_disp, mon_vel;
+    nc_h5_series stroke, dissipated;   /* only with element history (has_history) */
+    int has_history;
     char dir[512];
     int n_out;         /* output rows written (/output series) */
     long n_mon;        /* monitor rows written (/monitor series) */

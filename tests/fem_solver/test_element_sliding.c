@@ -1,0 +1,232 @@
+/* test_element_sliding — the sliding cable (fem_element_sliding.c): one 16 mm steel rope
+ * (EA = 1.26e7 N, pretension 10 kN) from an anchor over a fixed pulley, through a free
+ * shackle carrying 20 kN, over a second pulley to a second anchor. Frictionless: one force N
+ * in every segment, the shackle settles where both rope halves make the same angle with the
+ * horizontal, 2 N sin(theta) = W, and N = EA (L - L0)/L0 + N_pre on the total length; the
+ * closed form (a scalar equation in N, solved here by bisection) gives N, theta and the
+ * shackle's position. The pulleys' reactions are N times the sum of the unit vectors to their
+ * neighbours. The element tangent and the assembled tangent of a rope through two free
+ * shackles (non-neighbour nodes, coupled by the dense material part) match central
+ * differences. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+#include "../nc_test_assert.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "../../fem_solver/fem_analysis.h"
+#include "../../fem_solver/fem_input.h"
+#include "fem_test_util.h"
+
+#define EA_N 1.26e7
+#define NPRE_N 1e4
+#define W_N 1.2e4
+#define Z1 2.0      /* pulley heights (m); the pulleys are 5 m apart */
+#define Z2 1.0
+#define THETA0 (25.0 * M_PI / 180.0)
+
+/* anchor A (0,0,3), pulley P1 (1,0,2), shackle M, pulley P2 (6,0,1), anchor B (7,0,2); M starts
+ * 0.15 m beside the point where the rope halves make 25 degrees with the horizontal (the
+ * equilibrium for a load of 2 N_pre sin 25 = 8.45 kN); the load is 12 kN */
+static const char *pulley_json(void)
+{
+    static char text[2048];
+    /* 0.15 m off along x, so the shackle has to slide back */
+    double z0 = 0.5 * (Z1 + Z2) - 2.5 * tan(THETA0), x0 = 1.0 + (Z1 - z0) / tan(THETA0) + 0.15;
+    snprintf(text, sizeof text,
+             "{\"nodes\": [[0, 0, 3], [1, 0, %g], [%.17g, 0, %.17g], [6, 0, %g], [7, 0, 2]],\n"
+             " \"elements\": [[0, 1], [1, 2], [2, 3], [3, 4]],\n"
+             " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
+             "   \"area_m2\": 1.26e-4, \"pretension_n\": 10000}],\n"
+             " \"supports\": [{\"nodes\": [0, 1, 3, 4], \"dofs\": \"xyz\"}],\n"
+             " \"point_loads\": [{\"nodes\": [2], \"force_n\": [0, 0, %g]}],\n"
+             " \"gravity_m_s2\": [0, 0, 0],\n"
+             " \"analysis\": {\"type\": \"static\", \"max_iterations\": 30}}\n",
+             Z1, x0, z0, Z2, -W_N);
+    return text;
+}
+
+/* the closed form: the middle part spans 5 m between the pulleys at equal angles theta,
+ * L = 2 sqrt 2 + 5 / cos(theta), sin(theta) = W / (2 N), N = EA (L - L0)/L0 + N_pre */
+static double closed_form_N(double L0)
+{
+    double lo = W_N / 2.0 * 1.0000001, hi = 1e7;
+    for (int it = 0; it < 200; it++) {
+        double N = 0.5 * (lo + hi), th = asin(W_N / (2.0 * N));
+        double L = 2.0 * sqrt(2.0) + 5.0 / cos(th);
+        double g = EA_N * (L - L0) / L0 + NPRE_N - N;
+        if (g > 0) lo = N; else hi = N;
+    }
+    return 0.5 * (lo + hi);
+}
+
+static void test_pulley_chain(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    if (fem_input_load(fem_test_write("pulley.json", pulley_json()), &m, &err)) fail_msg("%s", err.message);
+    assert_int_equal(m.n_members, 1);
+    assert_int_equal(m.max_chain_nodes, 5);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    int max_it = 0;
+    for (int k = 1; k <= 4; k++) {
+        if (fem_analysis_static(&s, 0.25 * k, &err)) fail_msg("%s", err.message);
+        max_it = s.stats.iterations > max_it ? s.stats.iterations : max_it;
+    }
+    double x[15], L = 0, L0 = 0;
+    for (int i = 0; i < 15; i++) x[i] = m.X[i] + s.cur.u[i];
+    double e[4][3], len[4];
+    for (int g = 0; g < 4; g++) {
+        double l2 = 0;
+        for (int c = 0; c < 3; c++) {
+            e[g][c] = x[3 * (g + 1) + c] - x[3 * g + c];
+            l2 += e[g][c] * e[g][c];
+        }
+        len[g] = sqrt(l2);
+        for (int c = 0; c < 3; c++) e[g][c] /= len[g];
+        L += len[g];
+        L0 += m.L0[g];
+    }
+    double N = s.axial[0];
+    double N_cf = closed_form_N(L0), th = asin(W_N / (2.0 * N_cf));
+    /* shackle M: l1 sin = Z1 - z, l2 sin = Z2 - z, (l1 + l2) cos = 5 */
+    double zM = 0.5 * (Z1 + Z2) - 2.5 * tan(th), xM = 1.0 + (Z1 - zM) / tan(th);
+    print_message("N = %.3f N (closed form %.3f), theta %.4f rad, shackle at (%.5f, %.5f) "
+                  "(closed form (%.5f, %.5f)), L = %.6f m, L0 = %.6f m, at most %d Newton "
+                  "iterations\n", N, N_cf, th, x[6], x[8], xM, zM, L, L0, max_it);
+    for (int g = 1; g < 4; g++) assert_near_rel(s.axial[g], N, 1e-14);   /* one force */
+    assert_near_rel(N, EA_N * (L - L0) / L0 + NPRE_N, 1e-12);          /* total-length strain */
+    assert_near_rel(N, N_cf, 1e-8);
+    assert_near(x[6], xM, 1e-8);
+    assert_near(x[8], zM, 1e-8);
+    assert_true(fabs(x[6] - m.X[6]) > 0.1);   /* the shackle slid along the rope */
+    /* frictionless: equal angles on both sides of the shackle */
+    assert_near(-e[1][2], e[2][2], 1e-9);
+    /* node forces: the support of every chain node takes -N (sum of unit vectors to its
+     * neighbours); the shackle's balances the load */
+    double f[15];
+    fem_analysis_node_balance(&s, 1.0, f);
+    for (int j = 0; j < 5; j++)
+        for (int c = 0; c < 3; c++) {
+            double to_prev = j > 0 ? -e[j - 1][c] : 0.0, to_next = j < 4 ? e[j][c] : 0.0;
+            double expect = j == 2 ? 0.0 : -N * (to_prev + to_next);
+            assert_near(f[3 * j + c], expect, 1e-9 * N);
+        }
+    assert_true(max_it <= 8);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
+/* anchor, shackle, pulley, shackle, anchor: two free nodes that are not neighbours */
+static const char *const two_shackles_json =
+    "{\"nodes\": [[0, 0, 0], [2, 0.3, -0.5], [4, 0, 0.5], [6, -0.2, -0.3], [8, 0, 0]],\n"
+    " \"elements\": [[0, 1], [1, 2], [2, 3], [3, 4]],\n"
+    " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
+    "   \"area_m2\": 1.26e-4, \"pretension_n\": 10000, \"density_kg_m3\": 7850}],\n"
+    " \"supports\": [{\"nodes\": [0, 2, 4], \"dofs\": \"xyz\"}],\n"
+    " \"gravity_m_s2\": [0, 0, 0],\n"
+    " \"analysis\": {\"type\": \"static\"}}\n";
+
+/* The assembled step tangent (c_m M + c_k K_T through the pattern, the two shackles'
+ * non-neighbour blocks included) against central differences of the step residual. */
+static void test_two_shackles(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    if (fem_input_load(fem_test_write("shackles.json", two_shackles_json), &m, &err))
+        fail_msg("%s", err.message);
+    m.settings.type = FEM_DYNAMIC;
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(s.n_chain_pairs, 6);
+    const int nd = s.ndof, ne = s.neq;
+    assert_int_equal(ne, 6);
+    double u[15], r[15], rp[15], rm[15], x[6], y[6], kmax = 0;
+    /* a general state, the shackles pulled down 5 cm so the rope is taut */
+    for (int i = 0; i < nd; i++) u[i] = 0.003 * sin(1.3 * i);
+    u[5] -= 0.05;
+    u[11] -= 0.05;
+    double K[36];
+    for (int q = 0; q < ne; q++) {
+        assert_int_equal(fem_analysis_step_residual(&s, 1e-3, u, r, &err), 0);
+        memset(x, 0, sizeof x);
+        x[q] = 1;
+        fem_sparse_matvec(&s.K, x, y);
+        for (int p = 0; p < ne; p++) {
+            K[6 * p + q] = y[p];
+            kmax = fmax(kmax, fabs(y[p]));
+        }
+    }
+    for (int q = 0; q < ne; q++) {
+        int d = s.dof_of_eq[q];
+        double h = 1e-7;
+        u[d] += h;
+        fem_analysis_step_residual(&s, 1e-3, u, rp, &err);
+        u[d] -= 2 * h;
+        fem_analysis_step_residual(&s, 1e-3, u, rm, &err);
+        u[d] += h;
+        for (int p = 0; p < ne; p++)
+            assert_near(K[6 * p + q], -(rp[s.dof_of_eq[p]] - rm[s.dof_of_eq[p]]) / (2 * h), 1e-7 * kmax);
+    }
+    /* the shackles (nodes 1 and 3) are coupled: the rope's force depends on both */
+    double coupling = 0;
+    for (int p = 0; p < 3; p++)
+        for (int q = 3; q < 6; q++) coupling = fmax(coupling, fabs(K[6 * p + q]));
+    print_message("largest shackle-shackle entry %.3e N/m of %.3e N/m\n", coupling, kmax);
+    assert_true(coupling > 1e-2 * kmax);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
+/* chain tangent against central differences of the chain force, every entry */
+static void test_tangent(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    if (fem_input_load(fem_test_write("shackles2.json", two_shackles_json), &m, &err))
+        fail_msg("%s", err.message);
+    const fem_element_ops *ops = fem_element_type(m.set_types[0].type);
+    double u[15];
+    for (int i = 0; i < 15; i++) u[i] = 0.01 * sin(1.7 * i + 0.3);
+    fem_element_ctx c = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 4, u, NULL};
+    double f[15], K[225], fp[15], fm[15], ax[4];
+    assert_int_equal(ops->chain_response(&c, f, K, ax), 0);
+    double kmax = 0;
+    for (int i = 0; i < 225; i++) kmax = fmax(kmax, fabs(K[i]));
+    for (int j = 0; j < 15; j++) {
+        double h = 1e-7;
+        u[j] += h;
+        ops->chain_response(&c, fp, NULL, ax);
+        u[j] -= 2 * h;
+        ops->chain_response(&c, fm, NULL, ax);
+        u[j] += h;
+        for (int i = 0; i < 15; i++) {
+            assert_near(K[15 * i + j], (fp[i] - fm[i]) / (2 * h), 1e-6 * kmax);
+            assert_near(K[15 * i + j], K[15 * j + i], 1e-9 * kmax);   /* symmetric */
+        }
+    }
+    /* slack: a shortened rope carries nothing */
+    for (int i = 0; i < 15; i++) u[i] = -0.2 * m.X[i];
+    assert_int_equal(ops->chain_response(&c, f, K, ax), 1);
+    assert_near(ax[0], 0.0, 0.0);
+    fem_model_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pulley_chain),
+        cmocka_unit_test(test_two_shackles),
+        cmocka_unit_test(test_tangent),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
