@@ -39,14 +39,8 @@ coupler's last state and status line).
   --quiet                 print only warnings, errors and the verdict
   --stall-limit SECONDS   stop the coupler as stalled when its heartbeat is older than this
                           (default 75, or $NC_STALL_LIMIT_S)
-  --resume DIR            continue a stopped (Ctrl-C) or crashed run in DIR from its last
-                          complete checkpoint (DIR/checkpoint/latest.json; coupler.json
-                          "checkpoint": {"interval_s": ...} and participants that announce
-                          'checkpoint'): no CASE_DIR, no --set, the inputs already in DIR;
-                          the solvers are started as before (the programs of the first run
-                          unless --fem-program/--dem-program say otherwise), the coupler with
-                          --resume. The logs of the earlier run are kept as *.log.1, *.log.2.
-                          The continued results are identical to an uninterrupted run's.
+  --resume DIR            continue a stopped or crashed run in DIR from its last complete
+                          checkpoint (coupler.json "checkpoint"; old logs kept as *.log.N)
 Progress: on a terminal one live status line (time, remaining wall time at the recent rate,
 contact, rock speed/energy, net deflection, iterations) under the coupler's messages;
 otherwise the coupler's log as it grows, with a plain status line every progress_interval s.
@@ -57,9 +51,9 @@ $NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
 or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged" /
 "accept_energy_growth": true, still reported as NOT reliable); 1 a program failed (named,
-the others stopped) or stalled; 2 bad arguments or case (or --resume DIR without a complete
-checkpoint); 130 stopped by the user (Ctrl-C or
-SIGTERM), all three programs stopped, the results so far readable.
+the others stopped) or stalled; 2 bad arguments or case, or --resume DIR without a complete
+checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all three programs stopped, the
+results so far readable.
 EOF
 }
 
