@@ -115,6 +115,22 @@ static int parse_timeouts(const cJSON *root, const char *where, cpl_config *c, n
                ? -1 : 0;
 }
 
+/* checkpoint: interval_s, simulated time between checkpoints (absent or 0: none) */
+static int parse_checkpoint(const cJSON *root, const char *where, cpl_loop_settings *s,
+                            nc_error *err)
+{
+    const cJSON *obj = NULL;
+    if (nc_json_object_opt(root, where, "checkpoint", &obj, err)) return -1;
+    if (!obj) return 0;
+    char path[512];
+    nc_json_path(path, sizeof path, where, "checkpoint");
+    static const char *const keys[] = {"interval_s", NULL};
+    return nc_json_check_keys(obj, path, keys, err) ||
+           nc_json_number_range_opt(obj, path, "interval_s", s->checkpoint_interval_s, 0.0,
+                                    1e12, &s->checkpoint_interval_s, err)
+               ? -1 : 0;
+}
+
 static int parse_output(const cJSON *root, const char *where, cpl_config *c, nc_error *err)
 {
     const cJSON *obj = NULL;
@@ -139,7 +155,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
-        "verify_restore", "timeouts", "output", "comment", NULL};
+        "verify_restore", "timeouts", "output", "checkpoint", "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -181,7 +197,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,
                          err) ||
         parse_timeouts(root, where, c, err) ||
-        parse_output(root, where, c, err))
+        parse_output(root, where, c, err) ||
+        parse_checkpoint(root, where, s, err))
         return -1;
     s->scheme = (cpl_scheme)scheme;
     s->on_max_iterations = (cpl_maxit_policy)policy;

@@ -1,9 +1,11 @@
 /* cpl_history — coupling.h5 and iterations.log, written step by step and flushed. */
 #include "cpl_history.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+#include <unistd.h>
 
 /* /energy/<name> datasets in the order of energy_values() */
 static const char *const energy_names[CPL_HISTORY_ENERGY_SERIES] = {
@@ -21,25 +23,71 @@ static void energy_values(const cpl_energy_record *e, double *v)
     memcpy(v, all, sizeof all);
 }
 
+/* a new series, or (resuming) the existing one cut back to h->keep rows */
 static int series(cpl_history *h, nc_h5_series *s, const char *path, nc_h5_type type, int cols,
                   const char *units, nc_error *err)
 {
     hsize_t row[1] = {(hsize_t)cols};
+    if (h->resuming)
+        return nc_h5_series_open(&h->h5, s, path, type, cols > 1 ? 2 : 1, cols > 1 ? row : NULL,
+                                 h->keep, err);
     return nc_h5_series_create_units(&h->h5, s, path, type, cols > 1 ? 2 : 1,
                                      cols > 1 ? row : NULL, units, err);
 }
+
+static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *s,
+                      int write_iterations, nc_error *err);
 
 int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s,
                      int write_iterations, nc_error *err)
 {
     memset(h, 0, sizeof *h);
+    return open_files(h, dir, s, write_iterations, err);
+}
+
+int cpl_history_resume(cpl_history *h, const char *dir, const cpl_loop_settings *s,
+                       int write_iterations, nc_error *err)
+{
+    cpl_history marks = *h;
+    memset(h, 0, sizeof *h);
+    h->mark_steps = marks.mark_steps;
+    h->mark_iterations = marks.mark_iterations;
+    h->mark_rejections = marks.mark_rejections;
+    h->mark_log_bytes = marks.mark_log_bytes;
+    h->energy_warned = marks.energy_warned;
+    h->resuming = 1;
+    return open_files(h, dir, s, write_iterations, err);
+}
+
+void cpl_history_mark(cpl_history *h)
+{
+    if (!h->open) return;
+    h->mark_steps = (long)nc_h5_series_rows(&h->s_time);
+    h->mark_iterations = (long)nc_h5_series_rows(&h->i_step);
+    h->mark_rejections = (long)nc_h5_series_rows(&h->r_step);
+    h->mark_log_bytes = h->log ? ftell(h->log) : 0;
+}
+
+void cpl_history_checkpoint_entries(cpl_history *h, cpl_ckpt_table *t)
+{
+    cpl_ckpt_long(t, "history", "steps_rows", &h->mark_steps);
+    cpl_ckpt_long(t, "history", "iterations_rows", &h->mark_iterations);
+    cpl_ckpt_long(t, "history", "rejections_rows", &h->mark_rejections);
+    cpl_ckpt_long(t, "history", "log_bytes", &h->mark_log_bytes);
+    cpl_ckpt_long(t, "history", "energy_warned", &h->energy_warned);
+}
+
+static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *s,
+                      int write_iterations, nc_error *err)
+{
     char path[2048];
     snprintf(path, sizeof path, "%s/coupling.h5", dir);
-    if (nc_h5_create(&h->h5, path, err)) return -1;
+    if (h->resuming ? nc_h5_open(&h->h5, path, err) : nc_h5_create(&h->h5, path, err)) return -1;
     h->open = 1;
     h->write_iterations = write_iterations;
     /* the residual is a scaled norm of the relaxed quantity */
     const char *res_units = s->relaxed == CPL_RELAXED_FORCE ? "N" : "m, m/s";
+    h->keep = (hsize_t)h->mark_steps;
     if (series(h, &h->s_time, "/steps/time", NC_H5_F64, 1, "s", err) ||
         series(h, &h->s_dt, "/steps/dt", NC_H5_F64, 1, "s", err) ||
         series(h, &h->s_iterations, "/steps/iterations", NC_H5_I32, 1, "1", err) ||
@@ -50,22 +98,26 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         series(h, &h->s_near, "/steps/near_interface", NC_H5_I32, 1, "1", err) ||
         series(h, &h->s_gap, "/steps/min_gap", NC_H5_F64, 1, "m", err) ||
         series(h, &h->s_rejected, "/steps/rejected", NC_H5_I32, 1, "1", err) ||
-        series(h, &h->r_step, "/rejections/step", NC_H5_I32, 1, "1", err) ||
+        series(h, &h->e_above, "/energy/above", NC_H5_I32, 1, "1", err))
+        goto fail;
+    h->keep = (hsize_t)h->mark_rejections;
+    if (series(h, &h->r_step, "/rejections/step", NC_H5_I32, 1, "1", err) ||
         series(h, &h->r_attempt, "/rejections/attempt", NC_H5_I32, 1, "1", err) ||
         series(h, &h->r_time, "/rejections/time", NC_H5_F64, 1, "s", err) ||
         series(h, &h->r_dt, "/rejections/dt", NC_H5_F64, 1, "s", err) ||
         series(h, &h->r_next_dt, "/rejections/next_dt", NC_H5_F64, 1, "s", err) ||
         series(h, &h->r_iterations, "/rejections/iterations", NC_H5_I32, 1, "1", err) ||
         series(h, &h->r_residual, "/rejections/residual", NC_H5_F64, 1, res_units, err) ||
-        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, "1", err) ||
-        series(h, &h->e_above, "/energy/above", NC_H5_I32, 1, "1", err))
+        series(h, &h->r_reason, "/rejections/reason", NC_H5_I32, 1, "1", err))
         goto fail;
+    h->keep = (hsize_t)h->mark_steps;
     for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) {
         char name[64];
         snprintf(name, sizeof name, "/energy/%s", energy_names[k]);
         if (series(h, &h->e_series[k], name, NC_H5_F64, 1, "J", err))
             goto fail;
     }
+    h->keep = (hsize_t)h->mark_iterations;
     if (write_iterations &&
         (series(h, &h->i_step, "/iterations/step", NC_H5_I32, 1, "1", err) ||
          series(h, &h->i_iteration, "/iterations/iteration", NC_H5_I32, 1, "1", err) ||
@@ -89,12 +141,25 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
         nc_h5_flush(&h->h5, err))
         goto fail;
     snprintf(path, sizeof path, "%s/iterations.log", dir);
-    h->log = fopen(path, "w");
+    if (h->resuming) {
+        /* the lines after the checkpoint go; later ones are appended */
+        if (truncate(path, (off_t)h->mark_log_bytes) != 0) {
+            nc_error_set(err, 1, "%s: cannot cut the iterations log back to the checkpoint "
+                         "(%ld bytes): %s", path, h->mark_log_bytes, strerror(errno));
+            goto fail;
+        }
+        h->log = fopen(path, "a");
+    } else {
+        h->log = fopen(path, "w");
+    }
     if (!h->log) {
-        nc_error_set(err, 1, "%s: cannot create the iterations log", path);
+        nc_error_set(err, 1, "%s: cannot %s the iterations log", path,
+                     h->resuming ? "reopen" : "create");
         goto fail;
     }
-    fprintf(h->log, "# step time iterations converged residual dt rejected created_J input_J\n");
+    if (!h->resuming)
+        fprintf(h->log, "# step time iterations converged residual dt rejected created_J "
+                "input_J\n");
     fflush(h->log);
     return 0;
 fail:

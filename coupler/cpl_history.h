@@ -41,11 +41,27 @@ typedef struct cpl_history {
     long energy_warned;         /* energy-created lines written to the log */
     FILE *log;
     int open;
+    /* what the files held at the last checkpoint (cpl_history_mark), restored by
+     * cpl_history_resume */
+    long mark_steps, mark_iterations, mark_rejections, mark_log_bytes;
+    /* resuming: series are opened and cut back to the marks instead of created */
+    int resuming;
+    hsize_t keep;
 } cpl_history;
 
 /* Creates both files in `dir` (which must exist). */
 int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s,
                      int write_iterations, nc_error *err);
+/* Checkpoint: records the rows of each group and the length of the log in the marks
+ * (call it after the step's row is written), and adds the marks and energy_warned to a
+ * checkpoint table (the same entries are loaded into a fresh, zeroed cpl_history). */
+void cpl_history_mark(cpl_history *h);
+void cpl_history_checkpoint_entries(cpl_history *h, cpl_ckpt_table *t);
+/* Resume: reopens both files of `dir` as they were at the checkpoint whose marks h holds
+ * (loaded with cpl_history_checkpoint_entries): every series cut back to its rows, the log
+ * truncated to its length; later rows are appended. */
+int cpl_history_resume(cpl_history *h, const char *dir, const cpl_loop_settings *s,
+                       int write_iterations, nc_error *err);
 int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_error *err);
 int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err);
 int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *err);

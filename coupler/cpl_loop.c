@@ -36,6 +36,11 @@ struct cpl_loop {
     cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
     cpl_timing timing;
     cpl_energy energy;
+    long next_checkpoint;   /* the next checkpoint is at start + this × interval */
+    int resume_pending;     /* loaded from a checkpoint: RESUME before the first step */
+    char resume_name[64];
+    double fingerprint[5];  /* checkpoint: settings a resumed run must share (see
+                               cpl_loop_resumed) */
 };
 
 void cpl_loop_settings_default(cpl_loop_settings *s)
@@ -62,6 +67,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     cpl_energy_settings_default(&s->energy);
     s->interface_jacobian = 1;
     s->verify_restore = 1;
+    s->checkpoint_interval_s = 0.0;
 }
 
 int cpl_jacobian_set(cpl_jacobian *j, size_t n, const int32_t *nodes, const double *stiffness,
@@ -134,6 +140,9 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (!(s->energy.tol_abs_j >= 0.0) || !isfinite(s->energy.tol_abs_j))
         return nc_error_set(err, 1, "%s: energy_tolerance_abs_j must be a finite number >= 0, "
                             "got %g", where, s->energy.tol_abs_j);
+    if (!(s->checkpoint_interval_s >= 0.0) || !isfinite(s->checkpoint_interval_s))
+        return nc_error_set(err, 1, "%s: checkpoint.interval_s must be a finite number > 0 "
+                            "(or 0: no checkpoints), got %g", where, s->checkpoint_interval_s);
     if (s->grow_after < 1)
         return nc_error_set(err, 1, "%s: step_control.grow_after must be >= 1, got %d", where,
                             s->grow_after);
@@ -177,6 +186,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->timing.solver_dem_s = NAN;
     L->timing.min_dt_s = INFINITY;
     cpl_energy_init(&L->energy, &s->energy);
+    L->next_checkpoint = 1;
     *out = L;
     return 0;
 oom:
@@ -223,6 +233,139 @@ const double *cpl_loop_force(const cpl_loop *L) { return L->f; }
 double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
 const cpl_energy *cpl_loop_energy(const cpl_loop *L) { return &L->energy; }
 int cpl_loop_uses_jacobian(const cpl_loop *L) { return L->use_jacobian; }
+long cpl_loop_step(const cpl_loop *L) { return L->step; }
+
+/* ---- checkpoint and resume ------------------------------------------------------------ */
+
+_Static_assert(sizeof(int) == sizeof(int32_t), "Jacobian node ids are saved as int");
+
+int cpl_loop_checkpoints_on(const cpl_loop *L, const cpl_participant *fem,
+                            const cpl_participant *dem)
+{
+    return L->s.checkpoint_interval_s > 0.0 && fem->checkpoint && fem->resume &&
+           dem->checkpoint && dem->resume;
+}
+
+static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
+{
+    fp[0] = s->dt_s;
+    fp[1] = (double)s->scheme;
+    fp[2] = (double)s->relaxed;
+    fp[3] = s->tol_abs;
+    fp[4] = (double)n3;
+}
+
+static void energy_report_entries(cpl_ckpt_table *t, const char *prefix, cpl_energy_report *r)
+{
+    cpl_ckpt_int(t, prefix, "valid", &r->valid);
+    double *v[] = {&r->kinetic_j, &r->elastic_j, &r->potential_j, &r->interface_work_j,
+                   &r->external_work_j, &r->dissipated_j};
+    const char *names[] = {"kinetic", "elastic", "potential", "interface_work",
+                           "external_work", "dissipated"};
+    for (int i = 0; i < 6; i++) cpl_ckpt_f64(t, prefix, names[i], v[i], 1);
+}
+
+void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
+{
+    const char *p = "loop";
+    const size_t n3 = L->n3;
+    fill_fingerprint(&L->s, n3, L->fingerprint);
+    cpl_ckpt_f64(t, p, "settings", L->fingerprint, 5);
+    /* where the run is and the step control */
+    cpl_ckpt_f64(t, p, "time", &L->time_s, 1);
+    cpl_ckpt_long(t, p, "step", &L->step);
+    cpl_ckpt_int(t, p, "last_near", &L->last_near);
+    cpl_ckpt_int(t, p, "level", &L->level);
+    cpl_ckpt_int(t, p, "converged_run", &L->converged_run);
+    cpl_ckpt_f64(t, p, "grid_origin", &L->grid_origin_s, 1);
+    cpl_ckpt_long(t, p, "next_checkpoint", &L->next_checkpoint);
+    /* the accepted interface state (the predictor's input) and the work vectors of the last
+     * iteration (overwritten before use; saved so that nothing is left to chance) */
+    struct { const char *name; double *v; size_t n; } vec[] = {
+        {"u", L->u, n3}, {"v", L->v, n3}, {"f", L->f, n3}, {"u_in", L->u_in, n3},
+        {"v_in", L->v_in, n3}, {"f_dem", L->f_dem, n3}, {"f_in", L->f_in, n3},
+        {"u_out", L->u_out, n3}, {"v_out", L->v_out, n3}, {"r", L->r, n3},
+        {"check0", L->check0, n3}, {"check1", L->check1, n3}, {"x_in", L->x_in, L->nx},
+        {"x_out", L->x_out, L->nx}};
+    for (size_t i = 0; i < sizeof vec / sizeof *vec; i++)
+        cpl_ckpt_f64(t, p, vec[i].name, vec[i].v, vec[i].n);
+    /* the restore verification is done once per run, not again after a resume */
+    cpl_ckpt_int(t, p, "verified_fem", &L->verified_fem);
+    cpl_ckpt_int(t, p, "verified_dem", &L->verified_dem);
+    /* the DEM's linearisation of the last iteration */
+    cpl_ckpt_size(t, p, "jacobian_blocks", &L->jac.n_blocks);
+    cpl_ckpt_int(t, p, "jacobian_has_damping", &L->jac.has_damping);
+    cpl_ckpt_add(t, p, "jacobian_nodes", CPL_CKPT_INT, L->jac.nodes, 2 * L->jac.n_blocks);
+    cpl_ckpt_f64(t, p, "jacobian_stiffness", L->jac.stiffness, 9 * L->jac.n_blocks);
+    cpl_ckpt_f64(t, p, "jacobian_damping", L->jac.damping, 9 * L->jac.n_blocks);
+    /* the summary's counters (the wall-clock ones too: they keep adding up) */
+    cpl_timing *tm = &L->timing;
+    const char *q = "timing";
+    cpl_ckpt_f64(t, q, "total", &tm->total_s, 1);
+    cpl_ckpt_f64(t, q, "wait_fem", &tm->wait_fem_s, 1);
+    cpl_ckpt_f64(t, q, "wait_dem", &tm->wait_dem_s, 1);
+    cpl_ckpt_f64(t, q, "solver_fem", &tm->solver_fem_s, 1);
+    cpl_ckpt_f64(t, q, "solver_dem", &tm->solver_dem_s, 1);
+    cpl_ckpt_long(t, q, "fem_solves", &tm->fem_solves);
+    cpl_ckpt_long(t, q, "dem_solves", &tm->dem_solves);
+    cpl_ckpt_long(t, q, "steps", &tm->steps);
+    cpl_ckpt_long(t, q, "iterations", &tm->iterations);
+    cpl_ckpt_long(t, q, "unconverged_steps", &tm->unconverged_steps);
+    cpl_ckpt_long(t, q, "rejected_attempts", &tm->rejected_attempts);
+    cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
+    cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
+    /* the energy balance and guard */
+    cpl_energy *e = &L->energy;
+    const char *r = "energy";
+    cpl_ckpt_int(t, r, "started", &e->started);
+    cpl_ckpt_int(t, r, "available", &e->available);
+    double *ev[] = {&e->e0_j, &e->sum_mismatch_j, &e->sum_fem_diss_j, &e->sum_dem_diss_j,
+                    &e->sum_ext_j, &e->input_j, &e->created_j, &e->closure_j,
+                    &e->first_time_s, &e->first_created_j, &e->first_limit_j,
+                    &e->max_excess_j};
+    const char *en[] = {"e0", "sum_mismatch", "sum_fem_dissipated", "sum_dem_dissipated",
+                        "sum_external", "input", "created", "closure", "first_time",
+                        "first_created", "first_limit", "max_excess"};
+    for (size_t i = 0; i < sizeof ev / sizeof *ev; i++) cpl_ckpt_f64(t, r, en[i], ev[i], 1);
+    cpl_ckpt_long(t, r, "above_steps", &e->above_steps);
+    cpl_ckpt_long(t, r, "first_step", &e->first_step);
+    energy_report_entries(t, "energy/fem_last", &e->fem_last);
+    if (L->relax) cpl_relax_checkpoint_entries(L->relax, t, "relax");
+}
+
+int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
+{
+    long blocks = 0;
+    if (cpl_ckpt_read_long(path, "/loop/jacobian_blocks", &blocks, err)) return -1;
+    if (blocks < 0 || blocks > 100000000L)
+        return nc_error_set(err, 1, "%s: /loop/jacobian_blocks = %ld is not a block count", path,
+                            blocks);
+    size_t n = (size_t)blocks;
+    int32_t *nodes = calloc(2 * n + 1, sizeof *nodes);
+    double *zeros = calloc(9 * n + 1, sizeof *zeros);
+    int rc = nodes && zeros ? cpl_jacobian_set(&L->jac, n, nodes, zeros, zeros, err)
+                            : nc_error_set(err, 1, "%s: out of memory for %zu Jacobian blocks",
+                                           path, n);
+    free(nodes);
+    free(zeros);
+    return rc;
+}
+
+int cpl_loop_resumed(cpl_loop *L, const char *name, const char *path, nc_error *err)
+{
+    double now[5];
+    fill_fingerprint(&L->s, L->n3, now);
+    const char *what[5] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
+                           "interface dofs"};
+    for (int i = 0; i < 5; i++)
+        if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) != 0)
+            return nc_error_set(err, 1, "%s: the checkpoint was written with %s = %.17g, this "
+                                "run has %.17g: a run resumes with the settings it started "
+                                "with", path, what[i], L->fingerprint[i], now[i]);
+    snprintf(L->resume_name, sizeof L->resume_name, "%s", name);
+    L->resume_pending = 1;
+    return 0;
+}
 
 /* ---- calls into the participants: timing, interruption, error context ----------------- */
 
@@ -290,6 +433,40 @@ static int do_accept(run_ctx *c, const cpl_participant *p, const cpl_call *call)
 static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *call,
                           const double *in0, const double *in1, const double *out0,
                           const double *out1);
+
+static int do_checkpoint(run_ctx *c, const cpl_participant *p, const cpl_call *call,
+                         const char *name, int resume)
+{
+    if (check_stop(c, call)) return -1;
+    double t0 = nc_clock_now_s();
+    int rc = resume ? p->resume(p->ctx, call, name, c->err)
+                    : p->checkpoint(p->ctx, call, name, c->err);
+    *wait_of(c, p) += nc_clock_now_s() - t0;
+    return rc ? fail(c, p, call, resume ? "resume" : "checkpoint") : 0;
+}
+
+/* After an accepted step: a checkpoint when the step reached the next checkpoint time and
+ * the run goes on (a checkpoint of the end would have nothing to resume). */
+static int maybe_checkpoint(run_ctx *c)
+{
+    cpl_loop *L = c->L;
+    if (!cpl_loop_checkpoints_on(L, c->fem, c->dem)) return 0;
+    const double start = L->s.start_time_s, every = L->s.checkpoint_interval_s;
+    const double eps = 1e-9 * L->s.dt_s;
+    if (L->time_s < start + (double)L->next_checkpoint * every - eps) return 0;
+    while (start + (double)L->next_checkpoint * every <= L->time_s + eps) L->next_checkpoint++;
+    if (L->time_s >= L->s.end_time_s - eps || (L->s.max_steps > 0 && L->step >= L->s.max_steps))
+        return 0;
+    char name[64];
+    snprintf(name, sizeof name, "step_%06ld", L->step);
+    cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};
+    if (do_checkpoint(c, c->fem, &call, name, 0) || do_checkpoint(c, c->dem, &call, name, 0))
+        return -1;
+    if (c->obs && c->obs->on_checkpoint &&
+        c->obs->on_checkpoint(c->obs->ctx, L->step, L->time_s, name, c->err))
+        return fail(c, NULL, &call, "checkpoint");
+    return 0;
+}
 
 static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
                     const double *in0, const double *in1, double *out0, double *out1,
@@ -724,9 +901,24 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
                       dem->can_jacobian;
     double t0 = nc_clock_now_s();
     int rc = 0;
+    if (L->resume_pending) {
+        cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};
+        const cpl_participant *both[2] = {fem, dem};
+        for (int i = 0; i < 2 && rc == 0; i++) {
+            if (!both[i]->resume) {
+                nc_error_set(err, 1, "cannot resume: the participant does not announce the "
+                             "capability 'checkpoint'");
+                rc = fail(&c, both[i], &call, "resume");
+            } else {
+                rc = do_checkpoint(&c, both[i], &call, L->resume_name, 1);
+            }
+        }
+        if (rc == 0) L->resume_pending = 0;
+    }
     const double eps = 1e-9 * L->s.dt_s;
-    while (L->time_s < L->s.end_time_s - eps && (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
-        if ((rc = advance_step(&c)) != 0) break;
+    while (rc == 0 && L->time_s < L->s.end_time_s - eps &&
+           (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
+        if ((rc = advance_step(&c)) != 0 || (rc = maybe_checkpoint(&c)) != 0) break;
     }
     L->timing.total_s += nc_clock_now_s() - t0;
     return rc;

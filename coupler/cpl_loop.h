@@ -32,6 +32,7 @@
 #include <signal.h>
 #include <stddef.h>
 #include <stdint.h>
+#include "cpl_checkpoint.h"
 #include "cpl_energy.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
@@ -87,6 +88,12 @@ typedef struct cpl_participant {
                  double *out0, double *out1, cpl_solve_info *info, nc_error *err);
     int (*accept)(void *ctx, const cpl_call *call, nc_error *err);
     int can_jacobian;       /* DEM: can return the linearisation; FEM: can solve with it */
+    /* checkpoint/resume (protocol/README.md §3.3; NULL: the participant cannot): save the
+     * complete state under `name` durably, between steps (call->step = steps accepted,
+     * call->time_s = time reached); continue from the checkpoint `name` before the first
+     * step. */
+    int (*checkpoint)(void *ctx, const cpl_call *call, const char *name, nc_error *err);
+    int (*resume)(void *ctx, const cpl_call *call, const char *name, nc_error *err);
 } cpl_participant;
 
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
@@ -120,6 +127,8 @@ typedef struct cpl_loop_settings {
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */
+    double checkpoint_interval_s;   /* simulated time between checkpoints (0: none); taken
+                                       only when both participants can */
 } cpl_loop_settings;
 
 /* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */
@@ -188,6 +197,9 @@ typedef struct cpl_observer {
     int (*on_iteration)(void *ctx, const cpl_iteration_record *rec, nc_error *err);
     int (*on_step)(void *ctx, const cpl_step_record *rec, nc_error *err);
     int (*on_reject)(void *ctx, const cpl_reject_record *rec, nc_error *err);
+    /* both participants saved the checkpoint `name` after `step` steps at time_s: save the
+     * coupler's own state now (cpl_loop_checkpoint_entries + the observer's own) */
+    int (*on_checkpoint)(void *ctx, long step, double time_s, const char *name, nc_error *err);
 } cpl_observer;
 
 /* Wall-clock split of a run (seconds). wait_* include transport; solver_* are what the
@@ -240,6 +252,28 @@ const double *cpl_loop_force(const cpl_loop *loop);
 double cpl_loop_time(const cpl_loop *loop);
 /* The energy balance and guard of the accepted steps so far. */
 const cpl_energy *cpl_loop_energy(const cpl_loop *loop);
+/* Checkpoint/resume. After the ACCEPT_STEP of the step that reaches the next multiple of
+ * checkpoint_interval_s (from the start time) and is not the last step, when both
+ * participants have checkpoint/resume: CHECKPOINT "step_%06ld" (steps accepted) to both,
+ * then observer->on_checkpoint. Checkpoints are off when a participant cannot (see
+ * cpl_loop_checkpoints_on). */
+int cpl_loop_checkpoints_on(const cpl_loop *loop, const cpl_participant *fem,
+                            const cpl_participant *dem);
+/* Adds everything the rest of the run depends on, bit for bit, to t: step, time, step
+ * control, relaxation state (its method's own entries), predictor input (the accepted
+ * u, u̇, F), the interface Jacobian, the restore verification, the energy balance, the
+ * counters of the summary, the next checkpoint time. Before loading, call
+ * cpl_loop_checkpoint_prepare with the file (sizes that vary: the Jacobian's blocks). */
+void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);
+int cpl_loop_checkpoint_prepare(cpl_loop *loop, const char *path, nc_error *err);
+/* The state was loaded from the checkpoint `name` (file `path`, for messages): checks that
+ * the run has the settings the checkpoint was written with (dt, scheme, relaxed quantity,
+ * tolerance, interface size); cpl_loop_run then first sends RESUME (step, time, name) to
+ * both participants and continues. */
+int cpl_loop_resumed(cpl_loop *loop, const char *name, const char *path, nc_error *err);
+/* Steps accepted so far (the index of the next step). */
+long cpl_loop_step(const cpl_loop *loop);
+
 /* 1 when the run uses interface-Jacobian coupling (set by cpl_loop_run: the setting is on
  * and both participants can). */
 int cpl_loop_uses_jacobian(const cpl_loop *loop);

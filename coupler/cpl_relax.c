@@ -203,3 +203,8 @@ int cpl_relax_counter(const cpl_relax *r, const char *name, double *value)
 {
     return r->ops->counter ? r->ops->counter(r->state, name, value) : -1;
 }
+
+void cpl_relax_checkpoint_entries(cpl_relax *r, cpl_ckpt_table *t, const char *prefix)
+{
+    if (r->ops->checkpoint) r->ops->checkpoint(r->state, t, prefix);
+}

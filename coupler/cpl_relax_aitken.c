@@ -249,6 +249,22 @@ static int aitken_counter(const void *state, const char *name, double *value)
     return 0;
 }
 
+/* α and r^{k-1} carried into the next step, the safeguard's best iterate, the counter */
+static void aitken_checkpoint(void *state, cpl_ckpt_table *t, const char *prefix)
+{
+    aitken_state *a = state;
+    cpl_ckpt_f64(t, prefix, "alpha", a->alpha, a->n_blocks);
+    cpl_ckpt_f64(t, prefix, "r_prev", a->r_prev, a->n);
+    cpl_ckpt_int(t, prefix, "have_prev", &a->have_prev);
+    cpl_ckpt_int(t, prefix, "have_alpha", &a->have_alpha);
+    cpl_ckpt_f64(t, prefix, "x_best", a->x_best, a->n);
+    cpl_ckpt_f64(t, prefix, "r_best", a->r_best, a->n);
+    cpl_ckpt_f64(t, prefix, "alpha_best", a->alpha_best, a->n_blocks);
+    cpl_ckpt_f64(t, prefix, "best_norm2", &a->best_norm2, 1);
+    cpl_ckpt_int(t, prefix, "have_best", &a->have_best);
+    cpl_ckpt_long(t, prefix, "restarts", &a->n_restarts);
+}
+
 const cpl_relax_ops cpl_relax_aitken = {
     .name = "aitken",
     .keys = aitken_keys,
@@ -261,5 +277,6 @@ const cpl_relax_ops cpl_relax_aitken = {
     .update = aitken_update,
     .forget = aitken_forget,
     .counter = aitken_counter,
+    .checkpoint = aitken_checkpoint,
     .free = aitken_free,
 };

@@ -36,10 +36,18 @@ static void constant_free(void *state)
     free(state);
 }
 
+/* its whole state: α (the settings' value, the same in a resumed run) */
+static void constant_checkpoint(void *state, cpl_ckpt_table *t, const char *prefix)
+{
+    constant_state *st = state;
+    cpl_ckpt_f64(t, prefix, "alpha", &st->alpha, 1);
+}
+
 const cpl_relax_ops cpl_relax_constant = {
     .name = "constant",
     .check = cpl_relax_check_alpha,
     .create = constant_create,
     .update = constant_update,
+    .checkpoint = constant_checkpoint,
     .free = constant_free,
 };

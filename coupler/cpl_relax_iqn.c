@@ -284,6 +284,27 @@ static int iqn_counter(const void *state, const char *name, double *value)
     return 0;
 }
 
+/* the V/W columns kept across steps with the steps that made them, the last pair, the
+ * counters; the QR work arrays too (rebuilt before use, saved so nothing is left out) */
+static void iqn_checkpoint(void *state, cpl_ckpt_table *t, const char *prefix)
+{
+    iqn_state *q = state;
+    const size_t n = q->n, m = q->max_cols;
+    cpl_ckpt_size(t, prefix, "columns", &q->cols);
+    cpl_ckpt_long(t, prefix, "step", &q->step);
+    cpl_ckpt_f64(t, prefix, "V", q->V, n * m);
+    cpl_ckpt_f64(t, prefix, "W", q->W, n * m);
+    cpl_ckpt_add(t, prefix, "column_step", CPL_CKPT_LONG, q->col_step, m);
+    cpl_ckpt_f64(t, prefix, "r_prev", q->r_prev, n);
+    cpl_ckpt_f64(t, prefix, "xt_prev", q->xt_prev, n);
+    cpl_ckpt_int(t, prefix, "have_prev", &q->have_prev);
+    cpl_ckpt_f64(t, prefix, "Q", q->Q, n * m);
+    cpl_ckpt_f64(t, prefix, "R", q->R, m * m);
+    cpl_ckpt_f64(t, prefix, "c", q->c, m);
+    cpl_ckpt_f64(t, prefix, "rhs", q->rhs, m);
+    cpl_ckpt_size(t, prefix, "dropped_columns", &q->dropped);
+}
+
 const cpl_relax_ops cpl_relax_iqn_ils = {
     .name = "iqn-ils",
     .keys = iqn_keys,
@@ -297,5 +318,6 @@ const cpl_relax_ops cpl_relax_iqn_ils = {
     .forget = iqn_forget,
     .end_step = iqn_end_step,
     .counter = iqn_counter,
+    .checkpoint = iqn_checkpoint,
     .free = iqn_free,
 };

@@ -12,6 +12,7 @@
 
 #include <stddef.h>
 #include <cjson/cJSON.h>
+#include "cpl_checkpoint.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
 
@@ -38,6 +39,11 @@ struct cpl_relax_ops {
     /* step accepted; x_in/x_out the last pair not passed to update, or both NULL (optional) */
     void (*end_step)(void *state, const double *x_in, const double *x_out);
     int (*counter)(const void *state, const char *name, double *value);   /* optional */
+    /* checkpoint/resume: adds every part of the state the next steps depend on (history
+     * carried across steps, counters) to the table under `prefix`; the same entries are
+     * saved and loaded, so a resumed run continues bit for bit (optional: no state kept
+     * between steps) */
+    void (*checkpoint)(void *state, cpl_ckpt_table *t, const char *prefix);
     void (*free)(void *state);
 };
 

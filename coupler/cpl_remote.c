@@ -226,10 +226,37 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
     return 0;
 }
 
+/* CHECKPOINT / RESUME: step, time and the checkpoint's name in `text` (§3.3) */
+static int remote_named(cpl_remote *r, proto_msg_type type, const cpl_call *call,
+                        const char *name, nc_error *err)
+{
+    command(r, type, call);
+    r->request.dt_s = 0.0;
+    snprintf(r->request.text, sizeof r->request.text, "%s", name);
+    return request(r, err);
+}
+
+static int remote_checkpoint(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    return remote_named(ctx, PROTO_MSG_CHECKPOINT, call, name, err);
+}
+
+static int remote_resume(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    return remote_named(ctx, PROTO_MSG_RESUME, call, name, err);
+}
+
+int cpl_remote_can_checkpoint(const cpl_remote *r)
+{
+    return r->version >= 2 && proto_has_capability(r->capabilities, "checkpoint");
+}
+
 cpl_participant cpl_remote_participant(cpl_remote *r)
 {
+    const int ckpt = cpl_remote_can_checkpoint(r);
     cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept,
-                         r->version >= 2 && proto_has_capability(r->capabilities, "jacobian")};
+                         r->version >= 2 && proto_has_capability(r->capabilities, "jacobian"),
+                         ckpt ? remote_checkpoint : NULL, ckpt ? remote_resume : NULL};
     return p;
 }
 

@@ -48,7 +48,10 @@ int cpl_remote_interface_fem(cpl_remote *fem, cpl_mesh *mesh, double **u0, doubl
                              nc_error *err);
 /* INTERFACE to the DEM with the FEM's mesh. */
 int cpl_remote_interface_dem(cpl_remote *dem, const cpl_mesh *mesh, nc_error *err);
+/* With checkpoint/resume when it announced the capability "checkpoint" (version 2,
+ * protocol/README.md §3.3); the reply's text, when set, is the name of its checkpoint file. */
 cpl_participant cpl_remote_participant(cpl_remote *r);
+int cpl_remote_can_checkpoint(const cpl_remote *r);
 /* SHUTDOWN over a fresh connection with the given timeout; -1 if not acknowledged. */
 int cpl_remote_shutdown(cpl_remote *r, double timeout_s, nc_error *err);
 void cpl_remote_close(cpl_remote *r);

@@ -1,7 +1,12 @@
 /* coupler — drives a FEM and a DEM participant through the netcouple protocol.
  *
  *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
- *           [--progress-file PATH]
+ *           [--progress-file PATH] [--resume]
+ *
+ * Checkpoints (coupler.json "checkpoint", both participants announcing "checkpoint"): after
+ * both participants saved theirs, checkpoint/coupler_<name>.h5 (cpl_checkpoint.h) and the
+ * manifest checkpoint/latest.json in the output folder; --resume continues from the
+ * manifest's checkpoint.
  *
  * Exit codes: 0 success, 1 input/participant/coupling failure, 3 finished but with accepted
  * unconverged steps or with energy created beyond energy_tolerance (results not reliable; 0
@@ -16,6 +21,9 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
+#include "cpl_checkpoint.h"
 #include "cpl_config.h"
 #include "cpl_heartbeat.h"
 #include "cpl_history.h"
@@ -25,6 +33,7 @@
 #include "cpl_remote.h"
 #include "nc_clock.h"
 #include "nc_file.h"
+#include "nc_json.h"
 #include "nc_signal.h"
 
 static void usage(FILE *out)
@@ -39,7 +48,10 @@ static void usage(FILE *out)
             "  --quiet             only warnings, errors and the final summary\n"
             "  --progress-file PATH  keep PATH up to date with the run's state and status line\n"
             "                      (a heartbeat: rewritten every step and every second while\n"
-            "                      waiting for a participant; scripts/run_case.sh reads it)\n");
+            "                      waiting for a participant; scripts/run_case.sh reads it)\n"
+            "  --resume            continue the run in --output DIR from its last complete\n"
+            "                      checkpoint (DIR/checkpoint/latest.json); the participants\n"
+            "                      must be started as for the original run\n");
 }
 
 /* A run that finished with accepted unconverged steps or created energy (not opted in). */
@@ -69,6 +81,10 @@ typedef struct app {
     cpl_loop *loop;
     char fem_ep[1024], dem_ep[1024];   /* resolved endpoints ("" while unknown) */
     const volatile sig_atomic_t *stop_signal;   /* 0, or SIGINT / SIGTERM once received */
+    int resume;                     /* --resume */
+    char ckpt_name[64];             /* the checkpoint resumed from (--resume) */
+    char ckpt_newest[64], ckpt_older[64];   /* the two newest checkpoints (kept) */
+    long ckpt_step;
 } app;
 
 static int observe_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
@@ -143,12 +159,177 @@ static int watched_accept(void *ctx, const cpl_call *call, nc_error *err)
     return rc;
 }
 
+static int watched_checkpoint(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.checkpoint(w->inner.ctx, call, name, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
+static int watched_resume(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.resume(w->inner.ctx, call, name, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
 static cpl_participant watch_participant(app *a, watched *w, cpl_remote *r)
 {
     *w = (watched){cpl_remote_participant(r), a, r};
     cpl_participant p = {w->inner.name, w, watched_begin, watched_solve, watched_accept,
-                         w->inner.can_jacobian};
+                         w->inner.can_jacobian,
+                         w->inner.checkpoint ? watched_checkpoint : NULL,
+                         w->inner.resume ? watched_resume : NULL};
     return p;
+}
+
+/* ---- checkpoint and resume -------------------------------------------------------------- */
+
+/* The program's part of the coupler's checkpoint: the loop's state, the history's marks,
+ * the counters of the messages (which warnings were already printed). */
+static void app_checkpoint_entries(app *a, cpl_ckpt_table *t)
+{
+    cpl_loop_checkpoint_entries(a->loop, t);
+    cpl_history_checkpoint_entries(&a->history, t);
+    cpl_ckpt_long(t, "progress", "warnings", &a->progress.warnings);
+    cpl_ckpt_long(t, "progress", "energy_warnings", &a->progress.energy_warnings);
+    cpl_ckpt_long(t, "progress", "rejections", &a->progress.rejections);
+    cpl_ckpt_f64(t, "progress", "max_deflection", &a->progress.max_deflection_m, 1);
+}
+
+/* A participant's checkpoint file: the name its reply gave (a plain file name), else the
+ * convention of netcouple's solvers, <role>_<name>.h5 (protocol/README.md §3.3). */
+static void participant_file(const cpl_remote *r, const char *name, char *out, size_t size)
+{
+    const char *text = r->reply.text;
+    if (text[0] && !strchr(text, '/') && strcmp(text, ".") && strcmp(text, ".."))
+        snprintf(out, size, "%s", text);
+    else
+        snprintf(out, size, "%s_%s.h5", r->name, name);
+}
+
+static int observe_checkpoint(void *ctx, long step, double time_s, const char *name,
+                              nc_error *err)
+{
+    app *a = ctx;
+    char dir[2048], path[2400], manifest[2400];
+    snprintf(dir, sizeof dir, "%s/checkpoint", a->output_dir);
+    if (nc_file_make_dirs(dir, err)) return -1;
+    cpl_history_mark(&a->history);
+    cpl_ckpt_table t = {0};
+    app_checkpoint_entries(a, &t);
+    snprintf(path, sizeof path, "%s/coupler_%s.h5", dir, name);
+    int rc = cpl_ckpt_save(&t, path, err);
+    cpl_ckpt_table_free(&t);
+    if (rc) return -1;
+    /* the manifest names the checkpoint only now that all three files are durable */
+    char fem_file[PROTO_TEXT_MAX + 8], dem_file[PROTO_TEXT_MAX + 8], coupler_file[128];
+    participant_file(&a->fem, name, fem_file, sizeof fem_file);
+    participant_file(&a->dem, name, dem_file, sizeof dem_file);
+    snprintf(coupler_file, sizeof coupler_file, "coupler_%s.h5", name);
+    cJSON *root = cJSON_CreateObject(), *files = cJSON_CreateObject();
+    char time_hex[64];
+    snprintf(time_hex, sizeof time_hex, "%a", time_s);
+    int ok = root && files && cJSON_AddStringToObject(root, "checkpoint", name) &&
+             cJSON_AddNumberToObject(root, "step", (double)step) &&
+             cJSON_AddNumberToObject(root, "time", time_s) &&
+             cJSON_AddStringToObject(root, "time_hex", time_hex) &&
+             cJSON_AddStringToObject(files, "coupler", coupler_file) &&
+             cJSON_AddStringToObject(files, "fem", fem_file) &&
+             cJSON_AddStringToObject(files, "dem", dem_file);
+    if (ok) cJSON_AddItemToObject(root, "files", files);
+    else cJSON_Delete(files);
+    ok = ok && cJSON_AddStringToObject(root, "previous", a->ckpt_newest);
+    char *text = ok ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    if (!text) return nc_error_set(err, 1, "checkpoint manifest: out of memory");
+    size_t len = strlen(text);
+    char *with_newline = malloc(len + 2);
+    if (with_newline) {
+        memcpy(with_newline, text, len);
+        memcpy(with_newline + len, "\n", 2);
+    }
+    free(text);
+    if (!with_newline) return nc_error_set(err, 1, "checkpoint manifest: out of memory");
+    snprintf(manifest, sizeof manifest, "%s/latest.json", dir);
+    rc = cpl_ckpt_write_text(manifest, with_newline, err);
+    free(with_newline);
+    if (rc) return -1;
+    /* keep the two newest coupler checkpoints (the manifest no longer names the third) */
+    if (a->ckpt_older[0] && strcmp(a->ckpt_older, name) != 0) {
+        snprintf(path, sizeof path, "%s/coupler_%s.h5", dir, a->ckpt_older);
+        remove(path);
+    }
+    snprintf(a->ckpt_older, sizeof a->ckpt_older, "%s", a->ckpt_newest);
+    snprintf(a->ckpt_newest, sizeof a->ckpt_newest, "%s", name);
+    if (!a->quiet)
+        cpl_progress_message(&a->progress, "coupler: checkpoint %s (step %ld, t = %.6g s) in "
+                             "%s", name, step, time_s, dir);
+    return 0;
+}
+
+/* A checkpoint name as the protocol allows it (letters, digits, '_', '-'). */
+static int valid_name(const char *s)
+{
+    if (!s[0] || strlen(s) >= 64) return 0;
+    for (; *s; s++)
+        if (!((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || (*s >= '0' && *s <= '9') ||
+              *s == '_' || *s == '-'))
+            return 0;
+    return 1;
+}
+
+/* --resume: DIR/checkpoint/latest.json names the last complete checkpoint. */
+static int read_manifest(app *a, nc_error *err)
+{
+    char path[2400];
+    snprintf(path, sizeof path, "%s/checkpoint/latest.json", a->output_dir);
+    if (access(path, F_OK) != 0)
+        return nc_error_set(err, 1, "%s: no checkpoint to resume from (the run wrote none: "
+                            "coupler.json \"checkpoint\": {\"interval_s\": ...} and both "
+                            "participants announcing 'checkpoint' are needed)", path);
+    cJSON *root = NULL;
+    if (nc_json_load_file(path, &root, err)) return -1;
+    const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "checkpoint");
+    const cJSON *step = cJSON_GetObjectItemCaseSensitive(root, "step");
+    const cJSON *prev = cJSON_GetObjectItemCaseSensitive(root, "previous");
+    int rc = 0;
+    if (!cJSON_IsString(name) || !valid_name(name->valuestring))
+        rc = nc_error_set(err, 1, "%s: checkpoint: expected the checkpoint's name (letters, "
+                          "digits, '_', '-')", path);
+    else if (!cJSON_IsNumber(step) || step->valuedouble < 0 ||
+             step->valuedouble != (double)(long)step->valuedouble)
+        rc = nc_error_set(err, 1, "%s: step: expected a whole number >= 0", path);
+    if (rc == 0) {
+        snprintf(a->ckpt_name, sizeof a->ckpt_name, "%s", name->valuestring);
+        a->ckpt_step = (long)step->valuedouble;
+        snprintf(a->ckpt_newest, sizeof a->ckpt_newest, "%s", name->valuestring);
+        if (cJSON_IsString(prev) && valid_name(prev->valuestring))
+            snprintf(a->ckpt_older, sizeof a->ckpt_older, "%s", prev->valuestring);
+    }
+    cJSON_Delete(root);
+    return rc;
+}
+
+/* Loads the coupler's checkpoint into the fresh loop and history marks. */
+static int load_checkpoint(app *a, nc_error *err)
+{
+    char path[2400];
+    snprintf(path, sizeof path, "%s/checkpoint/coupler_%s.h5", a->output_dir, a->ckpt_name);
+    if (cpl_loop_checkpoint_prepare(a->loop, path, err)) return -1;
+    cpl_ckpt_table t = {0};
+    app_checkpoint_entries(a, &t);
+    int rc = cpl_ckpt_load(&t, path, err);
+    cpl_ckpt_table_free(&t);
+    if (rc || cpl_loop_resumed(a->loop, a->ckpt_name, path, err)) return -1;
+    if (cpl_loop_step(a->loop) != a->ckpt_step)
+        return nc_error_set(err, 1, "%s: holds step %ld, checkpoint/latest.json says %ld", path,
+                            cpl_loop_step(a->loop), a->ckpt_step);
+    return 0;
 }
 
 static int observe_reject(void *ctx, const cpl_reject_record *rec, nc_error *err)
@@ -169,6 +350,8 @@ static int parse_args(app *a, int argc, char **argv)
             exit(0);
         } else if (!strcmp(arg, "--quiet")) {
             a->quiet = 1;
+        } else if (!strcmp(arg, "--resume")) {
+            a->resume = 1;
         } else if (!strcmp(arg, "--output") && has_value) {
             a->output_dir = argv[++i];
         } else if (!strcmp(arg, "--fem-endpoint") && has_value) {
@@ -405,6 +588,7 @@ int main(int argc, char **argv)
     struct winsize ws;
     if (tty && ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0) a.progress.width = ws.ws_col;
     if (nc_file_make_dirs(a.output_dir, &err)) goto fail;
+    if (a.resume && read_manifest(&a, &err)) goto fail;
 
     char *fem_ep = a.fem_ep, *dem_ep = a.dem_ep;
     /* start-up waits: each is bounded by the connect or reply timeout */
@@ -443,6 +627,24 @@ int main(int argc, char **argv)
             }
         }
 
+    /* checkpoints need both participants (protocol/README.md §3.3) */
+    if (a.cfg.loop.checkpoint_interval_s > 0.0 || a.resume)
+        for (int k = 0; k < 2; k++) {
+            const cpl_remote *r = k ? &a.dem : &a.fem;
+            if (cpl_remote_can_checkpoint(r)) continue;
+            if (a.resume) {
+                nc_error_set(&err, 1, "%s (%s) does not announce the capability 'checkpoint' "
+                             "(protocol %d, capabilities: '%s'): cannot resume", r->name,
+                             r->peer_program, r->version, r->capabilities);
+                goto fail;
+            }
+            cpl_progress_message(&a.progress, "coupler: warning: checkpoints off: %s (%s) does "
+                                 "not announce the capability 'checkpoint' (protocol %d, "
+                                 "capabilities: '%s'); checkpoint.interval_s is ignored",
+                                 r->name, r->peer_program, r->version, r->capabilities);
+            break;
+        }
+
     /* conforming interface (section 4.4): the FEM's interface mesh is the DEM's wall */
     cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_reply);
     bad = cpl_remote_interface_fem(&a.fem, &a.mesh, &u0, &v0, &err);
@@ -456,8 +658,19 @@ int main(int argc, char **argv)
                              a.cfg.loop.scheme == CPL_SCHEME_STRONG ? "strong" : "weak",
                              a.cfg.loop.dt_s, a.cfg.loop.end_time_s);
     if (cpl_loop_create(&a.loop, &a.cfg.loop, a.mesh.n_nodes, u0, v0, &err)) goto fail;
-    if (cpl_history_open(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations, &err))
+    if (a.resume) {
+        if (load_checkpoint(&a, &err) ||
+            cpl_history_resume(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations,
+                               &err))
+            goto fail;
+        if (!a.quiet)
+            cpl_progress_message(&a.progress, "coupler: resuming from checkpoint %s (step %ld, "
+                                 "t = %.6g s)", a.ckpt_name, cpl_loop_step(a.loop),
+                                 cpl_loop_time(a.loop));
+    } else if (cpl_history_open(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations,
+                                &err)) {
         goto fail;
+    }
     history_open = 1;
 
     cpl_participant fem = watch_participant(&a, &a.fem_w, &a.fem);
@@ -473,7 +686,7 @@ int main(int argc, char **argv)
                                  ? "on: the FEM solves with the DEM's contact linearisation"
                                  : "not available (a participant lacks the capability "
                                    "'jacobian'): plain exchange");
-    cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject};
+    cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject, observe_checkpoint};
     if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of
          * that participant, which is not its fault */

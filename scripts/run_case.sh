@@ -22,6 +22,8 @@ usage() {
 usage: scripts/run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...]
                            [--fem-program CMD] [--dem-program CMD] [--quiet]
                            [--stall-limit SECONDS]
+       scripts/run_case.sh --resume DIR [--fem-program CMD] [--dem-program CMD] [--quiet]
+                           [--stall-limit SECONDS]
 Runs one coupled case: fem_solver, dem_solver and the coupler on localhost.
 
 CASE_DIR holds fem.json, dem.json, coupler.json and whatever they refer to (meshes, STL).
@@ -37,6 +39,8 @@ coupler's last state and status line).
   --quiet                 print only warnings, errors and the verdict
   --stall-limit SECONDS   stop the coupler as stalled when its heartbeat is older than this
                           (default 75, or $NC_STALL_LIMIT_S)
+  --resume DIR            continue a stopped or crashed run in DIR from its last complete
+                          checkpoint (coupler.json "checkpoint"; old logs kept as *.log.N)
 Progress: on a terminal one live status line (time, remaining wall time at the recent rate,
 contact, rock speed/energy, net deflection, iterations) under the coupler's messages;
 otherwise the coupler's log as it grows, with a plain status line every progress_interval s.
@@ -47,22 +51,24 @@ $NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
 or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged" /
 "accept_energy_growth": true, still reported as NOT reliable); 1 a program failed (named,
-the others stopped) or stalled; 2 bad arguments or case; 130 stopped by the user (Ctrl-C or
-SIGTERM), all three programs stopped, the results so far readable.
+the others stopped) or stalled; 2 bad arguments or case, or --resume DIR without a complete
+checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all three programs stopped, the
+results so far readable.
 EOF
 }
 
 die() { echo "run_case: $*" >&2; exit 2; }
 
-case_dir=""; out=""; sets=(); quiet=0
+case_dir=""; out=""; sets=(); quiet=0; resume_dir=""; fem_given=0; dem_given=0
 stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}; endpoint_wait=${NC_ENDPOINT_WAIT_S:-60}
 fem_program="$bin/fem_solver"; dem_program="$bin/dem_solver"
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) [ $# -ge 2 ] || die "--out needs a folder"; out=$2; shift 2 ;;
     --set) [ $# -ge 2 ] || die "--set needs FILE.KEY=VALUE"; sets+=("$2"); shift 2 ;;
-    --fem-program) [ $# -ge 2 ] || die "--fem-program needs a command"; fem_program=$2; shift 2 ;;
-    --dem-program) [ $# -ge 2 ] || die "--dem-program needs a command"; dem_program=$2; shift 2 ;;
+    --fem-program) [ $# -ge 2 ] || die "--fem-program needs a command"; fem_program=$2; fem_given=1; shift 2 ;;
+    --dem-program) [ $# -ge 2 ] || die "--dem-program needs a command"; dem_program=$2; dem_given=1; shift 2 ;;
+    --resume) [ $# -ge 2 ] || die "--resume needs the folder of the run"; resume_dir=$2; shift 2 ;;
     --quiet) quiet=1; shift ;;
     --stall-limit) [ $# -ge 2 ] || die "--stall-limit needs seconds"; stall_limit=$2; shift 2 ;;
     -h|--help) usage; exit 0 ;;
@@ -70,6 +76,37 @@ while [ $# -gt 0 ]; do
     *) [ -z "$case_dir" ] || die "only one CASE_DIR, got '$case_dir' and '$1'"; case_dir=$1; shift ;;
   esac
 done
+if [ -n "$resume_dir" ]; then
+  [ -z "$case_dir" ] || die "--resume continues the run in $resume_dir with its own inputs: no CASE_DIR ('$case_dir')"
+  [ -z "$out" ] || die "--resume writes into the run's own folder $resume_dir: no --out"
+  [ ${#sets[@]} -eq 0 ] || die "--resume continues with the inputs the run started with: no --set"
+  [ -d "$resume_dir" ] || die "$resume_dir: no such run folder"
+  for f in fem.json dem.json coupler.json; do
+    [ -f "$resume_dir/$f" ] || die "$resume_dir/$f: missing (not the folder of a run)"
+  done
+  # the last complete checkpoint: the manifest and the three files it names
+  "$python" - "$resume_dir" <<'PY' || exit 2
+import json, os, sys
+d = sys.argv[1]
+path = os.path.join(d, "checkpoint", "latest.json")
+def no(why):
+    sys.exit("run_case: --resume %s: no complete checkpoint: %s" % (d, why))
+if not os.path.isfile(path):
+    no("%s is missing (the run wrote no checkpoint: coupler.json needs \"checkpoint\": "
+       "{\"interval_s\": ...} and both participants must announce 'checkpoint')" % path)
+try:
+    with open(path) as f:
+        m = json.load(f)
+    name, files = m["checkpoint"], m["files"]
+    names = [files[k] for k in ("coupler", "fem", "dem")]
+except (OSError, ValueError, KeyError, TypeError) as e:
+    no("%s is not a checkpoint manifest (%s: %s)" % (path, type(e).__name__, e))
+for k, f in zip(("coupler", "fem", "dem"), names):
+    if not isinstance(f, str) or "/" in f or not os.path.isfile(os.path.join(d, "checkpoint", f)):
+        no("%s names the %s file %r, which is not in %s/checkpoint" % (path, k, f, d))
+PY
+  case_dir=$resume_dir; out=$resume_dir
+fi
 [ -n "$case_dir" ] || die "usage: run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...] (see --help)"
 positive='^[0-9]+([.][0-9]+)?$'
 [[ $stall_limit =~ $positive ]] && [[ $stall_limit != 0 ]] \
@@ -88,7 +125,7 @@ bin=$(cd "$bin" && pwd)
 mkdir -p "$out" || die "$out: cannot create the output folder"
 out=$(cd "$out" && pwd)
 case_abs=$(cd "$case_dir" && pwd)
-if [ "$case_abs" != "$out" ]; then
+if [ -z "$resume_dir" ] && [ "$case_abs" != "$out" ]; then
   cp -R "$case_abs"/. "$out"/ || die "cannot copy $case_dir into $out"
 fi
 rm -f "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
@@ -257,6 +294,18 @@ absolute_words() {
 fem_program=$(absolute_words "$fem_program")
 dem_program=$(absolute_words "$dem_program")
 cd "$out" || die "$out: cannot enter"
+# the programs of a run, for --resume (which starts the same ones unless told otherwise)
+if [ -n "$resume_dir" ]; then
+  if [ -f run_case.programs ]; then
+    { IFS= read -r saved_fem; IFS= read -r saved_dem; } < run_case.programs
+    [ $fem_given -eq 1 ] || fem_program=${saved_fem#fem }
+    [ $dem_given -eq 1 ] || dem_program=${saved_dem#dem }
+  fi
+  # the earlier run's logs stay, numbered
+  n=1; while [ -e "coupler.log.$n" ] || [ -e "fem.log.$n" ] || [ -e "dem.log.$n" ]; do n=$((n + 1)); done
+  for p in fem dem coupler; do [ -f "$p.log" ] && mv "$p.log" "$p.log.$n"; done
+fi
+printf 'fem %s\ndem %s\n' "$fem_program" "$dem_program" > run_case.programs
 rm -f coupler.progress coupler.progress.tmp
 status_shown=0; show_pid=""
 
@@ -292,9 +341,10 @@ done
 
 # ---- the coupler, and what the user sees ----------------------------------------------------
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
+resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
 "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
-  --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg \
+  --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
   >coupler.log 2>&1 &
 pid[coupler]=$!
 now_ms; cpl_started_ms=$NOW_MS

@@ -227,7 +227,7 @@ int main(int argc, char **argv)
     cpl_participant pf = cpl_remote_participant(&fem), pd = cpl_remote_participant(&dem);
     cpl_history history;
     memset(&history, 0, sizeof history);
-    cpl_observer obs = {&history, on_iteration, on_step, NULL};
+    cpl_observer obs = {&history, on_iteration, on_step, NULL, NULL};
     if (cpl_history_open(&history, dir, &s, 1, &err)) goto out;
     int run_rc = cpl_loop_create(&loop, &s, mesh.n_nodes, u0, v0, &err) ||
                  cpl_loop_run(loop, &pf, &pd, &obs, NULL, NULL, &err);

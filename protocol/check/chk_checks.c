@@ -916,6 +916,87 @@ static void remove_tree(const char *path)
     nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }
 
+/* ---- checkpoint/resume (capability `checkpoint`, §3.3) --------------------------------------- */
+
+static void session_init(session *s, const chk_config *cfg, chk_report *rep, chk_interface *f,
+                         const char *run);
+
+static int named_command(session *s, proto_msg_type type, long step, const char *name,
+                         char *why, size_t size)
+{
+    proto_message cmd;
+    command(&cmd, type, step, 0, (double)step * s->cfg->dt_s, 0.0);
+    snprintf(cmd.text, sizeof cmd.text, "%s", name);
+    return expect_ok(s, &cmd, why, size);
+}
+
+/* Step 0 accepted, CHECKPOINT, step 1 solved (answer A), shut down; the participant started
+ * again in the same folder: hello, interface, RESUME, step 1 solved with the same input:
+ * the answer must be A bit for bit. */
+static void checkpoint_runs(const chk_config *cfg, chk_report *rep, chk_interface *f,
+                            const char *base, const char *role)
+{
+    const char *row = "checkpoint/resume bit-identity", *name = "chk_000001";
+    char why[600] = "";
+    double *a = NULL, *b = NULL, *scratch = NULL;
+    session s;
+    session_init(&s, cfg, rep, f, "checkpoint");
+    snprintf(s.role, sizeof s.role, "%s", role);
+    int ok = start(&s, base, cfg->idle_timeout_s, 0) == 0 && hello(&s, 0, cfg->idle_timeout_s) == 0 &&
+             interface(&s, 0) == 0;
+    if (ok && (step_command(&s, PROTO_MSG_BEGIN_STEP, 0, why, sizeof why) ||
+               solve(&s, 0, 1, &scratch, why, sizeof why) ||
+               step_command(&s, PROTO_MSG_ACCEPT_STEP, 0, why, sizeof why))) {
+        ok = 0;
+        chk_report_add(rep, row, CHK_FAIL, "step 0: %s", why);
+    } else if (ok && named_command(&s, PROTO_MSG_CHECKPOINT, 1, name, why, sizeof why)) {
+        ok = 0;
+        chk_report_add(rep, row, CHK_FAIL, "checkpoint after step 0: %s", why);
+    } else if (ok && (step_command(&s, PROTO_MSG_BEGIN_STEP, 1, why, sizeof why) ||
+                      solve(&s, 1, 1, &a, why, sizeof why) ||
+                      step_command(&s, PROTO_MSG_ACCEPT_STEP, 1, why, sizeof why) ||
+                      step_command(&s, PROTO_MSG_SHUTDOWN, -1, why, sizeof why))) {
+        ok = 0;
+        chk_report_add(rep, row, CHK_FAIL, "step 1 after the checkpoint: %s", why);
+    }
+    if (ok && !chk_process_wait(&s.proc, EXIT_WAIT_S)) {
+        ok = 0;
+        chk_report_add(rep, row, CHK_FAIL, "still running %.0f s after shutdown", EXIT_WAIT_S);
+    }
+    if (!ok && s.dead && why[0] == '\0') chk_report_add(rep, row, CHK_FAIL, "%s", s.dead_why);
+    finish(&s);
+    if (ok) {
+        session_init(&s, cfg, rep, f, "checkpoint");   /* the same folder */
+        snprintf(s.role, sizeof s.role, "%s", role);
+        ok = start(&s, base, cfg->idle_timeout_s, 0) == 0 &&
+             hello(&s, 0, cfg->idle_timeout_s) == 0 && interface(&s, 0) == 0;
+        if (!ok) {
+            chk_report_add(rep, row, CHK_FAIL, "restarted participant: %s", s.dead_why);
+        } else if (named_command(&s, PROTO_MSG_RESUME, 1, name, why, sizeof why) ||
+                   step_command(&s, PROTO_MSG_BEGIN_STEP, 1, why, sizeof why) ||
+                   solve(&s, 1, 1, &b, why, sizeof why)) {
+            chk_report_add(rep, row, CHK_FAIL, "resume %s, step 1: %s", name, why);
+        } else {
+            size_t count = 3 * s.iface->n * (is_fem(&s) ? 2 : 1), at = 0;
+            size_t d = count_differences(a, b, count, &at);
+            if (d)
+                chk_report_add(rep, row, CHK_FAIL, "step 1 after resume differs from step 1 "
+                               "after the checkpoint in %zu of %zu values (first: entry %zu, "
+                               "%.17g vs %.17g)", d, count, at, b[at], a[at]);
+            else
+                chk_report_add(rep, row, CHK_PASS, "checkpoint after step 0, restart, resume: "
+                               "step 1 answered identically (%zu values)", count);
+            step_command(&s, PROTO_MSG_ACCEPT_STEP, 1, why, sizeof why);
+            step_command(&s, PROTO_MSG_SHUTDOWN, -1, why, sizeof why);
+            chk_process_wait(&s.proc, EXIT_WAIT_S);
+        }
+        finish(&s);
+    }
+    free(a);
+    free(b);
+    free(scratch);
+}
+
 /* ---- all runs -------------------------------------------------------------------------------- */
 
 static void session_init(session *s, const chk_config *cfg, chk_report *rep, chk_interface *f,
@@ -975,6 +1056,7 @@ int chk_run(const chk_config *cfg, chk_report *rep, nc_error *err)
         shutdown_and_exit(&s, "shutdown", "exit status: clean run", 0);
     char role[PROTO_NAME_MAX];
     snprintf(role, sizeof role, "%s", s.role);
+    const int can_checkpoint = s.version >= 2 && proto_has_capability(s.caps, "checkpoint");
 
     if (cfg->program) {
         finish(&s);
@@ -992,6 +1074,13 @@ int chk_run(const chk_config *cfg, chk_report *rep, nc_error *err)
         shutdown_and_exit(&s, cfg->program ? "shutdown after errors" : "shutdown",
                           "exit status: after errors", s.errors_seen ? 1 : 0);
     finish(&s);
+
+    if (cfg->program && can_checkpoint)
+        checkpoint_runs(cfg, rep, &f, base, role);
+    else
+        chk_report_add(rep, "checkpoint/resume bit-identity", CHK_SKIP,
+                       cfg->program ? "capability 'checkpoint' not announced"
+                                    : "not started by netcouple-check (it restarts the participant)");
 
     if (cfg->program && cfg->idle_check) {
         session_init(&s, cfg, rep, &f, "idle");

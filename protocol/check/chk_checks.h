@@ -1,14 +1,16 @@
 /* chk_checks — the conformance checks of netcouple-check: the harness plays the coupler
  * against one participant and records one row per property of protocol/README.md.
  *
- * With a PROGRAM it runs the participant three times, each started as a launcher starts it
+ * With a PROGRAM it runs the participant up to five times, each started as a launcher starts it
  * (PROGRAM ARGS... --endpoint tcp://127.0.0.1:* --endpoint-file FILE --output DIR
  * --idle-timeout S):
  *   1. the clean run — endpoint file, hello, a second coupler's hello, interface, two steps
  *      with the restore checks, a command of a foreign session, shutdown, exit status 0;
  *   2. the error run — commands out of order and malformed ones, each answered with an error
  *      while the participant keeps serving, shutdown, exit status 1 (§6);
- *   3. the idle run — no command at all: exit status 1 within the idle time plus a margin.
+ *   3. the checkpoint runs (capability `checkpoint`, §3.3) — step 0, CHECKPOINT, step 1;
+ *      then started again in the same folder, RESUME, step 1: the same answer bit for bit;
+ *   4. the idle run — no command at all: exit status 1 within the idle time plus a margin.
  * With an endpoint (a participant started by the user) runs 1 and 2 share one connection and
  * the process checks are skipped.
  * Every wait is bounded (reply timeout, start timeout); a participant that stops answering

@@ -14,7 +14,11 @@ ball.json keys (SI): radius (default 0.1), mass (default 1), position ([x, y, z]
 centre, required), velocity (default [0, 0, 0]), stiffness (contact, N/m, default 1e5),
 damping_ratio (contact, default 0.2), gravity (m/s², default -9.81), substeps (default 20),
 near_distance (gap below which near_interface = 1, m, default 0.05).
-Output: DIR/ball.csv with one row per accepted step: time, z, vz, gap.
+Output: DIR/ball.csv with one row per accepted step: time, z, vz, gap (created at the first
+BEGIN_STEP; a RESUME reopens it cut back to the rows of the checkpoint).
+Checkpoint/resume (capability "checkpoint", protocol/README.md §3.3): the committed z, vz,
+plane displacement and the length of ball.csv, saved bit for bit by netcouple_participant.py
+in DIR/checkpoint/dem_<name>.json.
 """
 import argparse
 import json
@@ -26,6 +30,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from netcouple_participant import Participant, ParticipantError, serve_until_shutdown  # noqa: E402
+from spring_plate import reopen_cut  # noqa: E402
 
 ALLOWED = {"radius", "mass", "position", "velocity", "stiffness", "damping_ratio", "gravity",
            "substeps", "near_distance", "comment"}
@@ -46,9 +51,8 @@ class Ball:
         self.wall = 0.0           # committed plane displacement (start of step)
         self.trial = None
         self.nodes = 0
-        self.csv = open(os.path.join(output_dir, "ball.csv"), "w")
-        self.csv.write("time,z,vz,gap\n")
-        self.csv.flush()
+        self.csv_path = os.path.join(output_dir, "ball.csv")
+        self.csv = None       # created at the first begin_step, reopened by a resume
 
     def interface(self, cmd):
         coords = cmd.array("coordinates")
@@ -59,8 +63,25 @@ class Ball:
         return [], {}
 
     def begin_step(self, cmd):
+        if self.csv is None:
+            self.csv = open(self.csv_path, "w")
+            self.csv.write("time,z,vz,gap\n")
+            self.csv.flush()
         self.trial = None
         return [], {}
+
+    def checkpoint_state(self, cmd):
+        return {"z": self.z, "vz": self.vz, "wall": self.wall,
+                "csv_bytes": self.csv.tell() if self.csv is not None else 0}
+
+    def restore_state(self, cmd, state):
+        self.z, self.vz, self.wall = state["z"], state["vz"], state["wall"]
+        self.trial = None
+        self.csv = reopen_cut(self.csv_path, state["csv_bytes"])
+
+    def close(self):
+        if self.csv is not None:
+            self.csv.close()
 
     def solve(self, cmd):
         if self.plane0 is None:
@@ -118,9 +139,9 @@ def main():
                                                                              sorted(unknown)))
     os.makedirs(args.output, exist_ok=True)
     ball = Ball(cfg, args.output)
-    p = Participant(args.endpoint, "dem", "netcouple ball_dem.py", "restore", args.idle_timeout,
-                    args.endpoint_file)
-    return serve_until_shutdown(p, ball, "ball_dem", ball.csv.close)
+    p = Participant(args.endpoint, "dem", "netcouple ball_dem.py", "restore checkpoint",
+                    args.idle_timeout, args.endpoint_file, args.output)
+    return serve_until_shutdown(p, ball, "ball_dem", ball.close)
 
 
 if __name__ == "__main__":

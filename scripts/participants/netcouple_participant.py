@@ -12,7 +12,8 @@ is a UTF-8 JSON header
      "values": {"near_interface": 1}, "role": "fem", "name": "...", "text": "..."}
 
 whose "arrays" list describes the array frames in order.
-Types: hello, interface, begin_step, solve, accept_step, shutdown; an error reply has
+Types: hello, interface, begin_step, solve, accept_step, shutdown, and in version 2
+checkpoint and resume (protocol/README.md §3.3); an error reply has
 type "error", status "error" and the reason in "text" ("retryable": true when a smaller step
 may succeed).
 
@@ -29,6 +30,16 @@ begin_step(cmd), solve(cmd), accept_step(cmd), each returning (arrays, values) w
 is a list of (name, numpy array) and values a dict; raise ParticipantError(reason) to reply
 with an error and keep serving, ParticipantError(reason, retryable=True) when the step may
 succeed with a smaller dt (the coupler then retries it). serve() returns on SHUTDOWN;
+Checkpoint/resume (optional): a handler that also has checkpoint_state(cmd) -> dict and
+restore_state(cmd, state) is checkpoint-capable, and only then is the capability
+"checkpoint" announced (when the program lists it). On CHECKPOINT the module takes the dict
+(floats, ints, strings, lists, dicts, numpy arrays), writes it to
+<output_dir>/checkpoint/<role>_<name>.json with every float as a hexadecimal string (bit for
+bit), flushed to disk and renamed into place, keeps the two newest such files and replies
+with the file name in "text"; on RESUME (before any begin_step, at most once) it reads the
+file back and hands the dict to restore_state, which also reopens the handler's result files
+as they were at the checkpoint. A handler must therefore not create its result files before
+the first begin_step or resume.
 serve_until_shutdown() wraps it with the exit codes and clean-up of a participant program:
 0 after SHUTDOWN when every command was answered normally, 1 when any command (a malformed
 one included) was answered with an error other than a retryable failure or a refusal of
@@ -44,7 +55,8 @@ import zmq
 
 PROTOCOL_VERSION = 2        # the newest version this module speaks
 PROTOCOL_VERSION_MIN = 1    # the oldest one it still serves
-TYPES = ("hello", "interface", "begin_step", "solve", "accept_step", "shutdown", "error")
+TYPES = ("hello", "interface", "begin_step", "solve", "accept_step", "shutdown", "checkpoint",
+         "resume", "error")
 DTYPES = {"f64": "<f8", "i32": "<i4"}
 
 
@@ -226,10 +238,50 @@ def encode(msg_type, command, role, name, arrays=(), values=None, text="", error
     return frames
 
 
+def _to_json(x):
+    """A checkpoint value as JSON: floats as hexadecimal strings (exact), arrays tagged."""
+    if isinstance(x, np.ndarray):
+        return {"array": [_to_json(v) for v in x.ravel().tolist()], "dtype": x.dtype.str,
+                "shape": list(x.shape)}
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return {"float": float(x).hex()}
+    if isinstance(x, str) or x is None:
+        return x
+    if isinstance(x, (list, tuple)):
+        return [_to_json(v) for v in x]
+    if isinstance(x, dict):
+        return {str(k): _to_json(v) for k, v in x.items()}
+    raise ParticipantError("checkpoint: cannot save a value of type %s" % type(x).__name__)
+
+
+def _from_json(x):
+    if isinstance(x, dict):
+        if set(x) == {"float"}:
+            return float.fromhex(x["float"])
+        if set(x) == {"array", "dtype", "shape"}:
+            return np.array([_from_json(v) for v in x["array"]],
+                            dtype=np.dtype(x["dtype"])).reshape(x["shape"])
+        return {k: _from_json(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_from_json(v) for v in x]
+    return x
+
+
+def _valid_checkpoint_name(name):
+    return isinstance(name, str) and 0 < len(name) < 64 and \
+        all(c.isascii() and (c.isalnum() or c in "_-") for c in name)
+
+
 class Participant:
     def __init__(self, endpoint, role, name, capabilities="restore", idle_timeout_s=300.0,
-                 endpoint_file=None):
+                 endpoint_file=None, output_dir="."):
         self.role = role
+        self.output_dir = output_dir
+        self.checkpoint_files = []   # written by this process, oldest first (two kept)
         self.name = name
         self.capabilities = capabilities
         self.idle_timeout_s = idle_timeout_s if idle_timeout_s > 0 else 0.0
@@ -279,7 +331,79 @@ class Participant:
                           version=version, session=session,
                           retryable=retryable, step=step, iteration=iteration))
 
-    def _hello(self, cmd):
+    @staticmethod
+    def can_checkpoint(handler):
+        return callable(getattr(handler, "checkpoint_state", None)) and \
+            callable(getattr(handler, "restore_state", None))
+
+    def _announced(self, handler):
+        """The capability words, without "checkpoint" when the handler cannot."""
+        words = self.capabilities.split()
+        if not self.can_checkpoint(handler):
+            words = [w for w in words if w != "checkpoint"]
+        return " ".join(words)
+
+    def _checkpoint_path(self, name):
+        return os.path.join(self.output_dir, "checkpoint", "%s_%s.json" % (self.role, name))
+
+    def _checkpoint(self, handler, cmd):
+        """Saves the handler's state durably; returns the file name (the reply's text)."""
+        name = cmd.header.get("text", "")
+        if not _valid_checkpoint_name(name):
+            raise ParticipantError("checkpoint name %r: expected letters, digits, '_', '-'"
+                                   % (name,))
+        state = {"step": cmd.step, "time": cmd.time, "state": handler.checkpoint_state(cmd)}
+        path = self._checkpoint_path(name)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        tmp = path + ".tmp"
+        try:
+            with open(tmp, "w") as f:
+                json.dump(_to_json(state), f)
+                f.write("\n")
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+            fd = os.open(os.path.dirname(path), os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except OSError as e:
+            raise ParticipantError("%s: cannot write the checkpoint: %s" % (path, e))
+        if path in self.checkpoint_files:
+            self.checkpoint_files.remove(path)
+        self.checkpoint_files.append(path)
+        while len(self.checkpoint_files) > 2:
+            old = self.checkpoint_files.pop(0)
+            try:
+                os.remove(old)
+            except OSError:
+                pass
+        return os.path.basename(path)
+
+    def _resume(self, handler, cmd):
+        name = cmd.header.get("text", "")
+        if not _valid_checkpoint_name(name):
+            raise ParticipantError("resume: checkpoint name %r: expected letters, digits, '_', "
+                                   "'-'" % (name,))
+        path = self._checkpoint_path(name)
+        try:
+            with open(path) as f:
+                saved = _from_json(json.load(f))
+        except (OSError, ValueError) as e:
+            raise ParticipantError("%s: cannot read the checkpoint: %s" % (path, e))
+        if not isinstance(saved, dict) or saved.get("step") != cmd.step or \
+                saved.get("time") != cmd.time:
+            raise ParticipantError("%s: checkpoint of step %r, t = %r; resume asks for step %d, "
+                                   "t = %r" % (path, saved.get("step") if isinstance(saved, dict)
+                                               else None, saved.get("time") if
+                                               isinstance(saved, dict) else None, cmd.step,
+                                               cmd.time))
+        handler.restore_state(cmd, saved["state"])
+        self.checkpoint_files = [path]
+        return os.path.basename(path)
+
+    def _hello(self, cmd, handler=None):
         """Agrees on the newest common version; version 2 takes the coupler's session, and a
         participant serving one session refuses a second coupler."""
         if self.version >= 2 and cmd.session != self.session:
@@ -301,7 +425,7 @@ class Participant:
         self.version = version
         self.session = cmd.session if version >= 2 else ""
         self._reply("hello", cmd, values={"idle_timeout_s": self.idle_timeout_s},
-                    text=self.capabilities)
+                    text=self._announced(handler))
 
     def _check_session(self, cmd):
         """Raises Refused for a command this participant must not serve."""
@@ -322,6 +446,7 @@ class Participant:
         poller = zmq.Poller()
         poller.register(self.socket, zmq.POLLIN)
         step_open = last_solve_ok = False
+        stepped = resumed = False   # a begin_step / a resume was served
         while True:
             if not poller.poll(self.idle_timeout_ms):
                 raise IdleTimeout("no command from the coupler for %.1f s"
@@ -336,7 +461,7 @@ class Participant:
                 self._error(cmd, "%s: expected a command, got a reply (%s)" % (self.role, cmd.type))
                 continue
             if cmd.type == "hello":
-                self._hello(cmd)
+                self._hello(cmd, handler)
                 continue
             try:
                 self._check_session(cmd)
@@ -359,6 +484,28 @@ class Participant:
                                "no step begun (begin_step must come first)" if not step_open
                                else "the step has no successful solve to accept"))
                 continue
+            if cmd.type in ("checkpoint", "resume"):
+                # protocol/README.md §3.3: between steps only; resume once, before stepping
+                why = None
+                if self.version < 2 or not self.can_checkpoint(handler):
+                    why = "this participant cannot (capability 'checkpoint' not announced)"
+                elif cmd.type == "checkpoint" and step_open:
+                    why = "inside a begun step (a checkpoint is taken after accept_step)"
+                elif cmd.type == "resume" and (stepped or resumed):
+                    why = "after %s (a run resumes once, before it steps)" % (
+                        "begin_step" if stepped else "a resume")
+                if why:
+                    self._error(cmd, "%s (step %d): refused: %s" % (cmd.type, cmd.step, why))
+                    continue
+                try:
+                    text = (self._checkpoint if cmd.type == "checkpoint" else self._resume)(
+                        handler, cmd)
+                except ParticipantError as e:
+                    self._error(cmd, "%s (step %d): %s" % (cmd.type, cmd.step, e))
+                    continue
+                resumed = resumed or cmd.type == "resume"
+                self._reply(cmd.type, cmd, text=text)
+                continue
             method = getattr(handler, cmd.type, None)
             if method is None:
                 self._error(cmd, "%s cannot do '%s'" % (self.role, cmd.type))
@@ -373,7 +520,7 @@ class Participant:
                             % (cmd.type, cmd.step, cmd.iteration, e), retryable=e.retryable)
                 continue
             if cmd.type == "begin_step":
-                step_open, last_solve_ok = True, False
+                step_open, last_solve_ok, stepped = True, False, True
             elif cmd.type == "solve":
                 last_solve_ok = True
             elif cmd.type == "accept_step":

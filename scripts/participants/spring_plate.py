@@ -15,12 +15,16 @@ plate.json keys (SI units): size (edge length, m, default 1), nodes_per_side (de
 center ([x, y, z] of the plate, m, default [0, 0, 0]), mass (kg, default 10), stiffness (N/m,
 required), damping_ratio (ζ of the plate-spring, default 0), gravity (acceleration on the
 plate's own mass, m/s², default 0).
-Output: DIR/plate.csv with one row per accepted step: time, w, w', F_z.
+Output: DIR/plate.csv with one row per accepted step: time, w, w', F_z (created at the first
+BEGIN_STEP; a RESUME reopens it cut back to the rows of the checkpoint).
+Checkpoint/resume (capability "checkpoint", protocol/README.md §3.3): the committed state
+w, w', w'' and the length of plate.csv, saved bit for bit by netcouple_participant.py in
+DIR/checkpoint/fem_<name>.json.
 --fail-at S:K replies an error to SOLVE of step S, iteration K (to test fault handling).
 Switches for tests of the coupler's checks:
 --retryable-above DT fails every SOLVE with dt > DT as retryable (the coupler retries the
   step with a smaller dt); --capabilities WORDS replaces the announced capabilities (default
-  "restore"; "--capabilities=" announces none); --no-restore makes every SOLVE start from
+  "restore checkpoint"; "--capabilities=" announces none); --no-restore makes every SOLVE start from
   the state the previous SOLVE ended in instead of the start of the step (a participant that
   forgets to restore; strong coupling must catch it).
 """
@@ -71,9 +75,8 @@ class Plate:
         self.a = self.g          # consistent initial acceleration (no load)
         self.w1, self.v1, self.a1, self.F1 = self.w, self.v, self.a, 0.0
         self.solved = False
-        self.csv = open(os.path.join(output_dir, "plate.csv"), "w")
-        self.csv.write("time,w,v,force_z\n")
-        self.csv.flush()
+        self.csv_path = os.path.join(output_dir, "plate.csv")
+        self.csv = None       # created at the first begin_step, reopened by a resume
         self.nodes = self.n * self.n
 
     def interface(self, cmd):
@@ -90,8 +93,21 @@ class Plate:
                 ("elements", np.array(elements, dtype=np.int32))], {}
 
     def begin_step(self, cmd):
+        if self.csv is None:
+            self.csv = open(self.csv_path, "w")
+            self.csv.write("time,w,v,force_z\n")
+            self.csv.flush()
         self.solved = False
         return [], {}
+
+    def checkpoint_state(self, cmd):
+        return {"w": self.w, "v": self.v, "a": self.a,
+                "csv_bytes": self.csv.tell() if self.csv is not None else 0}
+
+    def restore_state(self, cmd, state):
+        self.w, self.v, self.a = state["w"], state["v"], state["a"]
+        self.w1, self.v1, self.a1 = self.w, self.v, self.a
+        self.csv = reopen_cut(self.csv_path, state["csv_bytes"])
 
     def solve(self, cmd):
         if self.fail_at == (cmd.step, cmd.iteration):
@@ -132,7 +148,19 @@ class Plate:
         return [], {}
 
     def close(self):
-        self.csv.close()
+        if self.csv is not None:
+            self.csv.close()
+
+
+def reopen_cut(path, size):
+    """A result file as it was at a checkpoint: cut back to `size` bytes, then appended to."""
+    try:
+        f = open(path, "r+")
+        f.truncate(size)
+        f.seek(size)
+    except OSError as e:
+        raise ParticipantError("%s: cannot reopen at the checkpoint: %s" % (path, e))
+    return f
 
 
 def main():
@@ -144,7 +172,7 @@ def main():
     ap.add_argument("--idle-timeout", type=float, default=300.0)
     ap.add_argument("--fail-at", default=None)
     ap.add_argument("--retryable-above", type=float, default=None)
-    ap.add_argument("--capabilities", default="restore")
+    ap.add_argument("--capabilities", default="restore checkpoint")
     ap.add_argument("--no-restore", action="store_true")
     args = ap.parse_args()
     cfg = load(args.input)
@@ -152,7 +180,7 @@ def main():
     fail_at = tuple(int(x) for x in args.fail_at.split(":")) if args.fail_at else None
     plate = Plate(cfg, args.output, fail_at, args.retryable_above, args.no_restore)
     p = Participant(args.endpoint, "fem", "netcouple spring_plate.py", args.capabilities,
-                    args.idle_timeout, args.endpoint_file)
+                    args.idle_timeout, args.endpoint_file, args.output)
     # exits 1 after SHUTDOWN when a command was answered with an error (protocol rule)
     return serve_until_shutdown(p, plate, "spring_plate", plate.close)
 

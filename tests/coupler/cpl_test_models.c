@@ -2,6 +2,7 @@
 #include "cpl_test_models.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -185,9 +186,47 @@ static int s_accept(void *ctx, const cpl_call *call, nc_error *err)
     return 0;
 }
 
+/* ---- checkpoint files: raw doubles, written and read in one order ---------------------- */
+
+static int state_file(const char *dir, const char *role, const char *name, int write,
+                      double **parts, size_t n_parts, size_t nd, long *failures, nc_error *err)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s_%s.bin", dir, role, name);
+    FILE *f = fopen(path, write ? "wb" : "rb");
+    if (!f) return nc_error_set(err, 1, "%s: cannot open (test checkpoint)", path);
+    int ok = 1;
+    for (size_t k = 0; k < n_parts && ok; k++)
+        ok = (write ? fwrite(parts[k], sizeof(double), nd, f) : fread(parts[k], sizeof(double), nd, f)) == nd;
+    ok = ok && (write ? fwrite(failures, sizeof *failures, 1, f) : fread(failures, sizeof *failures, 1, f)) == 1;
+    ok = (fclose(f) == 0) && ok;
+    return ok ? 0 : nc_error_set(err, 1, "%s: short %s (test checkpoint)", path, write ? "write" : "read");
+}
+
+static int s_checkpoint(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    (void)call;
+    tm_structure *s = ctx;
+    if (s->open) return nc_error_set(err, 1, "checkpoint refused: inside a begun step (test)");
+    double *parts[2] = {s->u0, s->v0};
+    s->checkpoints++;
+    return state_file(s->checkpoint_dir, "fem", name, 1, parts, 2, s->nd, &s->fail.failures, err);
+}
+
+static int s_resume(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    (void)call;
+    tm_structure *s = ctx;
+    double *parts[2] = {s->u0, s->v0};
+    s->resumes++;
+    return state_file(s->checkpoint_dir, "fem", name, 0, parts, 2, s->nd, &s->fail.failures, err);
+}
+
 cpl_participant tm_structure_participant(tm_structure *s)
 {
-    cpl_participant p = {"fem", s, s_begin, s_solve, s_accept, 0};
+    cpl_participant p = {"fem", s, s_begin, s_solve, s_accept, 0,
+                         s->checkpoint_dir ? s_checkpoint : NULL,
+                         s->checkpoint_dir ? s_resume : NULL};
     return p;
 }
 
@@ -247,9 +286,29 @@ static int p_accept(void *ctx, const cpl_call *call, nc_error *err)
     return 0;
 }
 
+static int p_checkpoint(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    (void)call;
+    tm_particles *p = ctx;
+    double *parts[3] = {p->x0, p->y0, p->w0};
+    p->checkpoints++;
+    return state_file(p->checkpoint_dir, "dem", name, 1, parts, 3, p->nd, &p->fail.failures, err);
+}
+
+static int p_resume(void *ctx, const cpl_call *call, const char *name, nc_error *err)
+{
+    (void)call;
+    tm_particles *p = ctx;
+    double *parts[3] = {p->x0, p->y0, p->w0};
+    p->resumes++;
+    return state_file(p->checkpoint_dir, "dem", name, 0, parts, 3, p->nd, &p->fail.failures, err);
+}
+
 cpl_participant tm_particles_participant(tm_particles *p)
 {
-    cpl_participant q = {"dem", p, p_begin, p_solve, p_accept, 0};
+    cpl_participant q = {"dem", p, p_begin, p_solve, p_accept, 0,
+                         p->checkpoint_dir ? p_checkpoint : NULL,
+                         p->checkpoint_dir ? p_resume : NULL};
     return q;
 }
 
@@ -327,7 +386,7 @@ static int r_reject(void *ctx, const cpl_reject_record *rec, nc_error *err)
 cpl_observer tm_recorder_observer(tm_recorder *r)
 {
     memset(r, 0, sizeof *r);
-    cpl_observer o = {r, r_iteration, r_step, r_reject};
+    cpl_observer o = {r, r_iteration, r_step, r_reject, NULL};
     return o;
 }
 

@@ -44,6 +44,8 @@ typedef struct tm_structure {
     double dt_seen_max;       /* largest Δt received */
     tm_fail_window fail;
     int open;                 /* BEGIN_STEP done, ACCEPT_STEP not yet */
+    const char *checkpoint_dir;   /* checkpoint/resume to files here (NULL: cannot) */
+    long checkpoints, resumes;
 } tm_structure;
 
 typedef struct tm_particles {
@@ -57,6 +59,8 @@ typedef struct tm_particles {
     int fail_iteration;
     tm_fail_window fail;
     double stiff_from_s, stiff_until_s, stiff_factor;   /* kc × factor in the window */
+    const char *checkpoint_dir;   /* checkpoint/resume to files here (NULL: cannot) */
+    long checkpoints, resumes;
 } tm_particles;
 
 void tm_structure_init(tm_structure *s, size_t n_nodes, double m, double k, double k_link);
@@ -80,6 +84,10 @@ extern const tm_problem TM_HARD;
  * absolute tolerance of 1e-10 and at most 200 iterations per step. */
 cpl_loop_settings tm_loop_settings(cpl_scheme scheme, double dt, double end);
 
+/* With checkpoint_dir set, the participants can checkpoint and resume: their committed
+ * state (and the failure counter of the window) goes to <dir>/fem_<name>.bin, dem_<name>.bin
+ * and comes back bit for bit; like the serve loop they refuse a checkpoint inside a begun
+ * step. */
 cpl_participant tm_structure_participant(tm_structure *s);
 cpl_participant tm_particles_participant(tm_particles *p);
 

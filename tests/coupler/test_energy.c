@@ -57,7 +57,7 @@ static void run(const tm_problem *pb, const cpl_loop_settings *s, run_out *out)
     tm_structure_init(&st, pb->nodes, pb->m, pb->k, pb->k_link);
     tm_particles_init(&pa, pb->nodes, pb->mp, pb->kc, pb->g);
     cpl_participant fem = tm_structure_participant(&st), dem = tm_particles_participant(&pa);
-    cpl_observer obs = {&out->log, NULL, on_step, NULL};
+    cpl_observer obs = {&out->log, NULL, on_step, NULL, NULL};
     cpl_loop *loop;
     nc_error err;
     assert_int_equal(cpl_loop_create(&loop, s, pb->nodes, NULL, NULL, &err), 0);

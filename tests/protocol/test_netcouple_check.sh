@@ -87,7 +87,8 @@ grep -q "accepted the 49-node, 84-element interface" "$NC_TMP/dem.out" || fail "
 
 # the Python participants: pass, also with --strict
 run plate 0 -- "$PY" scripts/participants/spring_plate.py "$NC_TMP/plate.json"
-rows "$NC_TMP/plate.report.json" "${must[@]}" || fail "spring_plate rows"
+rows "$NC_TMP/plate.report.json" "${must[@]}" "checkpoint/resume bit-identity=PASS" \
+  || fail "spring_plate rows"
 run ball 0 --no-idle-check -- "$PY" scripts/participants/ball_dem.py "$NC_TMP/ball.json"
 rows "$NC_TMP/ball.report.json" "restore: solve repeated=PASS" "restore: step begun again=PASS" \
   "exit status: after errors=PASS" "hello: role=PASS" "FAIL-ONLY=" || fail "ball_dem rows"

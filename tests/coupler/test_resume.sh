@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Checkpoint/resume end to end with the real solvers: the small net case
+# (tests/coupler/cases/small_net: 7 x 7 cable net, one rock, COR 0.5, strong coupling with
+# Aitken, 0.4 s) with a checkpoint every 0.05 s. A run stopped by SIGINT to
+# run_case.sh (exit 130) and one killed with its whole process group (SIGKILL) are continued
+# with `run_case.sh --resume DIR`; every dataset of fem.h5, dem.h5 and coupling.h5 (except
+# the wall-clock ones, tests/coupler/resume_lib.sh) must be identical to the uninterrupted
+# run's, with the same shapes.
+# Skipped (exit 77) while fem_solver or dem_solver does not announce the capability
+# 'checkpoint' (the coupler then says "checkpoints off" at start-up, naming it).
+. tests/e2e_lib.sh
+. tests/coupler/resume_lib.sh
+set -m
+case_dir=tests/coupler/cases/small_net
+args=(--set coupler.checkpoint.interval_s=0.05)
+
+# can both solvers checkpoint? (the coupler's start-up warning names the one that cannot)
+scripts/run_case.sh "$case_dir" --out "$NC_TMP/probe" --quiet --set coupler.end_time=0.002 \
+  --set coupler.checkpoint.interval_s=0.001 > "$NC_TMP/probe.out" 2>&1 \
+  || { tail -n 20 "$NC_TMP/probe.out"; fail "probe run failed"; }
+if grep -q "checkpoints off" "$NC_TMP/probe/coupler.log"; then
+  echo "SKIP: $(grep -m 1 -o "checkpoints off: .*" "$NC_TMP/probe/coupler.log")"
+  exit 77
+fi
+
+resume_check net_int "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
+resume_check net_kill "$case_dir" kill "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
+echo "PASS"
