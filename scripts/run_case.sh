@@ -310,12 +310,17 @@ rm -f coupler.progress coupler.progress.tmp
 status_shown=0; show_pid=""
 
 # ---- start the solvers and wait for their endpoints -------------------------------------
+# A run_case.sh killed with SIGKILL cannot stop its programs: each gets SIGTERM from the kernel
+# when run_case.sh dies (setpriv --pdeathsig, util-linux), instead of waiting for a coupler
+# that never comes until its idle timeout.
+guard=()
+setpriv --pdeathsig TERM true 2>/dev/null && guard=(setpriv --pdeathsig TERM)
 # shellcheck disable=SC2086   # the program may be a command with arguments
-$fem_program fem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint \
+"${guard[@]}" $fem_program fem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint \
   >fem.log 2>&1 &
 pid[fem]=$!
 # shellcheck disable=SC2086
-$dem_program dem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint \
+"${guard[@]}" $dem_program dem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint \
   >dem.log 2>&1 &
 pid[dem]=$!
 
@@ -343,7 +348,7 @@ done
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
-"$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
+"${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
   --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
   >coupler.log 2>&1 &
 pid[coupler]=$!

@@ -12,6 +12,9 @@
 #  5. --help prints the usage and nothing else;
 #  6. the FEM replies an error (a Newton failure stand-in) -> the FEM alone is named as failed
 #     (the coupler's error names it), the coupler and the DEM as stopped;
+#  8. run_case.sh itself killed (SIGKILL) while it waits for the endpoints, before the coupler
+#     runs -> the solvers already started do not outlive it (no orphan waiting for a coupler
+#     until its idle timeout): gone within a few seconds;
 #  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
 #     (time, remaining time, contact, deflection) with its messages, the final status line
 #     stays, and coupler.log still holds everything without terminal control characters.
@@ -55,9 +58,13 @@ finish() {   # seconds: waits for run_case.sh; sets rc and took (s, one decimal)
   wait "$rpid"; rc=$?
   took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv[1])))" "$t0" "$EPOCHREALTIME")
 }
+group_members() {   # pid and command of every process in run_case.sh's process group
+  # (ps -g selects sessions, not process groups: filter on the pgid column)
+  ps -eo pid=,pgid=,args= | awk -v g="$rpid" '$2 == g {$2 = ""; print}'
+}
 no_leftovers() {   # no process of the run may survive run_case.sh
   local left
-  left=$(ps -o pid= -o args= -g "$rpid" 2>/dev/null)
+  left=$(group_members)
   [ -z "$left" ] || fail "processes left after run_case.sh: $left"
   rpid=""
 }
@@ -142,6 +149,24 @@ failed_line | grep -q "^run_case: failed: fem (named by the coupler's error, see
 grep -q "coupler: error: fem: step 50 .*requested failure at step 50" "$out.out" || fail "error reply: the coupler's error is not shown"
 no_leftovers
 echo "6 ok: $(failed_line)"
+
+# 8. run_case.sh killed before the coupler starts: its solvers must not outlive it
+launch orphans --dem-program tests/coupler/participants/never_publishes.sh
+for _ in $(seq 200); do [ -s "$out/fem.endpoint" ] && break; sleep 0.05; done
+[ -s "$out/fem.endpoint" ] || fail "orphans: the FEM published no endpoint"
+kill -KILL "$rpid"
+wait "$rpid" 2>/dev/null
+t0=$EPOCHREALTIME
+left="x"
+for _ in $(seq 100); do
+  left=$(group_members)
+  [ -z "$left" ] && break
+  sleep 0.05
+done
+[ -z "$left" ] || fail "orphans: left running 5 s after run_case.sh was killed: $left"
+took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv[1])))" "$t0" "$EPOCHREALTIME")
+rpid=""
+echo "8 ok: the solvers ended $took s after run_case.sh was killed"
 
 # 7. the live status line on a terminal
 if command -v script >/dev/null; then
