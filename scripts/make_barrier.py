@@ -19,9 +19,10 @@ Geometry (x along the barrier, y downslope = the impact direction, z up):
   anchors at (x_end -/+ height, 0, 0), bottom-rope anchors at (x_end -/+ height/2, 0, 0);
   each brake (type `brake`, --brake-length long) lies on the rope's line at the anchor;
 - upslope (retaining) ropes: from each post top to an anchor at (x_k, -upslope distance, 0),
-  a cable with a brake at the anchor;
-- lateral ropes: from each end post top to a lateral anchor at (x_end -/+ 0.75 height,
-  -height, 0), a cable; and the edge ropes: a `sliding_cable` from each end post top down
+  the rope and its brake in series as one `brake` element (stiffness 1/(1/k_e + L/EA));
+- lateral ropes: from each end post top to a lateral anchor at (x_end -/+ 0.75 height, 0, 0)
+  (in the barrier's plane, so they hold the end post along the barrier without pulling it
+  upslope), a cable; and the edge ropes: a `sliding_cable` from each end post top down
   through the net's end column to the post base.
 
 Named node sets: anchors (all), anchor_top_rope, anchor_bottom_rope, anchor_upslope,
