@@ -7,6 +7,7 @@
  * SIGINT/SIGTERM stop the run after the current step; results so far are kept.
  * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 130 stopped by a signal.
  */
+#include "fem_element.h"
 #include "fem_input.h"
 #include "fem_run.h"
 #include "nc_file.h"
@@ -52,9 +53,14 @@ static void print_summary(const fem_model *m, const char *input, FILE *out)
                 length += m->L0[e];
             }
         double a = set->area_m2, force = set->prestress_pa * a;
+        /* The element type; a set of type cable shows its behaviour (cable or truss). */
+        const fem_element_ops *ops = fem_element_type(m->set_types ? m->set_types[k].type : 0);
+        const char *kind = ops && m->set_types && m->set_types[k].type != FEM_TYPE_CABLE
+                               ? ops->name
+                               : set->behaviour == FEM_CABLE ? "cable" : "truss";
         fprintf(out, "  set %s (%s): %d elements, length %.6g m, E %.4g Pa, A %.4g m², "
                      "EA %.4g N, pretension %.4g N (%.4g Pa), mass %.6g kg",
-                set->name, set->behaviour == FEM_CABLE ? "cable" : "truss", count, length,
+                set->name, kind, count, length,
                 set->youngs_modulus_pa, a, set->youngs_modulus_pa * a,
                 force, set->prestress_pa, set->density_kg_m3 * a * length);
         if (set->breaking_load_n > 0.0)
