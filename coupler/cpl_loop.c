@@ -335,12 +335,11 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
 
 int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
 {
-    long blocks = 0;
-    if (cpl_ckpt_read_long(path, "/loop/jacobian_blocks", &blocks, err)) return -1;
-    if (blocks < 0 || blocks > 100000000L)
-        return nc_error_set(err, 1, "%s: /loop/jacobian_blocks = %ld is not a block count", path,
-                            blocks);
-    size_t n = (size_t)blocks;
+    size_t n = 0;
+    if (nc_ckpt_read_scalar(path, "/loop/jacobian_blocks", NC_CKPT_SIZE, &n, err)) return -1;
+    if (n > 100000000u)
+        return nc_error_set(err, 1, "%s: /loop/jacobian_blocks = %zu is not a block count", path,
+                            n);
     int32_t *nodes = calloc(2 * n + 1, sizeof *nodes);
     double *zeros = calloc(9 * n + 1, sizeof *zeros);
     int rc = nodes && zeros ? cpl_jacobian_set(&L->jac, n, nodes, zeros, zeros, err)

@@ -92,8 +92,8 @@ void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out);
 
 /* Adds the method's state to a checkpoint table under `prefix` (cpl_checkpoint.h); the
  * same entries serve to save and to load it. */
-struct cpl_ckpt_table;
-void cpl_relax_checkpoint_entries(cpl_relax *r, struct cpl_ckpt_table *t, const char *prefix);
+struct nc_ckpt_table;
+void cpl_relax_checkpoint_entries(cpl_relax *r, struct nc_ckpt_table *t, const char *prefix);
 
 /* A method's diagnostic counter by name ("restarts" of Aitken; "columns",
  * "dropped_columns" of IQN-ILS); -1 when the method has no such counter. */

@@ -83,7 +83,7 @@ typedef struct app {
     const volatile sig_atomic_t *stop_signal;   /* 0, or SIGINT / SIGTERM once received */
     int resume;                     /* --resume */
     char ckpt_name[64];             /* the checkpoint resumed from (--resume) */
-    char ckpt_newest[64], ckpt_older[64];   /* the two newest checkpoints (kept) */
+    char ckpt_newest[64];           /* the newest checkpoint (kept with the next one) */
     long ckpt_step;
 } app;
 
@@ -222,7 +222,7 @@ static int observe_checkpoint(void *ctx, long step, double time_s, const char *n
     cpl_history_mark(&a->history);
     cpl_ckpt_table t = {0};
     app_checkpoint_entries(a, &t);
-    snprintf(path, sizeof path, "%s/coupler_%s.h5", dir, name);
+    cpl_checkpoint_path(a->output_dir, name, path, sizeof path);
     int rc = cpl_ckpt_save(&t, path, err);
     cpl_ckpt_table_free(&t);
     if (rc) return -1;
@@ -256,15 +256,15 @@ static int observe_checkpoint(void *ctx, long step, double time_s, const char *n
     free(text);
     if (!with_newline) return nc_error_set(err, 1, "checkpoint manifest: out of memory");
     snprintf(manifest, sizeof manifest, "%s/latest.json", dir);
-    rc = cpl_ckpt_write_text(manifest, with_newline, err);
+    rc = nc_file_write_durably(manifest, with_newline, strlen(with_newline), err);
     free(with_newline);
     if (rc) return -1;
     /* keep the two newest coupler checkpoints (the manifest no longer names the third) */
-    if (a->ckpt_older[0] && strcmp(a->ckpt_older, name) != 0) {
-        snprintf(path, sizeof path, "%s/coupler_%s.h5", dir, a->ckpt_older);
-        remove(path);
-    }
-    snprintf(a->ckpt_older, sizeof a->ckpt_older, "%s", a->ckpt_newest);
+    char keep_new[128], keep_old[128];
+    snprintf(keep_new, sizeof keep_new, "coupler_%s.h5", name);
+    snprintf(keep_old, sizeof keep_old, "coupler_%s.h5", a->ckpt_newest);
+    const char *keep[2] = {keep_new, a->ckpt_newest[0] ? keep_old : NULL};
+    nc_ckpt_prune_except(dir, "coupler_", keep, 2);
     snprintf(a->ckpt_newest, sizeof a->ckpt_newest, "%s", name);
     if (!a->quiet)
         cpl_progress_message(&a->progress, "coupler: checkpoint %s (step %ld, t = %.6g s) in "
@@ -296,7 +296,6 @@ static int read_manifest(app *a, nc_error *err)
     if (nc_json_load_file(path, &root, err)) return -1;
     const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "checkpoint");
     const cJSON *step = cJSON_GetObjectItemCaseSensitive(root, "step");
-    const cJSON *prev = cJSON_GetObjectItemCaseSensitive(root, "previous");
     int rc = 0;
     if (!cJSON_IsString(name) || !valid_name(name->valuestring))
         rc = nc_error_set(err, 1, "%s: checkpoint: expected the checkpoint's name (letters, "
@@ -308,8 +307,6 @@ static int read_manifest(app *a, nc_error *err)
         snprintf(a->ckpt_name, sizeof a->ckpt_name, "%s", name->valuestring);
         a->ckpt_step = (long)step->valuedouble;
         snprintf(a->ckpt_newest, sizeof a->ckpt_newest, "%s", name->valuestring);
-        if (cJSON_IsString(prev) && valid_name(prev->valuestring))
-            snprintf(a->ckpt_older, sizeof a->ckpt_older, "%s", prev->valuestring);
     }
     cJSON_Delete(root);
     return rc;
@@ -319,7 +316,7 @@ static int read_manifest(app *a, nc_error *err)
 static int load_checkpoint(app *a, nc_error *err)
 {
     char path[2400];
-    snprintf(path, sizeof path, "%s/checkpoint/coupler_%s.h5", a->output_dir, a->ckpt_name);
+    cpl_checkpoint_path(a->output_dir, a->ckpt_name, path, sizeof path);
     if (cpl_loop_checkpoint_prepare(a->loop, path, err)) return -1;
     cpl_ckpt_table t = {0};
     app_checkpoint_entries(a, &t);

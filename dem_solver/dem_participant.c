@@ -2,7 +2,6 @@
 #include "dem_participant.h"
 
 #include <ctype.h>
-#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,13 +28,12 @@ typedef struct participant {
 
 /* The participant's own state in a checkpoint (dem_checkpoint.h): the nodal force of the last
  * step (output), the next output time and the energy at the last BEGIN_STEP. */
-static size_t own_items(participant *c, dem_ck_item *it)
+static void own_entries(participant *c, nc_ckpt_table *t)
 {
     size_t nn = c->s->model.net.active ? c->s->model.net.n_nodes : 0;
-    it[0] = (dem_ck_item){"/participant/net_force", DEM_CK_F64, c->force, nn, 3, 0};
-    it[1] = (dem_ck_item){"/participant/next_output_s", DEM_CK_F64, &c->next_out_s, 1, 1, 0};
-    it[2] = (dem_ck_item){"/participant/energy_at_begin_j", DEM_CK_F64, &c->e_start_j, 1, 1, 0};
-    return 3;
+    nc_ckpt_add_rows(t, "participant", "net_force", NC_CKPT_F64, c->force, nn, 3, 0);
+    nc_ckpt_f64(t, "participant", "next_output_s", &c->next_out_s, 1);
+    nc_ckpt_f64(t, "participant", "energy_at_begin_j", &c->e_start_j, 1);
 }
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -179,27 +177,12 @@ static void checkpoint_path(const participant *c, const char *name, char *out, s
  * left). Checkpoints of the other participants are not touched. */
 static void prune_checkpoints(const participant *c, const char *keep)
 {
-    char dir[1100];
+    char dir[1100], keep1[300], keep2[300];
     snprintf(dir, sizeof dir, "%s/checkpoint", c->out->dir);
-    DIR *d = opendir(dir);
-    if (!d) return;
-    char keep1[300], keep2[300];
     snprintf(keep1, sizeof keep1, "dem_%s.h5", keep);
     snprintf(keep2, sizeof keep2, "dem_%s.h5", c->last_checkpoint);
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        const char *f = e->d_name;
-        size_t len = strlen(f);
-        int ours = strncmp(f, "dem_", 4) == 0 &&
-                   ((len > 7 && strcmp(f + len - 3, ".h5") == 0) ||
-                    (len > 11 && strcmp(f + len - 7, ".h5.tmp") == 0));
-        if (!ours || strcmp(f, keep1) == 0 || (c->last_checkpoint[0] && strcmp(f, keep2) == 0))
-            continue;
-        char path[1500];
-        snprintf(path, sizeof path, "%s/%s", dir, f);
-        remove(path);
-    }
-    closedir(d);
+    const char *kept[2] = {keep1, c->last_checkpoint[0] ? keep2 : NULL};
+    nc_ckpt_prune_except(dir, "dem_", kept, 2);
 }
 
 static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -212,12 +195,13 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
     char dir[1100], path[1400];
     snprintf(dir, sizeof dir, "%s/checkpoint", c->out->dir);
     checkpoint_path(c, cmd->text, path, sizeof path);
-    dem_ck_item own[3];
-    size_t n_own = own_items(c, own);
+    nc_ckpt_table own = {0};
+    own_entries(c, &own);
     /* the result rows the checkpoint counts are on the disk before it is */
-    if (nc_file_make_dirs(dir, err) || dem_output_sync(c->out, err) ||
-        dem_checkpoint_save(path, cmd->text, c->s, c->out, own, n_own, cmd->step, cmd->time_s, err))
-        return -1;
+    int rc = nc_file_make_dirs(dir, err) || dem_output_sync(c->out, err) ||
+             dem_checkpoint_save(path, cmd->text, c->s, c->out, &own, cmd->step, cmd->time_s, err);
+    nc_ckpt_table_free(&own);
+    if (rc) return -1;
     prune_checkpoints(c, cmd->text);
     snprintf(c->last_checkpoint, sizeof c->last_checkpoint, "%s", cmd->text);
     if (c->opt->progress) {
@@ -238,10 +222,11 @@ static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, 
     if (!c->s->model.net.active)
         return nc_error_set(err, 1, "%s: RESUME before INTERFACE (the checkpoint holds the net "
                                     "wall's state)", path);
-    dem_ck_item own[3];
-    size_t n_own = own_items(c, own);
-    if (dem_checkpoint_load(path, c->s, c->out, own, n_own, cmd->step, cmd->time_s, err))
-        return -1; /* the state is untouched */
+    nc_ckpt_table own = {0};
+    own_entries(c, &own);
+    int rc = dem_checkpoint_load(path, c->s, c->out, &own, cmd->step, cmd->time_s, err);
+    nc_ckpt_table_free(&own);
+    if (rc) return -1; /* the state is untouched */
     /* the state is the checkpoint's from here: without its result files it must not step */
     if (dem_output_resume(c->out, c->s, err)) {
         c->resume_failed = 1;

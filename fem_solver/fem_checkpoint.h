@@ -3,10 +3,10 @@
  * same model so that it continues bit for bit as if it had never stopped
  * (protocol/README.md §3.3).
  *
- * What is saved is one table of entries {name, type, pointer, count} (fem_checkpoint.c:
- * analysis_entries, output_entries): save writes every entry as a dataset, load reads every
- * entry back and checks that the file has it with exactly that count, so a new history array
- * is one line in the table. Three parts are not copied but rebuilt from what defines them,
+ * What is saved is one table of entries {name, type, pointer, count} (common/nc_checkpoint.h;
+ * fem_checkpoint.c: analysis_entries, output_entries): save writes every entry as a dataset,
+ * load reads every entry back and checks that the file has it with exactly that count, so a
+ * new history array is one line in the table. Three parts are not copied but rebuilt from what defines them,
  * because the solver derives them (and CHOLMOD's ordering) from it:
  *   the sparse pattern — the extra node pairs a linearisation added
  *                        (fem_analysis_set_pattern_pairs: the same pairs give the same
@@ -20,11 +20,10 @@
  * and monitor nodes) and checksums of its geometry, properties, supports and loads; a
  * checkpoint of another model is refused naming what differs.
  *
- * Durability: the file is built in memory, written to fem_<name>.h5.tmp, fsync'ed, renamed
- * into place and the folder fsync'ed, so after a successful save the checkpoint survives a
- * crash. Afterwards older fem checkpoints are deleted: the one just written and the newest
- * one before it (by step) are kept; checkpoints of later steps (from before a resume to an
- * earlier one) and files that cannot be read are left alone.
+ * The file is common/nc_checkpoint's (durable save, every entry checked on load). After a
+ * save older fem checkpoints are deleted: the one just written and the newest one before it
+ * (by step) are kept; checkpoints of later steps (from before a resume to an earlier one) and
+ * files that cannot be read are left alone.
  */
 #ifndef FEM_CHECKPOINT_H
 #define FEM_CHECKPOINT_H
@@ -32,27 +31,8 @@
 #include <stddef.h>
 #include "fem_analysis.h"
 #include "fem_output.h"
+#include "nc_checkpoint.h"
 #include "nc_error.h"
-
-typedef enum { FEM_CK_F64, FEM_CK_I32, FEM_CK_LONG, FEM_CK_U8 } fem_ck_type;  /* double, int,
-                                                                                long, unsigned char */
-
-typedef struct fem_ck_entry {
-    char name[64];       /* dataset path in the file, e.g. "analysis/cur/u" */
-    fem_ck_type type;
-    void *data;          /* count values of the type */
-    size_t count;
-} fem_ck_entry;
-
-#define FEM_CK_MAX_ENTRIES 192
-
-typedef struct fem_ck_table {
-    fem_ck_entry entry[FEM_CK_MAX_ENTRIES];
-    int n;
-    int overflow;        /* more entries were added than fit: save and load refuse */
-} fem_ck_table;
-
-void fem_ck_add(fem_ck_table *t, const char *name, fem_ck_type type, void *data, size_t count);
 
 /* 0 when `name` is a checkpoint name (1-64 letters, digits, '_', '-'), else -1 naming it. */
 int fem_checkpoint_name_check(const char *name, nc_error *err);
@@ -62,7 +42,7 @@ void fem_checkpoint_path(const char *dir, const char *name, char *out, size_t si
 /* Saves the state of s and o and the caller's entries (extra, may be NULL) as checkpoint
  * `name` of step `step` (steps accepted so far) at time_s; the folder is created. */
 int fem_checkpoint_save(const char *dir, const char *name, long step, double time_s,
-                        fem_analysis *s, fem_output *o, const fem_ck_table *extra, nc_error *err);
+                        fem_analysis *s, fem_output *o, const nc_ckpt_table *extra, nc_error *err);
 
 /* Loads checkpoint `name` into s (initialised for the same model), o (not open; its n_out,
  * times, n_mon and max |u| fields are set, for fem_output_reopen) and the extra entries,
@@ -70,6 +50,6 @@ int fem_checkpoint_save(const char *dir, const char *name, long step, double tim
  * what is wrong (missing, unreadable, another model, another step). On an error s, o and the
  * extra fields may be partly overwritten: the caller starts them afresh. */
 int fem_checkpoint_load(const char *dir, const char *name, long step, double time_s,
-                        fem_analysis *s, fem_output *o, const fem_ck_table *extra, nc_error *err);
+                        fem_analysis *s, fem_output *o, const nc_ckpt_table *extra, nc_error *err);
 
 #endif

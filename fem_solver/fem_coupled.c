@@ -40,7 +40,7 @@ typedef struct coupled {
     const char *dir;          /* output folder */
     long written_step;
     double next_output_s;     /* time of the next full output */
-    fem_ck_table run_entries; /* what of this driver a checkpoint holds */
+    nc_ckpt_table run_entries; /* what of this driver a checkpoint holds */
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
 } coupled;
 
@@ -301,11 +301,11 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->sum = &sum;
     c->written_step = -1;
     c->out.max_u_node = -1;
-    fem_ck_add(&c->run_entries, "run/written_step", FEM_CK_LONG, &c->written_step, 1);
-    fem_ck_add(&c->run_entries, "run/next_output_s", FEM_CK_F64, &c->next_output_s, 1);
-    fem_ck_add(&c->run_entries, "run/steps", FEM_CK_LONG, &sum.steps, 1);
-    fem_ck_add(&c->run_entries, "run/newton_iterations", FEM_CK_LONG, &sum.newton_iterations, 1);
-    fem_ck_add(&c->run_entries, "run/failed_solves", FEM_CK_I32, &sum.failed_solves, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/written_step", NC_CKPT_LONG, &c->written_step, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/next_output_s", NC_CKPT_F64, &c->next_output_s, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/steps", NC_CKPT_LONG, &sum.steps, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/newton_iterations", NC_CKPT_LONG, &sum.newton_iterations, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/failed_solves", NC_CKPT_INT, &sum.failed_solves, 1);
     proto_participant *p = NULL;
     proto_serve_summary served;
     memset(&served, 0, sizeof served);
@@ -367,6 +367,7 @@ done:
     if (p) proto_participant_close(p);
     fem_output_close(&c->out);
     fem_analysis_free(&c->s);
+    nc_ckpt_table_free(&c->run_entries);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
     free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->lin_K); free(c->lin_C);
     free(c);
