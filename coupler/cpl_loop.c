@@ -376,6 +376,7 @@ typedef struct run_ctx {
     cpl_failure *failure;
     nc_error *err;
     int attempt;            /* tries of the current step rejected so far */
+    double clock_s;         /* wall clock up to which timing.total_s is counted */
 } run_ctx;
 
 static int fail(run_ctx *c, const cpl_participant *p, const cpl_call *call, const char *command)
@@ -461,6 +462,10 @@ static int maybe_checkpoint(run_ctx *c)
     cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};
     if (do_checkpoint(c, c->fem, &call, name, 0) || do_checkpoint(c, c->dem, &call, name, 0))
         return -1;
+    /* the saved wall time must include this run's part so far: a resumed run adds to it */
+    double now = nc_clock_now_s();
+    L->timing.total_s += now - c->clock_s;
+    c->clock_s = now;
     if (c->obs && c->obs->on_checkpoint &&
         c->obs->on_checkpoint(c->obs->ctx, L->step, L->time_s, name, c->err))
         return fail(c, NULL, &call, "checkpoint");
@@ -892,13 +897,12 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     cpl_failure dummy;
     if (!failure) failure = &dummy;
     memset(failure, 0, sizeof *failure);
-    run_ctx c = {L, fem, dem, observer, stop, failure, err, 0};
+    run_ctx c = {L, fem, dem, observer, stop, failure, err, 0, nc_clock_now_s()};
     /* not with relaxed forces: the FEM's answer then depends on the linearisation point as
      * well as on the relaxed force, and a secant model of the force map alone misleads
      * (coupler/README.md, "Interface Jacobian") */
     L->use_jacobian = cpl_loop_settings_jacobian_applies(&L->s) && fem->can_jacobian &&
                       dem->can_jacobian;
-    double t0 = nc_clock_now_s();
     int rc = 0;
     if (L->resume_pending) {
         cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};
@@ -919,6 +923,6 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
            (L->s.max_steps <= 0 || L->step < L->s.max_steps)) {
         if ((rc = advance_step(&c)) != 0 || (rc = maybe_checkpoint(&c)) != 0) break;
     }
-    L->timing.total_s += nc_clock_now_s() - t0;
+    L->timing.total_s += nc_clock_now_s() - c.clock_s;
     return rc;
 }

@@ -660,10 +660,10 @@ int main(int argc, char **argv)
             cpl_history_resume(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations,
                                &err))
             goto fail;
-        if (!a.quiet)
-            cpl_progress_message(&a.progress, "coupler: resuming from checkpoint %s (step %ld, "
-                                 "t = %.6g s)", a.ckpt_name, cpl_loop_step(a.loop),
-                                 cpl_loop_time(a.loop));
+        /* also with --quiet: a result continued from a checkpoint says so */
+        cpl_progress_message(&a.progress, "coupler: resuming from checkpoint %s (step %ld, "
+                             "t = %.6g s)", a.ckpt_name, cpl_loop_step(a.loop),
+                             cpl_loop_time(a.loop));
     } else if (cpl_history_open(&a.history, a.output_dir, &a.cfg.loop, a.cfg.write_iterations,
                                 &err)) {
         goto fail;

@@ -47,6 +47,9 @@ resume_check() {
     || { tail -n 20 "$b.resume.out" "$b"/*.log; fail "$name: run_case.sh --resume failed"; }
   grep -q "resuming from checkpoint $stopped_at" "$b/coupler.log" \
     || fail "$name: the coupler did not resume from $stopped_at: $(head -n 5 "$b/coupler.log")"
+  # the summary's wall time adds the part before the checkpoint: never below the waiting times
+  grep -q "^coupler: wall time .*coupler itself -" "$b/coupler.log" \
+    && fail "$name: the resumed run's wall-time split is negative: $(grep '^coupler: wall time' "$b/coupler.log")"
   "$PY" - "$a" "$b" "$WALL_CLOCK" $files <<'PY' || fail "$name: the resumed run differs from the uninterrupted one"
 import sys, h5py, numpy as np
 a, b, wall, files = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
