@@ -17,6 +17,10 @@
  *   reply (arrays and values) equals A's byte for byte, fem.h5 holds exactly A's series
  *   (same rows, same bytes, same max |u|) and fem.xdmf is A's; only the two newest
  *   checkpoints remain.
+ * - Element history: the barrier support rope of fem_solver/examples/barrier_rope_brake.json
+ *   (a sliding rope anchored through two brakes), checkpointed while its brakes yield: the
+ *   resumed run's states and brake strokes and dissipated energies equal the uninterrupted
+ *   run's bit for bit.
  * - Errors: RESUME of a missing checkpoint names the file; of another step names the step;
  *   of another model's checkpoint names what differs (node count; same counts but other
  *   E); CHECKPOINT inside a step and RESUME after the first step are refused while the
@@ -31,6 +35,7 @@
 #include "../nc_test_assert.h"
 
 #include <hdf5.h>
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -207,6 +212,68 @@ static void test_in_process_resume(void **state)
     fem_output_close(&oa);
     fem_output_close(&ob);
     free(u_k); free(v_k); free(ref_u); free(ref_v); free(uk_at); free(vk_at);
+    fem_model_free(&m);
+}
+
+/* The brakes of the barrier rope example yield during the load ramp (0.5 s) and its
+ * overshoot: at the checkpoint (0.3 s) their stroke is 0.16 m, at 0.7 s 0.52 m. */
+static void test_in_process_resume_brakes(void **state)
+{
+    (void)state;
+    enum { K_CK = 300, K_END = 700 };
+    nc_error err;
+    fem_model m;
+    if (fem_input_load("fem_solver/examples/barrier_rope_brake.json", &m, &err)) fail_msg("%s", err.message);
+    assert_true(m.history_count > 0);
+    const double dt = m.settings.dt_s;
+    char dir[600];
+    out_dir("brake", dir, sizeof dir);
+    size_t nd = 3 * (size_t)m.n_nodes, nh = (size_t)m.history_count;
+    double *ref_u = malloc(nd * sizeof *ref_u), *ref_h = malloc(nh * sizeof *ref_h);
+    double *stroke = calloc((size_t)m.n_elements, sizeof *stroke),
+           *dissipated = calloc((size_t)m.n_elements, sizeof *dissipated);
+    double stroke_at_ck = 0.0, stroke_end = 0.0;
+    assert_non_null(ref_u);
+    fem_analysis a, b;
+    fem_output oa, ob;
+    memset(&oa, 0, sizeof oa);
+    memset(&ob, 0, sizeof ob);
+    oa.max_u_node = ob.max_u_node = -1;
+    assert_int_equal(fem_analysis_init(&a, &m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&a, &err), 0);
+    for (int k = 1; k <= K_END; k++) {
+        if (k == K_CK + 1) {
+            if (fem_checkpoint_save(dir, "brake", K_CK, K_CK * dt, &a, &oa, NULL, &err))
+                fail_msg("%s", err.message);
+            fem_analysis_element_history_output(&a, stroke, dissipated);
+            for (int e = 0; e < m.n_elements; e++) stroke_at_ck = fmax(stroke_at_ck, stroke[e]);
+        }
+        if (fem_analysis_step(&a, dt, &err)) fail_msg("step %d: %s", k, err.message);
+        a.cur.time_s = k * dt;
+    }
+    fem_analysis_element_history_output(&a, stroke, dissipated);
+    for (int e = 0; e < m.n_elements; e++) stroke_end = fmax(stroke_end, stroke[e]);
+    /* yielding before the checkpoint and after it: the history matters */
+    assert_true(stroke_at_ck > 0.1);
+    assert_true(stroke_end > stroke_at_ck + 0.2);
+    memcpy(ref_u, a.cur.u, nd * sizeof *ref_u);
+    memcpy(ref_h, a.cur.element_history, nh * sizeof *ref_h);
+
+    assert_int_equal(fem_analysis_init(&b, &m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&b, &err), 0);
+    if (fem_checkpoint_load(dir, "brake", K_CK, K_CK * dt, &b, &ob, NULL, &err))
+        fail_msg("%s", err.message);
+    for (int k = K_CK + 1; k <= K_END; k++) {
+        if (fem_analysis_step(&b, dt, &err)) fail_msg("resumed step %d: %s", k, err.message);
+        b.cur.time_s = k * dt;
+    }
+    assert_memory_equal(b.cur.u, ref_u, nd * sizeof *ref_u);
+    assert_memory_equal(b.cur.element_history, ref_h, nh * sizeof *ref_h);
+    fem_analysis_free(&a);
+    fem_analysis_free(&b);
+    fem_output_close(&oa);
+    fem_output_close(&ob);
+    free(ref_u); free(ref_h); free(stroke); free(dissipated);
     fem_model_free(&m);
 }
 
@@ -651,6 +718,7 @@ int main(void)
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_in_process_resume),
+        cmocka_unit_test(test_in_process_resume_brakes),
         cmocka_unit_test(test_resume_bit_identical),
         cmocka_unit_test(test_resume_errors),
     };
