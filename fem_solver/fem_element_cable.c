@@ -65,7 +65,7 @@ static double cable_pair(const fem_element_ctx *c, double f_l[3], double Kb[9], 
     return fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], m->is_cable[e], f_l, Kb, slack);
 }
 
-static double cable_energy(const fem_element_ctx *c)
+double fem_cable_member_energy(const fem_element_ctx *c)
 {
     double d[3];
     fem_cable_chord(c, d);
@@ -76,5 +76,5 @@ const fem_element_ops fem_element_cable_ops = {
     .name = "cable",
     .uses_section = 1,
     .pair_response = cable_pair,
-    .strain_energy = cable_energy,
+    .strain_energy = fem_cable_member_energy,
 };

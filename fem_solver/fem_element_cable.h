@@ -25,5 +25,7 @@ void fem_cable_chord(const struct fem_element_ctx *c, double d[3]);
 /* Strain energy of segment e (cable/truss law, the model's L0, EA, AS, is_cable) at the
  * squared current length l2. */
 double fem_cable_energy(const struct fem_model *m, int e, double l2);
+/* The same for a two-node member in its current position (the cable and post types). */
+double fem_cable_member_energy(const struct fem_element_ctx *c);
 
 #endif

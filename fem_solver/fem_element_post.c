@@ -17,16 +17,9 @@ static double post_pair(const fem_element_ctx *c, double f_l[3], double Kb[9], i
     return fem_cable_response(d, m->L0[e], m->EA[e], m->AS[e], 0, f_l, Kb, slack);
 }
 
-static double post_energy(const fem_element_ctx *c)
-{
-    double d[3];
-    fem_cable_chord(c, d);
-    return fem_cable_energy(c->m, c->first, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-}
-
 const fem_element_ops fem_element_post_ops = {
     .name = "post",
     .uses_section = 1,
     .pair_response = post_pair,
-    .strain_energy = post_energy,
+    .strain_energy = fem_cable_member_energy,   /* a truss stores what a cable does */
 };

@@ -34,50 +34,6 @@ static const char *cable_json =
     " \"monitor_nodes\": [1], \"output\": {\"interval_steps\": 5},\n"
     " \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 0.001}}\n";
 
-static pid_t spawn(const char *json, const char *outdir, const char *epfile, const char *idle)
-{
-    const char *bin = getenv("NC_BIN");
-    char prog[1024];
-    snprintf(prog, sizeof prog, "%s/fem_solver", bin);
-    pid_t pid = fork();
-    if (pid == 0) {
-        freopen("/dev/null", "w", stdout);
-        execl(prog, prog, json, "--endpoint", "tcp://127.0.0.1:*", "--endpoint-file", epfile,
-              "--output", outdir, "--idle-timeout", idle, (char *)NULL);
-        _exit(127);
-    }
-    return pid;
-}
-
-static int read_endpoint(const char *file, char *ep, size_t size)
-{
-    for (int i = 0; i < 300; i++) {   /* up to 30 s (sanitizer builds start slowly) */
-        FILE *f = fopen(file, "r");
-        if (f) {
-            int ok = fgets(ep, (int)size, f) != NULL;
-            fclose(f);
-            if (ok) {
-                ep[strcspn(ep, "\n")] = '\0';
-                return 0;
-            }
-        }
-        usleep(100000);
-    }
-    return -1;
-}
-
-static int wait_exit(pid_t pid, double timeout_s)
-{
-    for (int i = 0; i < (int)(timeout_s * 10); i++) {
-        int status;
-        if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-        usleep(100000);
-    }
-    kill(pid, SIGKILL);
-    waitpid(pid, NULL, 0);
-    return -1;
-}
-
 /* Connects to the solver listening at ep as its "fem" peer (30 s request timeout) and zeroes
  * the request and reply messages; the caller says HELLO. */
 static proto_peer *connect_fem(const char *ep, proto_message *req, proto_message *rep, nc_error *err)
@@ -126,9 +82,9 @@ static void test_protocol_session(void **state)
     const char *json = fem_test_write("coupled.json", cable_json);
     char dir[600], epfile[600], ep[256];
     paths("session", dir, epfile, sizeof dir);
-    pid_t pid = spawn(json, dir, epfile, "30");
+    pid_t pid = fem_test_spawn(json, dir, epfile, "30");
     assert_true(pid > 0);
-    if (read_endpoint(epfile, ep, sizeof ep)) {
+    if (fem_test_read_endpoint(epfile, ep, sizeof ep)) {
         kill(pid, SIGKILL);
         fail_msg("fem_solver did not write its endpoint file");
     }
@@ -222,7 +178,7 @@ static void test_protocol_session(void **state)
 
     proto_message_init(&req, PROTO_MSG_SHUTDOWN);
     if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
-    int code = wait_exit(pid, 30);
+    int code = fem_test_wait_exit(pid, 30);
     assert_int_equal(code, 1);   /* a command failed during the run: non-zero after SHUTDOWN */
     char h5[700];
     snprintf(h5, sizeof h5, "%s/fem.h5", dir);
@@ -252,8 +208,8 @@ static void test_newton_failure(void **state)
     const char *json = fem_test_write("newton.json", text);
     char dir[600], epfile[600], ep[256];
     paths("newton", dir, epfile, sizeof dir);
-    pid_t pid = spawn(json, dir, epfile, "30");
-    assert_int_equal(read_endpoint(epfile, ep, sizeof ep), 0);
+    pid_t pid = fem_test_spawn(json, dir, epfile, "30");
+    assert_int_equal(fem_test_read_endpoint(epfile, ep, sizeof ep), 0);
     nc_error err;
     proto_message req, rep;
     proto_peer *peer = connect_fem(ep, &req, &rep, &err);
@@ -289,7 +245,7 @@ static void test_newton_failure(void **state)
     proto_message_init(&req, PROTO_MSG_SHUTDOWN);
     assert_int_equal(proto_peer_request(peer, &req, &rep, &err), 0);
     /* a retryable failure is the coupler's to handle, not an error of the FEM's run */
-    assert_int_equal(wait_exit(pid, 30), 0);
+    assert_int_equal(fem_test_wait_exit(pid, 30), 0);
     proto_message_free(&req);
     proto_message_free(&rep);
     proto_peer_close(peer);
@@ -304,9 +260,9 @@ static void test_idle_timeout(void **state)
     const char *json = fem_test_write("idle.json", cable_json);
     char dir[600], epfile[600], ep[256];
     paths("idle", dir, epfile, sizeof dir);
-    pid_t pid = spawn(json, dir, epfile, "1");
-    assert_int_equal(read_endpoint(epfile, ep, sizeof ep), 0);
-    int code = wait_exit(pid, 30);
+    pid_t pid = fem_test_spawn(json, dir, epfile, "1");
+    assert_int_equal(fem_test_read_endpoint(epfile, ep, sizeof ep), 0);
+    int code = fem_test_wait_exit(pid, 30);
     assert_int_equal(code, 1);
     char h5[700];
     snprintf(h5, sizeof h5, "%s/fem.h5", dir);
