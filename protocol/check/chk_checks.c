@@ -67,6 +67,19 @@ static void header(session *s, proto_message *m)
 
 /* Sends cmd in this session's version and token; 0 with the reply in s->reply. -1: no
  * usable reply (err says why); a timeout or transport failure ends the run. */
+/* A request that got no usable reply: a malformed reply is named as such (the participant
+ * still serves), anything else (timeout, closed connection) marks the participant dead. */
+static int request_failed(session *s, const char *what, nc_error *err)
+{
+    if (err->code != PROTO_ERR_DECODE && err->code != PROTO_ERR_VERSION) {
+        mark_dead(s, what, err);
+        snprintf(err->message, sizeof err->message, "%s", s->dead_why);
+    } else {
+        nc_error_prefix(err, "malformed reply to %s", what);
+    }
+    return -1;
+}
+
 static int request(session *s, proto_message *cmd, int keep_header, nc_error *err)
 {
     if (s->dead) return nc_error_set(err, 1, "%s", s->dead_why);
@@ -74,15 +87,7 @@ static int request(session *s, proto_message *cmd, int keep_header, nc_error *er
     char what[96];
     snprintf(what, sizeof what, "%s (step %ld, iteration %d)", proto_type_name(cmd->type),
              cmd->step, cmd->iteration);
-    if (chk_wire_request(&s->wire, cmd, &s->reply, err)) {
-        if (err->code != PROTO_ERR_DECODE && err->code != PROTO_ERR_VERSION) {
-            mark_dead(s, what, err);
-            snprintf(err->message, sizeof err->message, "%s", s->dead_why);
-        } else {
-            nc_error_prefix(err, "malformed reply to %s", what);
-        }
-        return -1;
-    }
+    if (chk_wire_request(&s->wire, cmd, &s->reply, err)) return request_failed(s, what, err);
     return 0;
 }
 
@@ -91,15 +96,8 @@ static int request_raw(session *s, const void *const *frames, const size_t *leng
 {
     if (s->dead) return nc_error_set(err, 1, "%s", s->dead_why);
     if (chk_wire_send_raw(&s->wire, frames, lengths, n, err) ||
-        chk_wire_receive(&s->wire, &s->reply, err)) {
-        if (err->code != PROTO_ERR_DECODE && err->code != PROTO_ERR_VERSION) {
-            mark_dead(s, what, err);
-            snprintf(err->message, sizeof err->message, "%s", s->dead_why);
-        } else {
-            nc_error_prefix(err, "malformed reply to %s", what);
-        }
-        return -1;
-    }
+        chk_wire_receive(&s->wire, &s->reply, err))
+        return request_failed(s, what, err);
     return 0;
 }
 
