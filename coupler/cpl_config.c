@@ -155,7 +155,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
-        "verify_restore", "timeouts", "output", "checkpoint", "comment", NULL};
+        "verify_restore", "contact_backtracking", "timeouts", "output", "checkpoint", "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -163,7 +163,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     cpl_loop_settings *s = &c->loop;
     int scheme = s->scheme, policy = s->on_max_iterations, quantity = s->relaxed,
         predictor = s->predictor;
-    long max_it = s->max_iterations, max_steps = s->max_steps;
+    long max_it = s->max_iterations, max_steps = s->max_steps,
+         backtracking = s->contact_backtracking;
     if (nc_json_check_keys(root, where, keys, err) ||
         parse_participant(root, where, "fem", base_dir, &c->fem, err) ||
         parse_participant(root, where, "dem", base_dir, &c->dem, err) ||
@@ -196,6 +197,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                          &s->interface_jacobian, err) ||
         nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,
                          err) ||
+        nc_json_int_opt(root, where, "contact_backtracking", backtracking, 0, 30, &backtracking,
+                        err) ||
         parse_timeouts(root, where, c, err) ||
         parse_output(root, where, c, err) ||
         parse_checkpoint(root, where, s, err))
@@ -206,6 +209,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     s->predictor = (cpl_predictor)predictor;
     s->max_iterations = (int)max_it;
     s->max_steps = max_steps;
+    s->contact_backtracking = (int)backtracking;
     if (cpl_loop_settings_check(s, where, err)) return -1;
     /* dt against the float spacing of the times it is added to (nc_time.h), and a bound on
      * the number of steps, so that a run that could not advance or never end is refused */

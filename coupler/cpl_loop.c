@@ -31,6 +31,7 @@ struct cpl_loop {
     double *u_out, *v_out;  /* FEM output */
     double *x_in, *x_out, *r;
     double *check0, *check1;    /* restore verification: the repeated solve's outputs */
+    double *u_prev, *v_prev;    /* contact backtracking: the last iterate with contact */
     int verified_fem, verified_dem;
     int use_jacobian;       /* interface-Jacobian coupling in this run */
     cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
@@ -67,6 +68,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     cpl_energy_settings_default(&s->energy);
     s->interface_jacobian = 1;
     s->verify_restore = 1;
+    s->contact_backtracking = 4;
     s->checkpoint_interval_s = 0.0;
 }
 
@@ -166,7 +168,8 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->time_s = s->start_time_s;
     L->last_near = -1;
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
-                          &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1};
+                          &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1,
+                          &L->u_prev, &L->v_prev};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -212,6 +215,8 @@ void cpl_loop_free(cpl_loop *L)
     free(L->x_out);
     free(L->check0);
     free(L->check1);
+    free(L->u_prev);
+    free(L->v_prev);
     cpl_jacobian_free(&L->jac);
     free(L);
 }
@@ -312,6 +317,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "iterations", &tm->iterations);
     cpl_ckpt_long(t, q, "unconverged_steps", &tm->unconverged_steps);
     cpl_ckpt_long(t, q, "rejected_attempts", &tm->rejected_attempts);
+    cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
     cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
     /* the energy balance and guard */
@@ -661,6 +667,45 @@ static int try_failed(run_ctx *c, try_result *t)
     return 0;
 }
 
+/* Contact backtracking. The resultant of an interface force field (n × 3), N. */
+static void resultant(const double *f, size_t n3, double out[3])
+{
+    out[0] = out[1] = out[2] = 0.0;
+    for (size_t i = 0; i < n3; i++) out[i % 3] += f[i];
+}
+
+static int all_zero(const double *f, size_t n3)
+{
+    for (size_t i = 0; i < n3; i++)
+        if (f[i] != 0.0) return 0;
+    return 1;
+}
+
+/* The resultant that the linearisation j about (u0, v0), with force f0 there, predicts at
+ * (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)] with the symmetric parts of K and C, which
+ * is what the FEM solved with (j NULL: the constant force f0). */
+static void predicted_resultant(const cpl_jacobian *j, const double *f0, const double *u0,
+                                const double *v0, const double *u1, const double *v1,
+                                size_t n3, double out[3])
+{
+    resultant(f0, n3, out);
+    if (!j) return;
+    for (size_t b = 0; b < j->n_blocks; b++) {
+        /* block (i, j) with the motion of j on i and, transposed, the motion of i on j */
+        const size_t f = 3 * (size_t)j->nodes[2 * b], m = 3 * (size_t)j->nodes[2 * b + 1];
+        const double *K = j->stiffness + 9 * b, *C = j->damping + 9 * b;
+        for (int r = 0; r < 3; r++)
+            for (int q = 0; q < 3; q++) {
+                out[r] -= 0.5 * K[3 * r + q] * (u1[m + q] - u0[m + q]);
+                out[q] -= 0.5 * K[3 * r + q] * (u1[f + r] - u0[f + r]);
+                if (j->has_damping) {
+                    out[r] -= 0.5 * C[3 * r + q] * (v1[m + q] - v0[m + q]);
+                    out[q] -= 0.5 * C[3 * r + q] * (v1[f + r] - v0[f + r]);
+                }
+            }
+    }
+}
+
 /* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
  * failure that ends the run, else 0 with the outcome in t. */
 static int run_step(run_ctx *c, cpl_call *call, try_result *t)
@@ -690,6 +735,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     }
     const int max_it = strong ? L->s.max_iterations : 1;
     int converged = 0, k;
+    int backtrack_prev = 0;                 /* u_prev, v_prev, r_prev, r_pred are set */
+    int free_seen = 0;                      /* an iterate of this try had no contact */
+    int contact_required = 0;               /* ... and a later one had contact again */
+    double r_prev[3] = {0.0, 0.0, 0.0}, r_pred[3] = {0.0, 0.0, 0.0};
     for (k = 1; k <= max_it; k++) {
         call->iteration = k;
         t->iterations = k;
@@ -700,6 +749,31 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         call->jacobian_in = NULL;
         if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
             return try_failed(c, t);
+        /* the step went past the contact boundary: the iterate has no contact at all
+         * although the linearisation about the last iterate with contact still predicted a
+         * force of the same sense, or although this step's contact-free answer was already
+         * seen to collide; halve the step back towards that iterate (the DEM alone is solved
+         * again) so that the FEM keeps a linearisation of the contact */
+        const int no_contact = all_zero(L->f_dem, n3);
+        if (!no_contact && free_seen) contact_required = 1;
+        if (backtrack_prev && no_contact) {
+            int halvings = 0;
+            while (halvings < L->s.contact_backtracking && all_zero(L->f_dem, n3) &&
+                   (contact_required ||
+                    r_pred[0] * r_prev[0] + r_pred[1] * r_prev[1] + r_pred[2] * r_prev[2] > 0.0)) {
+                for (size_t i = 0; i < n3; i++) {
+                    L->u_in[i] = 0.5 * (L->u_prev[i] + L->u_in[i]);
+                    L->v_in[i] = 0.5 * (L->v_prev[i] + L->v_in[i]);
+                }
+                for (int d = 0; d < 3; d++) r_pred[d] = 0.5 * (r_prev[d] + r_pred[d]);
+                halvings++;
+                L->timing.backtracks++;
+                if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
+                    return try_failed(c, t);
+            }
+            if (halvings) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
+        }
+        if (all_zero(L->f_dem, n3)) free_seen = 1;
         call->jacobian_out = NULL;
         if (L->use_jacobian) {
             call->jacobian_in = &L->jac;
@@ -718,6 +792,12 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 break;
             }
             double alpha;
+            backtrack_prev = L->s.contact_backtracking > 0 && !all_zero(L->f_dem, n3);
+            if (backtrack_prev) {
+                memcpy(L->u_prev, L->u_in, n3 * sizeof(double));
+                memcpy(L->v_prev, L->v_in, n3 * sizeof(double));
+                resultant(L->f_dem, n3, r_prev);
+            }
             pack(L, L->x_in, L->u_in, L->v_in);
             pack(L, L->x_out, L->u_out, L->v_out);
             if (cpl_relax_update(L->relax, L->x_in, L->x_out, L->x_in, &alpha, c->err)) {
@@ -728,6 +808,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 return 0;
             }
             unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
+            if (backtrack_prev)
+                predicted_resultant(L->use_jacobian ? &L->jac : NULL, L->f_dem, L->u_prev,
+                                    L->v_prev, L->u_in, L->v_in, n3, r_pred);
             if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
         } else {
             /* algorithm 3: residual and relaxation of the forces, then the structure */

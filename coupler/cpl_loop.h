@@ -127,6 +127,9 @@ typedef struct cpl_loop_settings {
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */
+    int contact_backtracking;       /* strong: at most this many halvings back towards the
+                                       last iterate with contact when an iterate loses it
+                                       (0: off) */
     double checkpoint_interval_s;   /* simulated time between checkpoints (0: none); taken
                                        only when both participants can */
 } cpl_loop_settings;
@@ -212,6 +215,7 @@ typedef struct cpl_timing {
     long unconverged_steps;         /* strong: accepted without converging */
     long rejected_attempts;         /* tries rejected and begun again with a smaller Δt */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
+    long backtracks;                /* DEM solves repeated by contact backtracking */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;

@@ -451,6 +451,9 @@ static void print_timing(app *a)
     fprintf(o, "coupler: %ld steps, %ld iterations (%.2f per step), %ld unconverged steps\n",
             t->steps, t->iterations, t->steps ? (double)t->iterations / (double)t->steps : 0.0,
             t->unconverged_steps);
+    if (t->backtracks > 0)
+        fprintf(o, "coupler: contact backtracking: %ld extra DEM solves halfway back to an "
+                "iterate with contact\n", t->backtracks);
     fprintf(o, "coupler: interface Jacobian %s\n",
             cpl_loop_uses_jacobian(a->loop) ? "on: the FEM solved with the DEM's contact linearisation"
                                             : "off: plain exchange of forces and displacements");

@@ -46,6 +46,8 @@ typedef struct fem_stats {
     long assemblies, factorizations, lu_factorizations, solves, line_search_cuts;
     long pattern_growths;  /* times an interface linearisation added node pairs to the pattern */
     long pcg_solves, pcg_iterations, pcg_failures;
+    long roundoff_converged;   /* solves ended at the rounding floor above the tolerance
+                                  (within FEM_ROUNDOFF_TOL_FACTOR of it) */
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
 } fem_stats;
 
