@@ -21,6 +21,11 @@
  * converged steps in a row (and on the grid of the larger step) a reduced Δt doubles again,
  * never above the nominal Δt. At dt_min a step that still does not converge is accepted or
  * stops the run (on_max_iterations); a failed solve there ends the run.
+ * Contact backtracking (contact_backtracking > 0, strong, relaxed u, u̇): an iterate whose
+ * DEM answer has no contact at all, after one with contact whose linearisation still
+ * predicted a force of the same sense (or after the try's contact-free answer was seen to
+ * collide), is moved halfway back towards that one, up to contact_backtracking times, and
+ * only the DEM is solved again (docs/notes/contact_backtracking.md).
  * Energy balance: every accepted step feeds the energies both participants reported with
  * their last solve to the energy guard (cpl_energy.h); its record goes with the step record.
  * The loop itself never prints: it reports every iteration, rejection and step to an

@@ -91,6 +91,52 @@ static void test_three_element_cable(void **state)
     }
 }
 
+/* The Newton iteration's rounding floor. The three-element cable (as above, 10x load)
+ * carries element forces of about 1e3 N, whose rounding leaves a residual near 1e-11 N that
+ * no increment can reduce (the increments fall below an ulp of the coordinates). With a
+ * tolerance of 1e-13 N that floor is within 1e3 of it: the solve is converged at the floor
+ * and counted, with the closed-form answer (1e-9 m); with 1e-18 N it is far above: the solve
+ * still fails with a Newton message, so the rule does not pass an arbitrary residual. */
+static void test_rounding_floor(void **state)
+{
+    (void)state;
+    const double E = 1e9, A = 1.26e-4, S_pre = 1e6;
+    const double P = 5.0 * 4.0 / 3.0 * M_PI * pow(0.12, 3) * 3.5e4 * 9.81;
+    const double tols[2] = {1e-13, 1e-18};
+    for (int pass = 0; pass < 2; pass++) {
+        fem_model m;
+        fem_test_line(&m, 3, 3.0, E, A, 7850, S_pre, FEM_CABLE, 1);
+        m.f_point[3 * 1 + 2] = -P;
+        m.f_point[3 * 2 + 2] = -P;
+        m.settings.type = FEM_STATIC;
+        m.settings.residual_tol_n = tols[pass];
+        m.settings.relative_tol = 0.0;
+        nc_error err;
+        assert_int_equal(fem_model_finalize(&m, &err), 0);
+        fem_analysis s;
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+        int rc = 0;
+        for (int k = 1; k <= 5 && rc == 0; k++) rc = fem_analysis_static(&s, k / 5.0, &err);
+        print_message("tolerance %g N: rc %d, residual %.3g N, %ld solves at the floor%s%s\n",
+                      tols[pass], rc, s.stats.residual_norm, s.stats.roundoff_converged,
+                      rc ? ": " : "", rc ? err.message : "");
+        if (pass == 0) {
+            assert_int_equal(rc, 0);
+            assert_true(s.stats.roundoff_converged > 0);
+            assert_below(s.stats.residual_norm, 1e3 * tols[pass]);
+            double a, w;
+            closed_form(P, E * A, S_pre * A, &a, &w);
+            assert_near(-s.cur.u[3 * 1 + 2], w, 1e-9);
+            assert_near(s.cur.u[3 * 1 + 0], a, 1e-9);
+        } else {
+            assert_int_not_equal(rc, 0);
+            assert_non_null(strstr(err.message, "Newton did not converge"));
+        }
+        fem_analysis_free(&s);
+        fem_model_free(&m);
+    }
+}
+
 /* A straight 2-element truss under axial compression: the geometric stiffness of the
  * transverse dofs is negative: CHOLMOD's LDL^T factorises it as it is; its supernodal
  * LL^T reports "not positive definite" and UMFPACK LU solves. The answer is the straight compressed bar: P = -A S(l) l / L per element, with
@@ -154,6 +200,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_three_element_cable),
+        cmocka_unit_test(test_rounding_floor),
         cmocka_unit_test(test_compressed_truss_lu),
         cmocka_unit_test(test_flat_net_singular),
     };
