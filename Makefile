@@ -45,7 +45,7 @@ CFLAGS_BASE := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) \
   -Wall -Wextra -Werror -Wno-format-truncation -fopenmp $(SAN_FLAGS) -MMD -MP \
   -Icommon -Iprotocol $(PKG_CFLAGS) $(SUITESPARSE_CFLAGS)
 CFLAGS += $(CFLAGS_BASE)
-LDLIBS := $(PKG_LIBS) $(SUITESPARSE_LIBS) -lm -lpthread
+LDLIBS := $(PKG_LIBS) $(SUITESPARSE_LIBS) -llapack -lm -lpthread
 LDFLAGS += -fopenmp $(SAN_FLAGS)
 
 MODULES := common protocol fem_solver dem_solver coupler

@@ -17,6 +17,7 @@
 #include "fem_run.h"
 #include "fem_checkpoint.h"
 #include "fem_output.h"
+#include "fem_linearisation_psd.h"
 #include "nc_file.h"
 #include "nc_clock.h"
 #include "proto_serve.h"
@@ -34,9 +35,9 @@ typedef struct coupled {
     int32_t *node_ids;
     double *iface_X, *iface_u, *iface_v;
     double *lin_u, *lin_v;    /* [ndof] the linearisation point on the model's dofs */
-    int *lin_nodes;           /* [2 blocks] model node numbers of the symmetrised blocks */
-    double *lin_K, *lin_C;    /* [9 blocks] their values */
+    int *lin_nodes;           /* [2 blocks] model node numbers of the received blocks */
     size_t lin_cap;
+    fem_psd psd;              /* the blocks the FEM solves with */
     const char *dir;          /* output folder */
     long written_step;
     double next_output_s;     /* time of the next full output */
@@ -89,8 +90,9 @@ static int on_restore(void *ctx, const proto_message *cmd, nc_error *err)
 }
 
 /* The linearisation of the coupling force that `cmd` carries (or none): interface node
- * indices become model nodes, the point u^k, v^k goes onto the model's dofs. */
-static int set_linearisation(coupled *c, const proto_message *cmd, nc_error *err)
+ * indices become model nodes, the point u^k, v^k goes onto the model's dofs. With `project`
+ * its positive semi-definite part, else its symmetric part. */
+static int set_linearisation(coupled *c, const proto_message *cmd, int project, nc_error *err)
 {
     const fem_model *m = c->m;
     fem_analysis *s = &c->s;
@@ -108,50 +110,35 @@ static int set_linearisation(coupled *c, const proto_message *cmd, nc_error *err
         proto_message_get_f64(cmd, "jacobian_displacement", n, 3, &u_k, NULL, err) ||
         proto_message_get_f64(cmd, "jacobian_velocity", n, 3, &v_k, NULL, err))
         return -1;
-    /* The symmetric part (K + K^T)/2, in the residual as well as in the matrix: block (i, j)
-     * goes in as K_ij/2 at (i, j) and K_ij^T/2 at (j, i). The FEM's Newton iterations then
-     * have their exact tangent (the matrix is symmetric), and the coupled solution does not
+    /* The symmetric part (K + K^T)/2, in the residual as well as in the matrix: the FEM's
+     * Newton iterations then have their exact tangent, and the coupled solution does not
      * change: the correction -K (u - u^k) vanishes where the interface iteration converges
-     * (u = u^k). The antisymmetric part (friction, the turning contact normal) is left to
-     * the interface iteration. With it in the residual but not in the matrix, Newton
-     * diverges on a granite rock on a steel net (cases/steel_net). */
-    if (2 * b > c->lin_cap) {
-        size_t cap = 2 * b;
-        int *nn = realloc(c->lin_nodes, 2 * cap * sizeof *nn);
-        if (nn) c->lin_nodes = nn;
-        double *kk = nn ? realloc(c->lin_K, 9 * cap * sizeof *kk) : NULL;
-        if (kk) c->lin_K = kk;
-        double *cc = kk ? realloc(c->lin_C, 9 * cap * sizeof *cc) : NULL;
-        if (cc) c->lin_C = cc;
-        if (!cc) return nc_error_set(err, 1, "out of memory for %zu Jacobian blocks", b);
-        c->lin_cap = cap;
+     * (u = u^k). With the full K in the residual but only its symmetric part in the matrix,
+     * Newton diverges on a granite rock on a steel net (cases/steel_net). The antisymmetric
+     * part (friction, the turning contact normal), and with `project` the negative part
+     * (fem_linearisation_psd.h), are left to the interface iteration. */
+    if (b > c->lin_cap) {
+        int *nn = realloc(c->lin_nodes, 2 * b * sizeof *nn);
+        if (!nn) return nc_error_set(err, 1, "out of memory for %zu Jacobian blocks", b);
+        c->lin_nodes = nn;
+        c->lin_cap = b;
     }
-    size_t out = 0;
-    for (size_t k = 0; k < b; k++) {
-        for (int e = 0; e < 2; e++)
+    for (size_t k = 0; k < b; k++)
+        for (int e = 0; e < 2; e++) {
             if (nodes[2 * k + e] < 0 || (size_t)nodes[2 * k + e] >= n)
                 return nc_error_set(err, 1, "jacobian_nodes row %zu: %d is not an interface "
                                     "node (0..%zu)", k, (int)nodes[2 * k + e], n - 1);
-        int i = m->iface_nodes[nodes[2 * k]], j = m->iface_nodes[nodes[2 * k + 1]];
-        for (int t = 0; t < 2; t++) {      /* t = 1: the transposed half at (j, i) */
-            c->lin_nodes[2 * out] = t ? j : i;
-            c->lin_nodes[2 * out + 1] = t ? i : j;
-            for (int r = 0; r < 3; r++)
-                for (int q = 0; q < 3; q++) {
-                    int from = t ? 3 * q + r : 3 * r + q;
-                    c->lin_K[9 * out + 3 * r + q] = 0.5 * K[9 * k + from];
-                    c->lin_C[9 * out + 3 * r + q] = C ? 0.5 * C[9 * k + from] : 0.0;
-                }
-            out++;
+            c->lin_nodes[2 * k + e] = m->iface_nodes[nodes[2 * k + e]];
         }
-    }
+    if ((project ? fem_psd_project : fem_psd_symmetric)(&c->psd, b, c->lin_nodes, K, C, err))
+        return -1;
     for (size_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
             c->lin_u[3 * m->iface_nodes[i] + d] = u_k[3 * i + d];
             c->lin_v[3 * m->iface_nodes[i] + d] = v_k[3 * i + d];
         }
-    return fem_analysis_set_linearisation(s, c->lin_u, c->lin_v, (int)out, c->lin_nodes,
-                                          c->lin_K, C ? c->lin_C : NULL, err);
+    return fem_analysis_set_linearisation(s, c->lin_u, c->lin_v, (int)c->psd.n_blocks,
+                                          c->psd.nodes, c->psd.K, C ? c->psd.C : NULL, err);
 }
 
 /* Solves the step with the interface force of `cmd`; fills the reply arrays. */
@@ -167,7 +154,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
     memset(s->f_coupling, 0, (size_t)s->ndof * sizeof(double));
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) s->f_coupling[3 * m->iface_nodes[i] + d] = force[3 * i + d];
-    if (set_linearisation(c, cmd, err)) return -1;
+    if (set_linearisation(c, cmd, 0, err)) return -1;
     double dt = cmd->dt_s;
     if (m->settings.type == FEM_STATIC) {
         /* quasi-static coupling: equilibrium under the loads, velocity from the increment */
@@ -179,7 +166,20 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         s->cur.time_s = t0 + dt;
         s->cur.step = step0 + 1;
     } else if (fem_analysis_step(s, dt, err)) {
-        return -1;
+        /* Newton failed with the symmetric part of the linearisation: a negative part of it
+         * can make the step's problem indefinite; retry once with its semi-definite part */
+        if (err->code != FEM_ERR_NEWTON || !s->lin.active) return -1;
+        char first[NC_ERROR_MESSAGE_MAX];
+        snprintf(first, sizeof first, "%s", err->message);
+        if (set_linearisation(c, cmd, 1, err)) return -1;
+        if (c->psd.last_clipped == 0) {
+            nc_error_set(err, FEM_ERR_NEWTON, "%s", first);
+            return -1;
+        }
+        c->sum->semidefinite_retries++;
+        if (fem_analysis_step(s, dt, err))
+            return nc_error_prefix(err, "%s; retried with the semi-definite part of the "
+                                        "interface linearisation", first);
     }
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
@@ -262,6 +262,7 @@ static int fresh_state(coupled *c, nc_error *err)
     c->next_output_s = c->m->settings.output_interval * c->m->settings.dt_s;
     c->sum->steps = c->sum->newton_iterations = 0;
     c->sum->failed_solves = 0;
+    c->sum->semidefinite_retries = 0;
     if (fem_analysis_init(&c->s, c->m, err)) return -1;
     if (c->m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) return -1;
     return 0;
@@ -306,6 +307,8 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     nc_ckpt_add(&c->run_entries, NULL, "run/steps", NC_CKPT_LONG, &sum.steps, 1);
     nc_ckpt_add(&c->run_entries, NULL, "run/newton_iterations", NC_CKPT_LONG, &sum.newton_iterations, 1);
     nc_ckpt_add(&c->run_entries, NULL, "run/failed_solves", NC_CKPT_INT, &sum.failed_solves, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/semidefinite_retries", NC_CKPT_INT,
+                &sum.semidefinite_retries, 1);
     proto_participant *p = NULL;
     proto_serve_summary served;
     memset(&served, 0, sizeof served);
@@ -369,7 +372,8 @@ done:
     fem_analysis_free(&c->s);
     nc_ckpt_table_free(&c->run_entries);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
-    free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->lin_K); free(c->lin_C);
+    free(c->lin_u); free(c->lin_v); free(c->lin_nodes);
+    fem_psd_free(&c->psd);
     free(c);
     sum.wall_s = nc_clock_now_s() - t0;
     if (summary) *summary = sum;

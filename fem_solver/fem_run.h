@@ -25,6 +25,8 @@ typedef struct fem_run_summary {
     int max_displacement_node;  /* where; -1 unknown */
     double wall_s;
     int failed_solves;          /* coupled: SOLVE commands answered with an error */
+    int semidefinite_retries;   /* coupled: steps solved again with the semi-definite part of
+                                   the interface linearisation after a Newton failure */
     fem_stats stats;
 } fem_run_summary;
 

@@ -145,12 +145,13 @@ int main(int argc, char **argv)
     fprintf(stderr,
             "fem_solver: %s: %d nodes, %d elements, %ld steps, %ld Newton iterations, "
             "%ld output steps, t = %g, max |u| = %.6g m%s%s, %.3f s (assembly %.3f s, "
-            "factorisation %.3f s, %ld LU fallbacks, %ld solves ended at the rounding floor)\n",
+            "factorisation %.3f s, %ld LU fallbacks, %ld solves ended at the rounding floor, "
+            "%d steps retried with the semi-definite interface linearisation)\n",
             input, model.n_nodes, model.n_elements, sum.steps, sum.newton_iterations,
             sum.output_steps, sum.final_time_s, sum.max_displacement_m, where,
             sum.max_displacement_node < 0 ? " (at the end)" : "", sum.wall_s,
             sum.stats.assembly_s, sum.stats.factor_s, sum.stats.lu_factorizations,
-            sum.stats.roundoff_converged);
+            sum.stats.roundoff_converged, sum.semidefinite_retries);
     fem_model_free(&model);
     if (rc == 1) {
         fprintf(stderr, "fem_solver: stopped by a signal; results so far are in %s\n", output);

@@ -14,7 +14,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential pkg-config
   libzmq3-dev libhdf5-dev libcjson-dev libsuitesparse-dev libcmocka-dev
-  libopenblas0-pthread
+  liblapack-dev libopenblas0-pthread
   clang libclang-rt-dev
   hdf5-tools
   python3 python3-zmq python3-h5py python3-numpy python3-matplotlib
