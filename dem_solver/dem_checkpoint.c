@@ -149,6 +149,7 @@ static void state_entries(nc_ckpt_table *t, dem_sim *s, dem_output *o, const siz
     ITEM(t, "/contacts/tangential_force", NC_CKPT_F64, c->ft, z->contacts, 3);
     ITEM(t, "/contacts/kt_prev", NC_CKPT_F64, c->kt_prev, z->contacts, 1);
     ITEM(t, "/contacts/fn_prev", NC_CKPT_F64, c->fn_prev, z->contacts, 1);
+    ITEM(t, "/contacts/impact_speed", NC_CKPT_F64, c->impact_speed, z->contacts, 1);
     ITEM(t, "/contacts/overlap", NC_CKPT_F64, c->overlap, z->contacts, 1);
     ITEM(t, "/contacts/normal", NC_CKPT_F64, c->normal, z->contacts, 3);
     ITEM(t, "/contacts/first", NC_CKPT_I32, s->contact.first, n + 1, 1);

@@ -625,7 +625,7 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
     for (; dem_contact_laws[n_laws] && n_laws + 1 < sizeof laws / sizeof *laws; n_laws++)
         laws[n_laws] = dem_contact_laws[n_laws]->name;
     laws[n_laws] = NULL;
-    static const char *const dampings[] = {"fit", "a7", NULL};
+    static const char *const dampings[] = {"fit", "a7", "hunt_crossley", NULL};
     static const double g0[3] = {0, 0, -9.81};
     snprintf(s->model.source, sizeof s->model.source, "%s", file);
     if (nc_json_check_keys(root, file, keys, err)) return -1;
@@ -640,6 +640,10 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
     if (nc_json_choice_opt(root, file, "damping", dampings, (int)law_ops->default_damping, &damping, err))
         return -1;
     p->damping = (dem_damping_formula)damping;
+    if (p->damping == DEM_DAMPING_HUNT_CROSSLEY && p->law != DEM_LAW_HERTZ_MINDLIN)
+        return nc_error_set(err, 1, "%s.damping: \"hunt_crossley\" is a dashpot of the Hertz law "
+                                    "(contact_law \"hertz_mindlin\"), not of \"%s\"", file,
+                            law_ops->name);
     const cJSON *dt = cJSON_GetObjectItemCaseSensitive(root, "dt_s");
     if (!dt || (cJSON_IsString(dt) && strcmp(dt->valuestring, "auto") == 0)) {
         p->dt_auto = 1;

@@ -14,6 +14,7 @@
 
 #include <math.h>
 
+#include "dem_damping.h"
 #include "dem_model.h"
 
 /* Effective properties of a contact pair. */
@@ -23,6 +24,7 @@ typedef struct dem_pair {
     double r_star;  /* m */
     double m_star;  /* kg */
     double zeta;    /* damping ratio */
+    double hunt_crossley; /* c(ε) = ξ v0 of the Hunt–Crossley dashpot (dem_damping.h) */
     double mu;      /* friction coefficient */
     double kt_kn_root; /* sqrt(kt / kn') = sqrt(4 G* / E*) (Hertz), sqrt(ratio) (linear) */
 } dem_pair;
@@ -43,14 +45,21 @@ double dem_effective_shear(double g1, double nu1, double g2, double nu2);
 static inline __attribute__((always_inline)) double dem_contact_force(const dem_params *prm, const dem_pair *pair,
                                        double overlap, const double n[3], const double vc[3],
                                        double dt, double ft[3], double *kt_prev,
-                                       double *fn_prev, double f_i[3])
+                                       double *fn_prev, double *impact_speed, double f_i[3])
 {
     double vn = vc[0] * n[0] + vc[1] * n[1] + vc[2] * n[2];
     double overlap_rate = -vn; /* > 0 while approaching (eq. (A.3)) */
     double fn, kt, cn_root; /* cn_root = sqrt(m* kn') */
     /* compile-time dispatch on the law (dem_contact_law.h): each branch is inlined */
     if (prm->law == DEM_LAW_HERTZ_MINDLIN) {
-        fn = dem_hertz_normal_force(pair, overlap, overlap_rate, &kt, &cn_root);
+        if (prm->damping == DEM_DAMPING_HUNT_CROSSLEY) {
+            if (!(*impact_speed > 0.0))   /* the first touch: this is the impact */
+                *impact_speed = fmax(overlap_rate, DEM_HUNT_CROSSLEY_MIN_SPEED);
+            fn = dem_hertz_hunt_crossley_force(pair, overlap, overlap_rate, *impact_speed, &kt,
+                                               &cn_root);
+        } else {
+            fn = dem_hertz_normal_force(pair, overlap, overlap_rate, &kt, &cn_root);
+        }
         if (fn < 0.0) fn = 0.0; /* no tension */
     } else {
         fn = dem_linear_normal_force(prm, pair, overlap, overlap_rate, &kt, &cn_root);

@@ -17,7 +17,7 @@ int dem_contacts_reserve(dem_contacts *c, size_t need, nc_error *err)
         c->field = p_;                                                                        \
     } while (0)
     GROW(i, 1); GROW(kind, 1); GROW(j, 1); GROW(aux, 1);
-    GROW(ft, 3); GROW(kt_prev, 1); GROW(fn_prev, 1);
+    GROW(ft, 3); GROW(kt_prev, 1); GROW(fn_prev, 1); GROW(impact_speed, 1);
     GROW(overlap, 1); GROW(normal, 3);
 #undef GROW
     c->cap = cap;
@@ -27,7 +27,7 @@ int dem_contacts_reserve(dem_contacts *c, size_t need, nc_error *err)
 void dem_contacts_free(dem_contacts *c)
 {
     free(c->i); free(c->kind); free(c->j); free(c->aux);
-    free(c->ft); free(c->kt_prev); free(c->fn_prev);
+    free(c->ft); free(c->kt_prev); free(c->fn_prev); free(c->impact_speed);
     free(c->overlap); free(c->normal);
     memset(c, 0, sizeof *c);
 }
@@ -38,7 +38,7 @@ void dem_contacts_copy_range(dem_contacts *dst, size_t to, const dem_contacts *s
     if (n == 0) return;
 #define CP(field, per) memcpy(dst->field + (per) * to, src->field + (per) * from, (per) * n * sizeof *src->field)
     CP(i, 1); CP(kind, 1); CP(j, 1); CP(aux, 1);
-    CP(ft, 3); CP(kt_prev, 1); CP(fn_prev, 1);
+    CP(ft, 3); CP(kt_prev, 1); CP(fn_prev, 1); CP(impact_speed, 1);
     CP(overlap, 1); CP(normal, 3);
 #undef CP
 }
@@ -68,6 +68,7 @@ static int build_wall_pairs(dem_contact_state *c, const dem_model *md, nc_error 
                                             w->shear_modulus_pa, w->poisson_ratio);
             p->r_star = p->m_star = 0.0;
             p->zeta = 0.5 * (m->zeta + (w->zeta >= 0.0 ? w->zeta : m->zeta));
+            p->hunt_crossley = 0.5 * (m->hunt_crossley + (w->zeta >= 0.0 ? w->hunt_crossley : m->hunt_crossley));
             p->mu = 0.5 * (m->friction + w->friction);
             p->kt_kn_root = dem_contact_law_of(md->prm.law)->kt_kn_root(&md->prm, p->e_star, p->g_star);
         }

@@ -28,7 +28,7 @@ enum {
 };
 
 /* A list of contacts, ordered by sphere i (then by discovery order, which is deterministic).
- * History (ft, kt_prev, fn_prev) survives from one step to the next through the key. The
+ * History (ft, kt_prev, fn_prev, impact_speed) survives from one step to the next through the key. The
  * contact forces themselves are summed onto spheres and walls while the list is built (see
  * dem_contact_pass.h) and not stored. */
 typedef struct dem_contacts {
@@ -38,6 +38,7 @@ typedef struct dem_contacts {
     double *ft;            /* 3n: elastic tangential force on i (history) */
     double *kt_prev;       /* tangential stiffness of the previous step */
     double *fn_prev;       /* normal force of the previous step */
+    double *impact_speed;  /* normal approach speed when the contact began (m/s; Hunt–Crossley) */
     double *overlap;       /* m */
     double *normal;        /* 3n: unit normal from sphere i towards the other body */
 } dem_contacts;
@@ -86,6 +87,8 @@ static inline void dem_net_wall_pair(const dem_model *m, size_t i, dem_pair *p)
     p->r_star = m->sph.radius[i];
     p->m_star = m->bod.mass[m->sph.body[i]];
     p->zeta = 0.5 * (mi->zeta + (net->zeta >= 0.0 ? net->zeta : mi->zeta));
+    p->hunt_crossley = 0.5 * (mi->hunt_crossley +
+                              (net->zeta >= 0.0 ? net->hunt_crossley : mi->hunt_crossley));
     p->mu = 0.5 * (mi->friction + net->friction);
     p->kt_kn_root = dem_contact_law_of(m->prm.law)->kt_kn_root(&m->prm, p->e_star, p->g_star);
 }

@@ -26,9 +26,10 @@ int dem_spill_add(dem_spills *sp, int kind, int32_t index, double weight, const 
 int dem_emit_wall_contact(const dem_sim *s, dem_emit_ctx *ctx, size_t i, dem_contact_in *in,
                           double dt)
 {
-    double ft[3], kt_prev, fn_prev;
+    double ft[3], kt_prev, fn_prev, impact_speed;
     int32_t p;
-    long c = dem_new_record(s, ctx, i, in->kind, in->j, in->aux, ft, &kt_prev, &fn_prev, &p);
+    long c = dem_new_record(s, ctx, i, in->kind, in->j, in->aux, ft, &kt_prev, &fn_prev,
+                            &impact_speed, &p);
     if (c < 0) return -1;
     if (p >= 0 && (in->kind == DEM_CONTACT_NET_EDGE || in->kind == DEM_CONTACT_NET_NODE)) {
         /* A cable has no inside: if the normal flipped since the last step, the sphere
@@ -51,8 +52,9 @@ int dem_emit_wall_contact(const dem_sim *s, dem_emit_ctx *ctx, size_t i, dem_con
     double vc[3]; /* eq. (A.2) */
     for (int k = 0; k < 3; k++) vc[k] = in->v_other[k] - (v_i[k] + wr[k]);
     double f[3], t[3];
-    dem_contact_force(&s->model.prm, &in->pair, in->overlap, in->n, vc, dt, ft, &kt_prev, &fn_prev, f);
-    dem_store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, in->overlap, in->n);
+    dem_contact_force(&s->model.prm, &in->pair, in->overlap, in->n, vc, dt, ft, &kt_prev, &fn_prev,
+                      &impact_speed, f);
+    dem_store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, impact_speed, in->overlap, in->n);
     dem_cross3(r_i, f, t);
     if (dem_add_to_sphere(s, ctx, i, f, t)) return -1;
     /* the reaction -f on the wall, summed after the pass */

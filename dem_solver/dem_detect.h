@@ -79,7 +79,8 @@ static inline int dem_add_to_sphere(const dem_sim *s, dem_emit_ctx *ctx, size_t 
 }
 
 /* Appends a contact record with key (i, kind, j, aux) to the thread's list and finds the history
- * of the same key from the previous step (ft, kt_prev, fn_prev; zero for a new contact). Returns
+ * of the same key from the previous step (ft, kt_prev, fn_prev, impact_speed; zero for a new
+ * contact). Returns
  * the record index (or -1 without memory) and in *prev the previous record (or -1). Contacts of
  * a sphere usually come in the same order as in the previous step, so the record at the same
  * position is tried first. */
@@ -87,7 +88,7 @@ static inline __attribute__((always_inline)) long dem_new_record(const dem_sim *
                                                                  size_t i, int kind, int32_t j,
                                                                  int32_t aux, double ft[3],
                                                                  double *kt_prev, double *fn_prev,
-                                                                 int32_t *prev)
+                                                                 double *impact_speed, int32_t *prev)
 {
     dem_contacts *out = ctx->out;
     if (out->n == out->cap && dem_contacts_reserve(out, out->n + 1, NULL)) return -1;
@@ -116,10 +117,12 @@ static inline __attribute__((always_inline)) long dem_new_record(const dem_sim *
         ft[2] = h[2];
         *kt_prev = pv->kt_prev[found];
         *fn_prev = pv->fn_prev[found];
+        *impact_speed = pv->impact_speed[found];
     } else {
         ft[0] = ft[1] = ft[2] = 0.0;
         *kt_prev = 0.0;
         *fn_prev = 0.0;
+        *impact_speed = 0.0;   /* set by dem_contact_force() at the first touch */
     }
     *prev = found;
     return (long)c;
@@ -128,7 +131,8 @@ static inline __attribute__((always_inline)) long dem_new_record(const dem_sim *
 /* Stores the updated history and geometry of record c. */
 static inline __attribute__((always_inline)) void dem_store_record(dem_contacts *out, size_t c,
                                                                    const double ft[3], double kt_prev,
-                                                                   double fn_prev, double overlap,
+                                                                   double fn_prev, double impact_speed,
+                                                                   double overlap,
                                                                    const double n[3])
 {
     double *h = out->ft + 3 * c, *nn = out->normal + 3 * c;
@@ -137,6 +141,7 @@ static inline __attribute__((always_inline)) void dem_store_record(dem_contacts 
     h[2] = ft[2];
     out->kt_prev[c] = kt_prev;
     out->fn_prev[c] = fn_prev;
+    out->impact_speed[c] = impact_speed;
     out->overlap[c] = overlap;
     nn[0] = n[0];
     nn[1] = n[1];

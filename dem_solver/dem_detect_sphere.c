@@ -62,19 +62,22 @@ static __attribute__((noinline)) int contacts_from(const dem_sim *s, dem_emit_ct
         pair.r_star = ri * rj / rs;
         pair.m_star = m_i * m_j / (m_i + m_j);
         pair.zeta = 0.5 * (mi->zeta + mj->zeta);
+        pair.hunt_crossley = 0.5 * (mi->hunt_crossley + mj->hunt_crossley);
         pair.mu = 0.5 * (mi->friction + mj->friction);
 
-        double ft[3], kt_prev, fn_prev;
+        double ft[3], kt_prev, fn_prev, impact_speed;
         int32_t p;
-        long c = dem_new_record(s, ctx, i, DEM_CONTACT_SPHERE, (int32_t)j, 0, ft, &kt_prev, &fn_prev, &p);
+        long c = dem_new_record(s, ctx, i, DEM_CONTACT_SPHERE, (int32_t)j, 0, ft, &kt_prev, &fn_prev,
+                                &impact_speed, &p);
         if (c < 0) return -1;
         double r_i[3] = {lever_i * n[0], lever_i * n[1], lever_i * n[2]};
         dem_cross3(w_i, r_i, wr);
         double vc[3] = {v_other[0] - (v_i[0] + wr[0]), v_other[1] - (v_i[1] + wr[1]),
                         v_other[2] - (v_i[2] + wr[2])}; /* eq. (A.2) */
         double f[3];
-        dem_contact_force(&s->model.prm, &pair, overlap, n, vc, dt, ft, &kt_prev, &fn_prev, f);
-        dem_store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, overlap, n);
+        dem_contact_force(&s->model.prm, &pair, overlap, n, vc, dt, ft, &kt_prev, &fn_prev,
+                          &impact_speed, f);
+        dem_store_record(ctx->out, (size_t)c, ft, kt_prev, fn_prev, impact_speed, overlap, n);
         double ti[3], tj[3];
         dem_cross3(r_i, f, ti);
         /* force -f at -r_j: torque = (-r_j) x (-f) = r_j x f */

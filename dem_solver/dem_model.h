@@ -16,7 +16,7 @@
 #include "nc_error.h"
 
 typedef enum { DEM_LAW_HERTZ_MINDLIN = 0, DEM_LAW_LINEAR = 1 } dem_law;
-typedef enum { DEM_DAMPING_FIT = 0, DEM_DAMPING_A7 = 1 } dem_damping_formula;
+typedef enum { DEM_DAMPING_FIT = 0, DEM_DAMPING_A7 = 1, DEM_DAMPING_HUNT_CROSSLEY = 2 } dem_damping_formula;
 
 typedef struct dem_material {
     char name[64];
@@ -27,6 +27,7 @@ typedef struct dem_material {
     double friction;      /* Coulomb friction coefficient μ */
     double shear_modulus_pa; /* G = E / (2 (1 + ν)) */
     double zeta;             /* damping ratio from ε by eq. (A.7) or eqs. (A.8)–(A.10) */
+    double hunt_crossley;    /* Hunt–Crossley c(ε) = ξ v0 (dem_damping.h) */
     double pair_e_star;      /* E* and G* of a contact between two spheres of this material */
     double pair_g_star;
     double pair_kt_kn_root;  /* sqrt(kt / kn') of such a contact */
@@ -124,6 +125,7 @@ typedef struct dem_net {
     double youngs_modulus_pa, poisson_ratio, friction, shear_modulus_pa;
     double restitution;    /* < 0: use the particle's damping */
     double zeta;
+    double hunt_crossley;
     double cable_radius_m; /* contact when the centre is within R + cable radius */
     double near_distance_m;/* "near_interface" threshold on the surface gap */
     int force_at_end;      /* coupled reply: 0 the time-averaged force of the step (impulse/dt),

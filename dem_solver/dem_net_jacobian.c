@@ -106,7 +106,7 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
         r->has_prev = 0;
         memset(r->ft, 0, sizeof r->ft);
         memset(r->n_prev, 0, sizeof r->n_prev);
-        r->kt_prev = r->fn_prev = 0.0;
+        r->kt_prev = r->fn_prev = r->impact_speed = 0.0;
         for (int32_t p = s->contact.prev_first[i]; p < s->contact.prev_first[i + 1]; p++)
             if (pv->kind[p] == kind && pv->j[p] == r->j && pv->aux[p] == c->aux[k]) {
                 r->has_prev = 1;
@@ -114,6 +114,7 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
                 memcpy(r->n_prev, pv->normal + 3 * (size_t)p, sizeof r->n_prev);
                 r->kt_prev = pv->kt_prev[p];
                 r->fn_prev = pv->fn_prev[p];
+                r->impact_speed = pv->impact_speed[p];
                 break;
             }
         /* the same contact in the previous sub-step (both lists are ordered by sphere) */
@@ -241,13 +242,14 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     double lever = r->radius - 0.5 * overlap, Dlever[NCOL] = {0};
     for (int c = 0; c < nc; c++) Dlever[c] = -0.5 * Dov[c];
     /* the incoming history (dem_new_record) and the crossed-cable flip (dem_emit_wall_contact) */
-    double ft[3], kt_prev, fn_prev, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
+    double ft[3], kt_prev, fn_prev, impact_speed, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
     const double *np;
     int has_prev;
     if (in) {
         memcpy(ft, in->ft, sizeof ft);
         kt_prev = in->kt;
         fn_prev = in->fn;
+        impact_speed = in->impact_speed;
         np = in->n;
         has_prev = 1;
         memcpy(Dft, in->dft, sizeof Dft);
@@ -256,11 +258,12 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         memcpy(ft, r->ft, sizeof ft);
         kt_prev = r->kt_prev;
         fn_prev = r->fn_prev;
+        impact_speed = r->impact_speed;
         np = r->n_prev;
         has_prev = 1;
     } else {
         ft[0] = ft[1] = ft[2] = 0.0;
-        kt_prev = fn_prev = 0.0;
+        kt_prev = fn_prev = impact_speed = 0.0;
         np = NULL;
         has_prev = 0;
     }
@@ -301,13 +304,14 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
     /* the values exactly as the DEM computes them */
     double ft_in[3] = {ft[0], ft[1], ft[2]}, ktp_in = kt_prev, fnp_in = fn_prev;
-    dem_contact_force(prm, &r->pair, overlap, n, vc, h, ft, &kt_prev, &fn_prev, f);
+    dem_contact_force(prm, &r->pair, overlap, n, vc, h, ft, &kt_prev, &fn_prev, &impact_speed, f);
     tq[0] = ri[1] * f[2] - ri[2] * f[1];
     tq[1] = ri[2] * f[0] - ri[0] * f[2];
     tq[2] = ri[0] * f[1] - ri[1] * f[0];
     memcpy(out->ft, ft, sizeof ft);
     out->kt = kt_prev;
     out->fn = fn_prev;
+    out->impact_speed = impact_speed;
     memcpy(out->n, n, sizeof n);
     *t_out = t;
     if (!want) return;
@@ -318,12 +322,20 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     law->normal(prm, pr, overlap, &L);
     double vn = dot3(vc, n), rate = -vn, Dvn[NCOL];
     for (int c = 0; c < nc; c++) Dvn[c] = col_dot(n, Dvc, c) + col_dot(vc, Dn, c);
-    double fn = L.fn_elastic + 2.0 * pr->zeta * L.cn_root * rate, Dfn[NCOL];
+    /* the Hunt–Crossley dashpot's ξ = hunt_crossley / v0 is held at the contact's impact speed
+     * (v0 is the approach speed at the first touch; its own derivative in the sub-step where
+     * the contact begins is left out) */
+    const int hunt_crossley = prm->damping == DEM_DAMPING_HUNT_CROSSLEY;
+    const double xi = hunt_crossley ? pr->hunt_crossley / impact_speed : 0.0;
+    double fn = hunt_crossley ? L.fn_elastic * (1.0 + xi * rate)
+                              : L.fn_elastic + 2.0 * pr->zeta * L.cn_root * rate, Dfn[NCOL];
     int clamped = law->no_tension && fn < 0.0;
     if (clamped) fn = 0.0;
     for (int c = 0; c < nc; c++)
-        Dfn[c] = clamped ? 0.0 : (L.kn_tangent + 2.0 * pr->zeta * L.dcn_root * rate) * Dov[c] -
-                                     2.0 * pr->zeta * L.cn_root * Dvn[c];
+        Dfn[c] = clamped ? 0.0
+                 : hunt_crossley ? L.kn_tangent * (1.0 + xi * rate) * Dov[c] - L.fn_elastic * xi * Dvn[c]
+                                 : (L.kn_tangent + 2.0 * pr->zeta * L.dcn_root * rate) * Dov[c] -
+                                       2.0 * pr->zeta * L.cn_root * Dvn[c];
     double kt = L.kt, Dkt[NCOL], ct = 2.0 * pr->zeta * L.cn_root * pr->kt_kn_root, Dct[NCOL];
     for (int c = 0; c < nc; c++) {
         Dkt[c] = L.dkt * Dov[c];

@@ -73,7 +73,8 @@ typedef struct dem_jac_record {
     double p[3], v[3], w[3];   /* sphere centre (m), velocity (m/s), body spin (rad/s) */
     double radius, reach;      /* sphere radius, radius + cable radius (m) */
     dem_pair pair;
-    double ft[3], kt_prev, fn_prev, n_prev[3]; /* incoming history (used in sub-step 0) */
+    double ft[3], kt_prev, fn_prev, impact_speed, n_prev[3]; /* incoming history (used in
+                                                                sub-step 0) */
     double f_base[3], t_base[3]; /* force and torque on the sphere at the solve's displacement */
 } dem_jac_record;
 
@@ -91,7 +92,7 @@ enum {
 
 /* Per-record state of a replay: outgoing history and its tangent. */
 typedef struct dem_jac_state {
-    double ft[3], kt, fn, n[3];
+    double ft[3], kt, fn, impact_speed, n[3];
     double dft[3][3 * DEM_JAC_MAX_NODES], dkt[3 * DEM_JAC_MAX_NODES];
 } dem_jac_state;
 

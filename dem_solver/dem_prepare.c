@@ -205,8 +205,9 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     for (size_t k = 0; k < s->model.n_materials; k++) {
         dem_material *m = &s->model.materials[k];
         m->shear_modulus_pa = m->youngs_modulus_pa / (2.0 * (1.0 + m->poisson_ratio));
-        m->zeta = s->model.prm.damping == DEM_DAMPING_FIT ? dem_zeta_fit(m->restitution)
-                                                    : dem_zeta_a7(m->restitution);
+        m->zeta = s->model.prm.damping == DEM_DAMPING_A7 ? dem_zeta_a7(m->restitution)
+                                                   : dem_zeta_fit(m->restitution);
+        m->hunt_crossley = dem_hunt_crossley_factor(m->restitution);
         m->pair_e_star = dem_effective_modulus(m->youngs_modulus_pa, m->poisson_ratio,
                                                m->youngs_modulus_pa, m->poisson_ratio);
         m->pair_g_star = dem_effective_shear(m->shear_modulus_pa, m->poisson_ratio,
@@ -216,9 +217,11 @@ int dem_sim_prepare(dem_sim *s, nc_error *err)
     dem_net *net = &s->model.net;
     if (net->youngs_modulus_pa > 0.0)
         net->shear_modulus_pa = net->youngs_modulus_pa / (2.0 * (1.0 + net->poisson_ratio));
-    if (net->restitution >= 0.0)
-        net->zeta = s->model.prm.damping == DEM_DAMPING_FIT ? dem_zeta_fit(net->restitution)
-                                                      : dem_zeta_a7(net->restitution);
+    if (net->restitution >= 0.0) {
+        net->zeta = s->model.prm.damping == DEM_DAMPING_A7 ? dem_zeta_a7(net->restitution)
+                                                     : dem_zeta_fit(net->restitution);
+        net->hunt_crossley = dem_hunt_crossley_factor(net->restitution);
+    }
     s->model.r_max = 0.0;
     s->model.r_min = INFINITY;
     for (size_t i = 0; i < s->model.sph.n; i++) {
