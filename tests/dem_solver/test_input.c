@@ -54,6 +54,8 @@ static void test_malformed_json(void **state)
     expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.1, \"material\": \"ice\"}]}",
                  "ice");
     expect_error("{\"particles\": []}", "materials");
+    expect_error("{" MAT ", \"contact_law\": \"linear\", \"damping\": \"hunt_crossley\","
+                 " \"linear\": {\"normal_stiffness_n_per_m\": 1e6}}", "test.json.damping");
     expect_error("{\"materials\": [{\"name\": \"a\", \"youngs_modulus_pa\": -1, \"poisson_ratio\": 0.2,"
                  " \"density_kg_m3\": 1, \"restitution\": 0.5, \"friction\": 0.1}]}",
                  "materials[0].youngs_modulus_pa");
