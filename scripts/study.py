@@ -190,9 +190,11 @@ def study_timestep(out, jobs, end_time):
 RELAXATION_DT = "2.5e-3"
 # COR 1 isolates the relaxation (paper 7.3); 200 iterations per step let alpha = 0.1 converge
 # everywhere; a step that still has not converged is accepted and counted (column "unconverged")
-# at the study's fixed dt (no step rejection: relaxation_variant sets step_control.dt_min = dt)
+# at the study's fixed dt (no step rejection: relaxation_variant sets step_control.dt_min = dt);
+# the paper's iteration, without the contact backtracking (docs/notes/contact_backtracking.md)
 RELAXATION_COMMON = ["dem.materials.0.restitution=1.0", "coupler.on_max_iterations=accept",
-                     "coupler.max_iterations=200", "coupler.accept_unconverged=true"]
+                     "coupler.max_iterations=200", "coupler.accept_unconverged=true",
+                     "coupler.contact_backtracking=0"]
 
 
 def relaxation_variant(alpha, dt):
