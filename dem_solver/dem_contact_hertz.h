@@ -89,6 +89,7 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
     ft1 += kt * vt1 * dt;
     ft2 += kt * vt2 * dt;
 
+    double spring_trial2 = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
     double tr0 = ft0 + ct * vt0, tr1 = ft1 + ct * vt1, tr2 = ft2 + ct * vt2;
     double trial2 = tr0 * tr0 + tr1 * tr1 + tr2 * tr2;
     double cap = pair->mu * (fn > 0.0 ? fn : 0.0);
@@ -100,6 +101,19 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
         ft0 = tr0 - ct * vt0;
         ft1 = tr1 - ct * vt1;
         ft2 = tr2 - ct * vt2;
+        /* sliding never stretches the spring: it holds at most the Coulomb force and at
+         * most what its own increments k_t v_t dt loaded. On a new contact the dashpot part
+         * ct v_t may exceed the cap many times, and a spring left at cap - ct v_t, or raised
+         * with a fast-growing cap, would push back once the sliding stops (energy from
+         * nowhere) */
+        double spring2 = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
+        double limit2 = fmin(cap * cap, spring_trial2);
+        if (spring2 > limit2) {
+            double q = sqrt(limit2 / spring2);
+            ft0 *= q;
+            ft1 *= q;
+            ft2 *= q;
+        }
     }
     ft[0] = ft0;
     ft[1] = ft1;

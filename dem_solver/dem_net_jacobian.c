@@ -383,17 +383,31 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
     double trial2 = dot3(tr, tr), cap = pr->mu * (fn > 0.0 ? fn : 0.0);
     if (trial2 > cap * cap) { /* Coulomb: the spring slides at the cap */
-        double len = sqrt(trial2), sc = trial2 > 0.0 ? cap / len : 0.0;
+        double len = sqrt(trial2), sc = trial2 > 0.0 ? cap / len : 0.0, Dcap[NCOL];
+        double Dg[3][NCOL];   /* the trial spring's, for the spring limit below */
+        memcpy(Dg, Dft, sizeof Dg);
         for (int c = 0; c < nc; c++) {
-            double Dcap = fn > 0.0 ? pr->mu * Dfn[c] : 0.0;
+            Dcap[c] = fn > 0.0 ? pr->mu * Dfn[c] : 0.0;
             double Dlen = trial2 > 0.0 ? col_dot(tr, Dtr, c) / len : 0.0;
-            double Dsc = trial2 > 0.0 ? (Dcap - sc * Dlen) / len : 0.0;
+            double Dsc = trial2 > 0.0 ? (Dcap[c] - sc * Dlen) / len : 0.0;
             for (int k = 0; k < 3; k++) {
                 Dtr[k][c] = Dsc * tr[k] + sc * Dtr[k][c];
                 Dft[k][c] = Dtr[k][c] - Dct[c] * vt[k] - ct * Dvt[k][c];
             }
         }
         for (int k = 0; k < 3; k++) tr[k] *= sc;
+        /* the spring limit of dem_contact_force(): |ft| <= min(cap, |trial spring|) */
+        double s[3] = {tr[0] - ct * vt[0], tr[1] - ct * vt[1], tr[2] - ct * vt[2]};
+        double s2 = dot3(s, s), g2 = dot3(g, g), limit2 = fmin(cap * cap, g2);
+        if (s2 > limit2) {
+            double q = sqrt(limit2 / s2);
+            for (int c = 0; c < nc; c++) {
+                double Dlimit2 = cap * cap <= g2 ? 2.0 * cap * Dcap[c] : 2.0 * col_dot(g, Dg, c);
+                double Ds2 = 2.0 * col_dot(s, Dft, c);
+                double Dq = limit2 > 0.0 ? 0.5 * q * (Dlimit2 / limit2 - Ds2 / s2) : 0.0;
+                for (int k = 0; k < 3; k++) Dft[k][c] = Dq * s[k] + q * Dft[k][c];
+            }
+        }
     }
     for (int k = 0; k < 3; k++)
         for (int c = 0; c < nc; c++) df[k][c] = -Dfn[c] * n[k] - fn * Dn[k][c] + Dtr[k][c];
