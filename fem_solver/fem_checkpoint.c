@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CK_FORMAT 1   /* layout version of the file */
+#define CK_FORMAT 2   /* layout version of the file (2: the per-set peak forces) */
 
 /* ---- the table ---------------------------------------------------------------------- */
 
@@ -121,14 +121,20 @@ static void rebuilt_entries(nc_ckpt_table *t, const ck_sizes *z, ck_rebuilt *r, 
 }
 
 /* The output's counters: which rows of fem.h5 belong to the state, the times the XDMF index
- * lists, the run's largest |u|. */
-static void output_entries(nc_ckpt_table *t, const ck_sizes *z, fem_output *o)
+ * lists, the run's largest |u|, each set's largest axial force and when each element first
+ * exceeded its breaking load (fem_output_reserve_peaks has sized them). */
+static void output_entries(nc_ckpt_table *t, const ck_sizes *z, fem_output *o, const fem_model *m)
 {
     nc_ckpt_add(t, NULL, "output/times", NC_CKPT_F64, o->times, (size_t)z->n_out);
     nc_ckpt_add(t, NULL, "output/monitor_rows", NC_CKPT_LONG, &o->n_mon, 1);
     nc_ckpt_add(t, NULL, "output/max_u_m", NC_CKPT_F64, &o->max_u_m, 1);
     nc_ckpt_add(t, NULL, "output/max_u_time_s", NC_CKPT_F64, &o->max_u_time_s, 1);
     nc_ckpt_add(t, NULL, "output/max_u_node", NC_CKPT_INT, &o->max_u_node, 1);
+    size_t k = (size_t)m->n_sets;
+    nc_ckpt_add(t, NULL, "output/peak_axial_force", NC_CKPT_F64, o->peak_n, k);
+    nc_ckpt_add(t, NULL, "output/peak_time_s", NC_CKPT_F64, o->peak_time_s, k);
+    nc_ckpt_add(t, NULL, "output/peak_element", NC_CKPT_INT, o->peak_element, k);
+    nc_ckpt_add(t, NULL, "output/exceedance_time_s", NC_CKPT_F64, o->exceeded_s, (size_t)m->n_elements);
 }
 
 /* ---- the model's identity ------------------------------------------------------------ */
@@ -221,7 +227,7 @@ static void full_table(nc_ckpt_table *t, ck_header *h, ck_sizes *z, ck_rebuilt *
     size_entries(t, z);
     analysis_entries(t, s);
     rebuilt_entries(t, z, r, (size_t)s->ndof);
-    output_entries(t, z, o);
+    output_entries(t, z, o, s->m);
     nc_ckpt_add_table(t, extra);
 }
 
@@ -233,7 +239,7 @@ int fem_checkpoint_save(const char *dir, const char *name, long step, double tim
     snprintf(ck, sizeof ck, "%s/checkpoint", dir);
     fem_checkpoint_path(dir, name, path, sizeof path);
     snprintf(file, sizeof file, "fem_%s.h5", name);
-    if (nc_file_make_dirs(ck, err)) return -1;
+    if (nc_file_make_dirs(ck, err) || fem_output_reserve_peaks(o, s->m, err)) return -1;
 
     ck_header h;
     memset(&h, 0, sizeof h);
@@ -327,7 +333,8 @@ int fem_checkpoint_load(const char *dir, const char *name, long step, double tim
     r.factor_x = malloc(nnz * sizeof(double));
     r.saved_factor_x = malloc(nnz * sizeof(double));
     if (!r.pairs || !r.lin_nodes || !r.lin_K || !r.lin_C || !r.lin_u || !r.lin_v || !r.factor_x ||
-        !r.saved_factor_x || fem_output_reserve_times(o, z.n_out, err)) {
+        !r.saved_factor_x || fem_output_reserve_times(o, z.n_out, err) ||
+        fem_output_reserve_peaks(o, s->m, err)) {
         nc_error_set(err, 1, "%s: out of memory", path);
         goto done;
     }

@@ -45,7 +45,7 @@ int fem_checkpoint_save(const char *dir, const char *name, long step, double tim
                         fem_analysis *s, fem_output *o, const nc_ckpt_table *extra, nc_error *err);
 
 /* Loads checkpoint `name` into s (initialised for the same model), o (not open; its n_out,
- * times, n_mon and max |u| fields are set, for fem_output_reopen) and the extra entries,
+ * times, n_mon, max |u| and peak force fields are set, for fem_output_reopen) and the extra entries,
  * after checking that it is of this model and of `step` at time_s. Errors name the file and
  * what is wrong (missing, unreadable, another model, another step). On an error s, o and the
  * extra fields may be partly overwritten: the caller starts them afresh. */

@@ -228,13 +228,13 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
     coupled *c = ctx;
     fem_analysis *s = &c->s;
     c->sum->steps++;
+    fem_analysis_update_axial(s);   /* every step: the peak forces (fem_output_monitor) */
     if (fem_output_monitor(&c->out, s, s->cur.time_s, err)) return -1;
     /* full output at multiples of interval_steps x the nominal dt in TIME: the coupler's
      * steps may be shorter (step control) or longer (far steps), so counting steps would
      * write off the grid the DEM writes on */
     double every_s = c->m->settings.output_interval * c->m->settings.dt_s;
     if (s->cur.time_s >= c->next_output_s - 1e-6 * every_s) {
-        fem_analysis_update_axial(s);
         if (fem_output_step(&c->out, s, s->cur.time_s, err)) return -1;
         c->written_step = s->cur.step;
         c->next_output_s = (floor(s->cur.time_s / every_s + 1e-6) + 1.0) * every_s;
@@ -366,6 +366,8 @@ done:
     sum.max_displacement_m = c->out.max_u_node >= 0 ? c->out.max_u_m : 0.0;
     sum.max_displacement_time_s = c->out.max_u_node >= 0 ? c->out.max_u_time_s : -1.0;
     sum.max_displacement_node = c->out.max_u_node;
+    sum.overload = summary ? summary->overload : NULL;
+    sum.overloaded_elements = fem_output_overload(&c->out, m, sum.overload);
     sum.stats = c->s.stats;
     if (p) proto_participant_close(p);
     fem_output_close(&c->out);

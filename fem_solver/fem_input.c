@@ -456,7 +456,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
                                        "max_iterations", "residual_tolerance_n",
                                        "relative_tolerance", "displacement_tolerance_m",
                                        "factorization", "newton", "contraction", "coupling_load",
-                                       NULL};
+                                       "fail_on_overload", NULL};
     static const char *const types[] = {"static", "dynamic", NULL};
     static const char *const integrators[] = {"newmark", "generalized_alpha", "bossak", NULL};
     static const char *const factorizations[] = {"auto", "ldlt", "llt", NULL};
@@ -471,6 +471,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
         nc_json_choice_opt(o, w, "factorization", factorizations, 0, &fact, err) ||
         nc_json_choice_opt(o, w, "newton", newtons, 0, &newton, err) ||
         nc_json_choice_opt(o, w, "coupling_load", coupling_loads, 0, &coupling_load, err) ||
+        nc_json_bool_opt(o, w, "fail_on_overload", 0, &s->fail_on_overload, err) ||
         nc_json_number_range_opt(o, w, "contraction", 0.2, 0.0, 0.9, &s->contraction, err) ||
         nc_json_number_range_opt(o, w, "beta", 0.25, 1e-6, 0.5, &s->beta, err) ||
         nc_json_number_range_opt(o, w, "gamma", 0.5, 0.5, 1.0, &s->gamma, err) ||

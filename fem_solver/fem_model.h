@@ -62,6 +62,8 @@ typedef struct fem_settings {
     double contraction;          /* residual ratio below which a kept factorisation is fine */
     int coupling_load_constant;  /* 1: the coupling force acts over the whole step (its
                                     impulse is F dt); 0: it is a load at t_n+1 only */
+    int fail_on_overload;        /* 1: an axial force above a set's breaking_load_n makes the
+                                    program's exit status non-zero (it is always reported) */
 } fem_settings;
 
 typedef struct fem_model {

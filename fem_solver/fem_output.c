@@ -9,6 +9,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+static void free_peaks(fem_output *o)
+{
+    free(o->peak_n);
+    free(o->peak_time_s);
+    free(o->peak_element);
+    free(o->exceeded_s);
+    o->peak_n = o->peak_time_s = o->exceeded_s = NULL;
+    o->peak_element = NULL;
+}
+
 /* Buffers and the support list of model m; support_dofs [3 n_nodes] into *dofs (caller frees). */
 static int prepare(fem_output *o, const fem_model *m, const char *dir, const char *path,
                    int **dofs, nc_error *err)
@@ -31,6 +41,23 @@ static int prepare(fem_output *o, const fem_model *m, const char *dir, const cha
         o->support_nodes[o->n_support++] = i;
     }
     *dofs = support_dofs;
+    return fem_output_reserve_peaks(o, m, err);
+}
+
+int fem_output_reserve_peaks(fem_output *o, const fem_model *m, nc_error *err)
+{
+    if (o->peak_n) return 0;
+    size_t k = (size_t)m->n_sets, e = (size_t)m->n_elements;
+    o->peak_n = calloc(k + 1, sizeof *o->peak_n);
+    o->peak_time_s = calloc(k + 1, sizeof *o->peak_time_s);
+    o->peak_element = malloc((k + 1) * sizeof *o->peak_element);
+    o->exceeded_s = malloc((e + 1) * sizeof *o->exceeded_s);
+    if (!o->peak_n || !o->peak_time_s || !o->peak_element || !o->exceeded_s) {
+        free_peaks(o);
+        return nc_error_set(err, 1, "out of memory for the peak forces of %zu element sets", k);
+    }
+    for (size_t i = 0; i < k; i++) o->peak_element[i] = -1;
+    for (size_t i = 0; i < e; i++) o->exceeded_s[i] = -1.0;
     return 0;
 }
 
@@ -114,6 +141,7 @@ static void discard(fem_output *o)
     free(o->buf);
     free(o->force);
     free(o->support_nodes);
+    free_peaks(o);
     memset(o, 0, sizeof *o);
     o->max_u_node = -1;
 }
@@ -216,6 +244,17 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
             o->max_u_time_s = time_s;
             o->max_u_node = i;
         }
+    }
+    /* every step, not only output steps: a peak between two output steps counts */
+    for (int e = 0; o->peak_n && e < m->n_elements; e++) {
+        const int k = m->element_set[e];
+        const double f = s->axial[e], limit = m->sets[k].breaking_load_n;
+        if (o->peak_element[k] < 0 || f > o->peak_n[k]) {
+            o->peak_n[k] = f;
+            o->peak_time_s[k] = time_s;
+            o->peak_element[k] = e;
+        }
+        if (limit > 0.0 && f > limit && o->exceeded_s[e] < 0.0) o->exceeded_s[e] = time_s;
     }
     if (nc_h5_series_append(&o->mon_time, &time_s, err)) return -1;
     o->n_mon++;
@@ -325,6 +364,94 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     return 0;
 }
 
+int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set)
+{
+    int total = 0;
+    for (int k = 0; per_set && k < m->n_sets; k++)
+        per_set[k] = (fem_set_overload){m->sets[k].breaking_load_n, 0.0, -1.0, -1, 0, -1.0};
+    if (!o->peak_n) return 0;
+    for (int e = 0; e < m->n_elements; e++) {
+        if (o->exceeded_s[e] < 0.0) continue;
+        total++;
+        if (!per_set) continue;
+        fem_set_overload *r = per_set + m->element_set[e];
+        if (r->exceeded++ == 0 || o->exceeded_s[e] < r->first_time_s) r->first_time_s = o->exceeded_s[e];
+    }
+    for (int k = 0; per_set && k < m->n_sets; k++) {
+        per_set[k].peak_n = o->peak_n[k];
+        per_set[k].peak_time_s = o->peak_time_s[k];
+        per_set[k].peak_element = o->peak_element[k];
+    }
+    return total;
+}
+
+void fem_set_overload_text(const fem_model *m, int k, const fem_set_overload *r, char *out,
+                           size_t size)
+{
+    const char *at = m->settings.type == FEM_STATIC ? "load factor" : "t =",
+               *unit = m->settings.type == FEM_STATIC ? "" : " s";
+    double ratio = r->peak_n / r->breaking_load_n;
+    if (r->exceeded > 0)
+        snprintf(out, size, "warning: set %s: %d element%s exceeded breaking_load_n %g N (first at "
+                 "%s %g%s); largest %g N (%.3gx) in element %d at %s %g%s; the model has no rope "
+                 "failure, forces beyond the breaking load are not physical", m->sets[k].name,
+                 r->exceeded, r->exceeded == 1 ? "" : "s", r->breaking_load_n, at, r->first_time_s,
+                 unit, r->peak_n, ratio, r->peak_element, at, r->peak_time_s, unit);
+    else
+        snprintf(out, size, "set %s: largest axial force %g N, %.3gx breaking_load_n %g N, in "
+                 "element %d at %s %g%s", m->sets[k].name, r->peak_n, ratio, r->breaking_load_n,
+                 r->peak_element, at, r->peak_time_s, unit);
+}
+
+/* /element_sets and the root's overload attributes (layout in fem_output.h). */
+static int write_overload(fem_output *o, const fem_model *m, nc_error *err)
+{
+    int n = m->n_sets;
+    fem_set_overload *r = malloc((size_t)n * sizeof *r);
+    double *d = malloc(4 * (size_t)n * sizeof *d);
+    int *i32 = malloc(2 * (size_t)n * sizeof *i32);
+    char *text = malloc((size_t)n * 512 + 1);
+    if (!r || !d || !i32 || !text) {
+        free(r); free(d); free(i32); free(text);
+        return nc_error_set(err, 1, "%s: out of memory for the set summary", o->h5.path);
+    }
+    int total = fem_output_overload(o, m, r), checked = 0;
+    size_t len = 0;
+    text[0] = '\0';
+    for (int k = 0; k < n; k++) {
+        d[k] = r[k].breaking_load_n;
+        d[n + k] = r[k].peak_n;
+        d[2 * n + k] = r[k].peak_time_s;
+        d[3 * n + k] = r[k].first_time_s;
+        i32[k] = r[k].peak_element;
+        i32[n + k] = r[k].exceeded;
+        checked |= r[k].breaking_load_n > 0.0;
+        if (r[k].exceeded > 0) {
+            if (len) text[len++] = '\n';
+            fem_set_overload_text(m, k, r + k, text + len, 511);
+            len += strlen(text + len);
+        }
+    }
+    hsize_t k = (hsize_t)n, e = (hsize_t)m->n_elements;
+    const char *ts = m->settings.type == FEM_STATIC ? "1" : "s";
+    nc_h5_file *h = &o->h5;
+    int rc = nc_h5_write_units(h, "/element_sets/breaking_load", NC_H5_F64, 1, &k, d, "N", err) ||
+             nc_h5_write_units(h, "/element_sets/peak_axial_force", NC_H5_F64, 1, &k, d + n, "N", err) ||
+             nc_h5_write_units(h, "/element_sets/peak_time", NC_H5_F64, 1, &k, d + 2 * n, ts, err) ||
+             nc_h5_write_units(h, "/element_sets/peak_element", NC_H5_I32, 1, &k, i32, "1", err) ||
+             nc_h5_write_units(h, "/element_sets/exceeded_elements", NC_H5_I32, 1, &k, i32 + n, "1", err) ||
+             nc_h5_write_units(h, "/element_sets/first_exceedance_time", NC_H5_F64, 1, &k, d + 3 * n, ts, err) ||
+             nc_h5_write_units(h, "/element_sets/element_exceedance_time", NC_H5_F64, 1, &e,
+                               o->exceeded_s, ts, err) ||
+             (checked && nc_h5_attr_double(h, "/", "overloaded_elements", total, err)) ||
+             (total > 0 && nc_h5_attr_string(h, "/", "overload", text, err));
+    /* a resumed run's file may hold the warnings of the run it continues beyond the checkpoint */
+    if (!rc && total == 0 && !h->failed && H5Aexists_by_name(h->file, "/", "overload", H5P_DEFAULT) > 0)
+        H5Adelete_by_name(h->file, "/", "overload", H5P_DEFAULT);
+    free(r); free(d); free(i32); free(text);
+    return rc ? -1 : 0;
+}
+
 void fem_output_close(fem_output *o)
 {
     if (!o) return;
@@ -336,6 +463,7 @@ void fem_output_close(fem_output *o)
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_node", o->max_u_node, &ignored);
         }
+        if (o->model && o->peak_n) write_overload(o, o->model, &ignored);
         close_series(o);
         nc_h5_flush(&o->h5, &ignored);
         nc_h5_close(&o->h5);
@@ -344,5 +472,6 @@ void fem_output_close(fem_output *o)
     free(o->buf);
     free(o->force);
     free(o->support_nodes);
+    free_peaks(o);
     memset(o, 0, sizeof *o);
 }

@@ -16,6 +16,15 @@
  *   every step /monitor/time [s], /monitor/node_ids [p] i32, /monitor/displacement and
  *   /monitor/velocity [s,p,3]. /output/displacement holds the run's largest |u| as
  *   attributes max_magnitude (m), max_time (s) and max_node, over every monitored step.
+ *   Per element set, over every monitored step (written at close; index k = element set k,
+ *   as in /mesh/element_set): /element_sets/breaking_load [k] N (0: not given),
+ *   /element_sets/peak_axial_force [k] N (the largest tensile axial force),
+ *   /element_sets/peak_time [k] s (load factor for statics), /element_sets/peak_element [k]
+ *   i32, /element_sets/exceeded_elements [k] i32 (elements whose force ever exceeded the
+ *   breaking load), /element_sets/first_exceedance_time [k] s, and per element
+ *   /element_sets/element_exceedance_time [m] s (first time above it; -1: never, no step);
+ *   with a breaking load given, the root attribute overloaded_elements (their total) and,
+ *   when it is > 0, the root string attribute overload (the warnings, one line per set).
  * The file is flushed after every output step and fem.xdmf (XDMF 3, read by ParaView's
  * default reader) is rewritten via a temporary file and rename (at most every 2 s beyond
  * 200 output steps) so both stay readable if the run stops.
@@ -28,6 +37,16 @@
 
 #include "fem_analysis.h"
 #include "nc_h5.h"
+
+/* One element set's largest axial force and breaking-load exceedance (fem_output_overload). */
+typedef struct fem_set_overload {
+    double breaking_load_n;   /* the set's breaking_load_n (0: not given, nothing exceeds) */
+    double peak_n;            /* largest tensile axial force over the monitored steps (N) */
+    double peak_time_s;       /* when (load factor for statics) */
+    int peak_element;         /* where; -1: no step monitored (or no element in the set) */
+    int exceeded;             /* elements whose axial force ever exceeded breaking_load_n */
+    double first_time_s;      /* the first time one did; -1: none */
+} fem_set_overload;
 
 typedef struct fem_output {
     nc_h5_file h5;
@@ -50,6 +69,10 @@ typedef struct fem_output {
     const fem_model *model;
     double max_u_m, max_u_time_s;   /* run maximum of |u| over the monitored steps */
     int max_u_node;                 /* -1 before the first step */
+    /* per element set and element over the monitored steps (fem_output_reserve_peaks) */
+    double *peak_n, *peak_time_s;   /* [n_sets] largest axial force (N) and when */
+    int *peak_element;              /* [n_sets] where; -1 before the first step */
+    double *exceeded_s;             /* [n_elements] first time above the breaking load, -1 never */
 } fem_output;
 
 /* Creates DIR/fem.h5 (truncating) with the mesh and empty series. */
@@ -61,12 +84,25 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
 int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_error *err);
 /* Room for count output times in o->times. */
 int fem_output_reserve_times(fem_output *o, int count, nc_error *err);
-/* Appends the monitor rows of the current state (call every step); tracks the largest |u|. */
+/* Room for the per-set peaks and exceedance times of model m, as before the first step,
+ * unless o has them already (open, reopen and the checkpoint's save and load call it). */
+int fem_output_reserve_peaks(fem_output *o, const fem_model *m, nc_error *err);
+/* Appends the monitor rows of the current state (call every step); tracks the largest |u|
+ * and, from s->axial (current: fem_analysis_update_axial), each set's largest axial force
+ * and the elements above their set's breaking_load_n. */
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 /* Appends one full output step, flushes, rewrites the XDMF file. */
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 /* Support reactions of the current state into r [3 n_support] (N), load factor lambda. */
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r);
+/* Each set's peak and exceedance so far into per_set [n_sets] (may be NULL); returns the
+ * number of elements that exceeded their set's breaking_load_n. */
+int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set);
+/* One line on set k of a set with a breaking load (no trailing newline): the warning when
+ * elements exceeded it, else the largest force as a fraction of it (times as load factors
+ * for statics). */
+void fem_set_overload_text(const fem_model *m, int k, const fem_set_overload *r, char *out,
+                           size_t size);
 void fem_output_close(fem_output *o);
 
 #endif

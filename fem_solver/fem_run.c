@@ -52,9 +52,9 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
             s.cur.time_s = k * set->dt_s;   /* no drift from repeated sums */
             sum.steps++;
             sum.newton_iterations += s.stats.iterations;
+            fem_analysis_update_axial(&s);   /* every step: the peak forces (fem_output_monitor) */
             if (fem_output_monitor(&out, &s, s.cur.time_s, err)) goto done;
             if (k % set->output_interval == 0) {
-                fem_analysis_update_axial(&s);
                 if (fem_output_step(&out, &s, s.cur.time_s, err)) goto done;
                 written_step = k;
             }
@@ -74,6 +74,8 @@ done:
     sum.max_displacement_m = out.max_u_node >= 0 ? out.max_u_m : 0.0;
     sum.max_displacement_time_s = out.max_u_node >= 0 ? out.max_u_time_s : -1.0;
     sum.max_displacement_node = out.max_u_node;
+    sum.overload = summary ? summary->overload : NULL;
+    sum.overloaded_elements = fem_output_overload(&out, m, sum.overload);
     if (s.m && s.cur.u) sum.stats = s.stats;   /* not when the set-up failed (out of memory) */
     fem_output_close(&out);
     fem_analysis_free(&s);

@@ -14,6 +14,7 @@
 #include <signal.h>
 #include "fem_model.h"
 #include "fem_analysis.h"
+#include "fem_output.h"
 
 typedef struct fem_run_summary {
     long steps;                 /* steps or load increments done */
@@ -23,6 +24,10 @@ typedef struct fem_run_summary {
     double max_displacement_m;  /* largest nodal |u| of the run (standalone; coupled: at the end) */
     double max_displacement_time_s; /* when it occurred (load factor for statics); -1 unknown */
     int max_displacement_node;  /* where; -1 unknown */
+    int overloaded_elements;    /* elements whose axial force exceeded their set's
+                                   breaking_load_n at some monitored step */
+    fem_set_overload *overload; /* [n_sets] the caller's array (NULL: not wanted): each set's
+                                   largest axial force and exceedance (fem_output_overload) */
     double wall_s;
     int failed_solves;          /* coupled: SOLVE commands answered with an error */
     int semidefinite_retries;   /* coupled: steps solved again with the semi-definite part of

@@ -5,7 +5,9 @@
  *   fem_solver fem.json --endpoint EP --output DIR [--endpoint-file FILE] [--idle-timeout S]
  *
  * SIGINT/SIGTERM stop the run after the current step; results so far are kept.
- * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 130 stopped by a signal.
+ * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 3 finished but an axial force
+ * exceeded its set's breaking_load_n with analysis.fail_on_overload (without it: a warning
+ * only), 130 stopped by a signal.
  */
 #include "fem_element.h"
 #include "fem_input.h"
@@ -130,6 +132,7 @@ int main(int argc, char **argv)
     fem_run_summary sum;
     memset(&sum, 0, sizeof sum);
     sum.max_displacement_node = -1;
+    sum.overload = calloc((size_t)model.n_sets, sizeof *sum.overload);   /* NULL: not reported */
     int rc;
     if (endpoint) {
         fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0)};
@@ -152,6 +155,15 @@ int main(int argc, char **argv)
             sum.max_displacement_node < 0 ? " (at the end)" : "", sum.wall_s,
             sum.stats.assembly_s, sum.stats.factor_s, sum.stats.lu_factorizations,
             sum.stats.roundoff_converged, sum.semidefinite_retries);
+    /* each set with a breaking load: its largest force against it, a warning when exceeded */
+    for (int k = 0; sum.overload && k < model.n_sets; k++)
+        if (sum.overload[k].breaking_load_n > 0.0 && sum.overload[k].peak_element >= 0) {
+            char line[512];
+            fem_set_overload_text(&model, k, &sum.overload[k], line, sizeof line);
+            fprintf(stderr, "fem_solver: %s\n", line);
+        }
+    free(sum.overload);
+    int overload_fails = model.settings.fail_on_overload && sum.overloaded_elements > 0;
     fem_model_free(&model);
     if (rc == 1) {
         fprintf(stderr, "fem_solver: stopped by a signal; results so far are in %s\n", output);
@@ -160,6 +172,11 @@ int main(int argc, char **argv)
     if (rc) {
         fprintf(stderr, "fem_solver: %s\n", err.message);
         return 1;
+    }
+    if (overload_fails) {
+        fprintf(stderr, "fem_solver: %d element%s exceeded the breaking load (analysis.fail_on_overload): "
+                        "exit status 3\n", sum.overloaded_elements, sum.overloaded_elements == 1 ? "" : "s");
+        return 3;
     }
     return 0;
 }

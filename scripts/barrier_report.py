@@ -12,6 +12,9 @@ fem.h5, dem.h5, coupling.h5) and prints, and with --plot draws:
     the nominal height of the post tops (fem.h5, last output step);
   - peak axial forces per element set (ropes, brakes) and the largest anchor reaction (fem.h5
     output steps only: peaks between them are missed);
+  - overload: per element set with a breaking load, the largest axial force of every FEM step
+    against it and the elements that exceeded it (fem.h5 `/element_sets`, when present; the
+    model has no rope failure, so forces beyond the breaking load are not physical);
   - the energy balance (coupling.h5 `/energy`, every accepted step): the block's kinetic
     energy at the first contact and at the end, and where it went: brakes (fem.h5
     `element_dissipated_energy`, output steps), the rest of the FEM's dissipation (Rayleigh and
@@ -162,6 +165,21 @@ def report(run):
         if sel.any():
             peaks[name] = {"type": types[i], "peak_axial_force_n": float(np.abs(axial[:, sel]).max())}
     out["peak_axial_force"] = peaks
+
+    # overload: fem_solver's every-step peaks against the breaking loads (absent in older files)
+    out["overload"] = None
+    if "element_sets/peak_axial_force" in fem:
+        es = lambda key: dataset(fem, fem_path, "element_sets/" + key)
+        brk, peak, t_peak = es("breaking_load"), es("peak_axial_force"), es("peak_time")
+        where, count, first = es("peak_element"), es("exceeded_elements"), es("first_exceedance_time")
+        if len(brk) != len(names):
+            fail("%s: element_sets has %d sets, %s %d" % (fem_path, len(brk), fem_json, len(names)))
+        out["overload"] = {names[i]: {
+            "breaking_load_n": float(brk[i]), "peak_axial_force_n": float(peak[i]),
+            "ratio": float(peak[i] / brk[i]), "peak_time_s": float(t_peak[i]),
+            "peak_element": int(where[i]), "exceeded_elements": int(count[i]),
+            "first_exceedance_s": float(first[i]) if count[i] > 0 else None}
+            for i in range(len(names)) if brk[i] > 0 and where[i] >= 0}
     reac = dataset(fem, fem_path, "output/reaction")
     snodes = list(dataset(fem, fem_path, "mesh/support_nodes"))
     rmag = np.linalg.norm(reac, axis=2)
@@ -216,6 +234,16 @@ def print_report(r):
     p("  peak axial forces (fem.h5 output steps only):")
     for name, v in r["peak_axial_force"].items():
         p("    %-14s %-14s %10.4g kN" % (name, v["type"], v["peak_axial_force_n"] / 1e3))
+    if r["overload"] is not None:
+        p("  breaking loads (fem.h5 /element_sets, every FEM step):")
+        for name, v in r["overload"].items():
+            p("    %-14s peak %8.4g kN / breaking load %8.4g kN = %.2fx (element %d, t = %.4g s)%s"
+              % (name, v["peak_axial_force_n"] / 1e3, v["breaking_load_n"] / 1e3, v["ratio"],
+                 v["peak_element"], v["peak_time_s"],
+                 "; %d elements EXCEEDED it, first at t = %.4g s" % (v["exceeded_elements"], v["first_exceedance_s"])
+                 if v["exceeded_elements"] else ""))
+        if any(v["exceeded_elements"] for v in r["overload"].values()):
+            p("    the model has no rope failure: forces beyond the breaking load are not physical")
     p("  peak reaction: anchors %.4g kN, post bases %.4g kN (output steps only)"
       % ((r["peak_anchor_reaction_n"] or 0) / 1e3, (r["peak_post_base_reaction_n"] or 0) / 1e3))
     e = r["energy"]

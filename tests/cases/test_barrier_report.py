@@ -1,5 +1,6 @@
 """test_barrier_report — scripts/barrier_report.py on a run folder written by hand: a real
 make_barrier.py model (fem.json) with fem.h5, dem.h5 and coupling.h5 holding chosen values,
+(with the FEM's every-step peak forces against the breaking loads in /element_sets),
 so that every printed figure has a known answer (exact up to the JSON's float round trip,
 checked to 1e-12 relative; the braking time's linear interpolation by hand). Then folders
 that lack a file or are not a barrier: exit 2 with a message naming the file.
@@ -69,6 +70,15 @@ mt = np.linspace(0.0, 0.2, 201)
 mon_ids = [centre] + sets["post_tops"]
 mdisp = np.zeros((len(mt), len(mon_ids), 3))
 mdisp[:, 0] = np.outer(0.75 * np.sin(np.pi * mt / 0.24), d)   # largest 0.75 m at 0.12 s
+# /element_sets (fem_solver's every-step peaks): every set with a breaking load peaks at
+# 0.8 of it, except the first, at 1.77 of it with 12 elements above it from 0.031 s on
+brk = np.array([s.get("breaking_load_n", 0.0) for s in model["element_sets"]])
+roped = [i for i in range(len(names)) if brk[i] > 0]
+over = roped[0]
+ratio = np.where(np.arange(len(names)) == over, 1.77, 0.8)
+es_count = np.where(np.arange(len(names)) == over, 12, 0).astype(np.int32)
+es_first = np.where(np.arange(len(names)) == over, 0.031, -1.0)
+es_where = np.array([np.nonzero(eset == i)[0][0] for i in range(len(names))], dtype=np.int32)
 with h5py.File(os.path.join(run, "fem.h5"), "w") as f:
     f["mesh/coordinates"] = coords
     f["mesh/elements"] = elements
@@ -83,6 +93,12 @@ with h5py.File(os.path.join(run, "fem.h5"), "w") as f:
     f["monitor/node_ids"] = np.array(mon_ids, dtype=np.int32)
     f["monitor/time"] = mt
     f["monitor/displacement"] = mdisp
+    f["element_sets/breaking_load"] = brk
+    f["element_sets/peak_axial_force"] = ratio * brk
+    f["element_sets/peak_time"] = np.full(len(names), 0.052)
+    f["element_sets/peak_element"] = es_where
+    f["element_sets/exceeded_elements"] = es_count
+    f["element_sets/first_exceedance_time"] = es_first
 
 # dem.h5: the block's two spheres; velocity along d 12, 6, -2, -3 m/s
 t_dem = np.array([0.0, 0.05, 0.1, 0.15])
@@ -135,6 +151,17 @@ close(r["nominal_height_m"], nominal, "nominal height")
 for name, p in peaks.items():
     close(r["peak_axial_force"][name]["peak_axial_force_n"], p, "peak force " + name)
 close(r["peak_anchor_reaction_n"], 5e4, "anchor reaction")
+assert len(roped) >= 2 and sorted(r["overload"]) == sorted(names[i] for i in roped), r["overload"]
+for i in roped:
+    v = r["overload"][names[i]]
+    close(v["breaking_load_n"], brk[i], "breaking load " + names[i])
+    close(v["ratio"], ratio[i], "overload ratio " + names[i])
+    close(v["peak_axial_force_n"], ratio[i] * brk[i], "every-step peak " + names[i])
+    assert v["peak_element"] == es_where[i] and v["peak_time_s"] == 0.052
+    assert v["exceeded_elements"] == es_count[i]
+    assert v["first_exceedance_s"] == (0.031 if i == over else None)
+assert ("%s" % names[over]) in out.stdout and "12 elements EXCEEDED" in out.stdout and "= 1.77x" in out.stdout
+assert "forces beyond the breaking load are not physical" in out.stdout
 close(r["peak_post_base_reaction_n"], 1e5, "post base reaction")
 e = r["energy"]
 close(e["block_kinetic_at_contact_j"], dk[1], "kinetic at contact")
@@ -152,6 +179,14 @@ shutil.copytree(run, bad)
 os.remove(os.path.join(bad, "coupling.h5"))
 out = subprocess.run([py, script, bad], capture_output=True, text=True)
 assert out.returncode == 2 and "coupling.h5: missing" in out.stderr, (out.returncode, out.stderr)
+# a fem.h5 of an older fem_solver (no /element_sets): no overload figures, the rest as before
+with h5py.File(os.path.join(bad, "fem.h5"), "a") as f:
+    del f["element_sets"]
+shutil.copy(os.path.join(run, "coupling.h5"), bad)
+out = subprocess.run([py, script, bad, "--json", os.path.join(tmp, "r2.json")], capture_output=True, text=True)
+assert out.returncode == 0 and "breaking loads" not in out.stdout, (out.returncode, out.stderr)
+assert json.load(open(os.path.join(tmp, "r2.json")))["overload"] is None
+os.remove(os.path.join(bad, "coupling.h5"))
 json.dump({"nodes": [], "elements": [], "element_sets": [], "node_sets": {}},
           open(os.path.join(bad, "fem.json"), "w"))
 out = subprocess.run([py, script, bad], capture_output=True, text=True)

@@ -6,8 +6,10 @@ layout users rely on (/mesh, /output series, /monitor/time, /monitor/node_ids,
 /monitor/displacement), the static answer of the paper's 7.2 cable (w = 0.303837 m from the
 closed form in test_static.c, tolerance 1e-6 m), the XDMF file (tests/xdmf_check.py: it
 describes fem.h5 exactly, one grid per output time; and the check fails on corrupted copies),
-bad inputs (clear message naming the file, exit 1), usage errors (exit 2), and SIGTERM (clean
-stop: exit 130, results readable).
+bad inputs (clear message naming the file, exit 1), usage errors (exit 2), SIGTERM (clean
+stop: exit 130, results readable), and a rope above its breaking load (two bars in series
+under 10 kN on each of their two free nodes: 20 kN in the first, breaking load 15 kN): the
+warning on stderr and in fem.h5, exit 0, or 3 with analysis.fail_on_overload.
 """
 import json
 import os
@@ -167,7 +169,35 @@ def test_sigterm():
     check_xdmf(out, 441, 840, k)
 
 
-for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm):
+def test_overload():
+    model = {"nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0]],
+             "elements": [{"nodes": [0, 1], "set": "net"}, {"nodes": [1, 2], "set": "net"}],
+             "element_sets": [{"name": "net", "youngs_modulus_pa": 1e11, "area_m2": 1e-4,
+                               "breaking_load_n": 15000, "behaviour": "truss"}],
+             "supports": [{"nodes": [0]}, {"nodes": [1, 2], "dofs": "yz"}],
+             "point_loads": [{"nodes": [1, 2], "force_n": [10000, 0, 0]}],
+             "analysis": {"type": "static", "load_steps": 4}}
+    warning = ("warning: set net: 1 element exceeded breaking_load_n 15000 N (first at load factor 1); "
+               "largest 20000 N (1.33x) in element 0 at load factor 1; the model has no rope failure")
+    for fail in (False, True):
+        model["analysis"]["fail_on_overload"] = fail
+        path = os.path.join(TMP, "overload.json")
+        json.dump(model, open(path, "w"))
+        out = os.path.join(TMP, "overload_%d" % fail)
+        r = run([path, "--output", out])
+        check(r.returncode == (3 if fail else 0), "overload exit %d: %s" % (r.returncode, r.stderr))
+        check(warning in r.stderr, "overload warning missing: " + r.stderr)
+        with h5py.File(os.path.join(out, "fem.h5"), "r") as f:
+            text = f.attrs["overload"]
+            text = text.decode() if isinstance(text, bytes) else text
+            check(f.attrs["overloaded_elements"] == 1 and warning in text,
+                  "fem.h5 overload attributes %s" % dict(f.attrs))
+            check(abs(f["element_sets/peak_axial_force"][0] - 2e4) < 1e-9 * 2e4
+                  and f["element_sets/peak_axial_force"].attrs["units"] in (b"N", "N"),
+                  "peak force %s" % f["element_sets/peak_axial_force"][()])
+
+
+for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm, test_overload):
     print("--", test.__name__)
     test()
 print("%d failure(s)" % len(failures))
