@@ -53,8 +53,11 @@ static inline __attribute__((always_inline)) double dem_contact_force(const dem_
     /* compile-time dispatch on the law (dem_contact_law.h): each branch is inlined */
     if (prm->law == DEM_LAW_HERTZ_MINDLIN) {
         if (prm->damping == DEM_DAMPING_HUNT_CROSSLEY) {
-            if (!(*impact_speed > 0.0))   /* the first touch: this is the impact */
-                *impact_speed = fmax(overlap_rate, DEM_HUNT_CROSSLEY_MIN_SPEED);
+            /* v0: the fastest approach of this contact so far (the first touch of a single
+             * impact; a contact that began as a graze and is then struck takes the strike's
+             * speed), so the force is at most (1 + c(ε)) times the elastic force */
+            double v0 = fmax(overlap_rate, DEM_HUNT_CROSSLEY_MIN_SPEED);
+            if (!(*impact_speed >= v0)) *impact_speed = v0;
             fn = dem_hertz_hunt_crossley_force(pair, overlap, overlap_rate, *impact_speed, &kt,
                                                &cn_root);
         } else {

@@ -304,6 +304,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
     /* the values exactly as the DEM computes them */
     double ft_in[3] = {ft[0], ft[1], ft[2]}, ktp_in = kt_prev, fnp_in = fn_prev;
+    const double v0_in = impact_speed;
     dem_contact_force(prm, &r->pair, overlap, n, vc, h, ft, &kt_prev, &fn_prev, &impact_speed, f);
     tq[0] = ri[1] * f[2] - ri[2] * f[1];
     tq[1] = ri[2] * f[0] - ri[0] * f[2];
@@ -322,10 +323,11 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     law->normal(prm, pr, overlap, &L);
     double vn = dot3(vc, n), rate = -vn, Dvn[NCOL];
     for (int c = 0; c < nc; c++) Dvn[c] = col_dot(n, Dvc, c) + col_dot(vc, Dn, c);
-    /* the Hunt–Crossley dashpot's ξ = hunt_crossley / v0 is held at the contact's impact speed
-     * (v0 is the approach speed at the first touch; its own derivative in the sub-step where
-     * the contact begins is left out) */
+    /* the Hunt–Crossley dashpot's ξ = hunt_crossley / v0 with v0 the contact's fastest
+     * approach so far: held where this sub-step is slower; where this sub-step set it
+     * (v0 = δ̇ above the floor) ξ δ̇ = c(ε) and the force is (1 + c) times the elastic one */
     const int hunt_crossley = prm->damping == DEM_DAMPING_HUNT_CROSSLEY;
+    const int v0_now = hunt_crossley && rate > DEM_HUNT_CROSSLEY_MIN_SPEED && !(v0_in >= rate);
     const double xi = hunt_crossley ? pr->hunt_crossley / impact_speed : 0.0;
     double fn = hunt_crossley ? L.fn_elastic * (1.0 + xi * rate)
                               : L.fn_elastic + 2.0 * pr->zeta * L.cn_root * rate, Dfn[NCOL];
@@ -333,6 +335,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     if (clamped) fn = 0.0;
     for (int c = 0; c < nc; c++)
         Dfn[c] = clamped ? 0.0
+                 : v0_now ? L.kn_tangent * (1.0 + pr->hunt_crossley) * Dov[c]
                  : hunt_crossley ? L.kn_tangent * (1.0 + xi * rate) * Dov[c] - L.fn_elastic * xi * Dvn[c]
                                  : (L.kn_tangent + 2.0 * pr->zeta * L.dcn_root * rate) * Dov[c] -
                                        2.0 * pr->zeta * L.cn_root * Dvn[c];
