@@ -88,7 +88,7 @@ print("impact energy %.1f J, block kinetic at contact %.1f J, at the end %.1f J,
 # the balance closes: the work the DEM's forces did on the net and the work the FEM received
 # agree to 2 % of the impact energy (a step converged only loosely at the contact nodes loses
 # energy there: 5.9 kJ of 30 kJ with the interface residual's velocity part left out)
-assert abs(e["interface_mismatch_j"]) < 0.02 * e_in, "the interface work does not balance
+assert abs(e["interface_mismatch_j"]) < 0.02 * e_in, "the interface work does not balance"
 assert abs(e["block_kinetic_at_contact_j"] - e_in) < 0.01 * e_in, "impact energy"
 assert rep["block_stop_s"] is not None, "the block was not stopped"
 assert e["block_kinetic_end_j"] < 0.75 * e_in, "the block rebounds with too much energy"
