@@ -3,7 +3,9 @@
  * Hertz–Mindlin: Fn = 4/3 E* sqrt(R*) δ^1.5 + cn δ̇, cn = 2 ζ sqrt(m* kn') with the tangent
  * stiffness kn' = 2 E* sqrt(R* δ) (the stiffness the fit eqs. (A.8)–(A.10) was made for), clamped to
  * Fn >= 0 (no tension). Tangential: incremental spring kt = 8 G* sqrt(R* δ) with history,
- * rescaled by kt/kt_prev while unloading, dashpot ct = 2 ζ sqrt(m* kt), Coulomb cap μ Fn.
+ * rescaled by kt/kt_prev while unloading, dashpot ct = 2 ζ sqrt(m* kt), Coulomb cap μ Fn on
+ * spring + dashpot; sliding leaves the spring at most at the cap and at most at its own
+ * loaded value. With damping "hunt_crossley" v0 is the contact's fastest approach so far.
  * Linear: Fn = kn δ + 2 ζ sqrt(m* kn) δ̇ (the classic spring–dashpot for which eq. (A.7) is exact;
  * the dashpot may pull slightly at the end of the contact, as eq. (A.7) assumes), kt = ratio kn.
  * The normal part of each law is an inline function of its header (dem_law_hertz.h,
