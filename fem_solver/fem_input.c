@@ -610,6 +610,13 @@ int fem_input_load_opt(const char *path, fem_model *m, const fem_input_options *
         parse_loads(m, root, file, err) || parse_analysis(m, root, file, err) ||
         parse_rest(m, root, file, err) || fem_model_finalize(m, err))
         goto out;
+    if (m->settings.fail_on_overload) {   /* an option that can never fire is a mistake */
+        int any = 0;
+        for (int k = 0; k < m->n_sets; k++) any |= m->sets[k].breaking_load_n > 0.0;
+        if (!any)
+            nc_warn(sink, "%s.analysis.fail_on_overload: no element set gives breaking_load_n, so "
+                          "nothing can exceed it", file);
+    }
     rc = 0;
 out:
     cJSON_Delete(root);

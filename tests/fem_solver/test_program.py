@@ -9,7 +9,8 @@ describes fem.h5 exactly, one grid per output time; and the check fails on corru
 bad inputs (clear message naming the file, exit 1), usage errors (exit 2), SIGTERM (clean
 stop: exit 130, results readable), and a rope above its breaking load (two bars in series
 under 10 kN on each of their two free nodes: 20 kN in the first, breaking load 15 kN): the
-warning on stderr and in fem.h5, exit 0, or 3 with analysis.fail_on_overload.
+warning on stderr and in fem.h5, exit 0, or 3 with analysis.fail_on_overload; the option
+without any breaking load is warned about.
 """
 import json
 import os
@@ -195,6 +196,13 @@ def test_overload():
             check(abs(f["element_sets/peak_axial_force"][0] - 2e4) < 1e-9 * 2e4
                   and f["element_sets/peak_axial_force"].attrs["units"] in (b"N", "N"),
                   "peak force %s" % f["element_sets/peak_axial_force"][()])
+    # the option without any breaking load can never fire: warned, naming the field
+    del model["element_sets"][0]["breaking_load_n"]
+    json.dump(model, open(path, "w"))
+    r = run([path, "--output", os.path.join(TMP, "overload_none")])
+    check(r.returncode == 0, "overload without breaking loads: exit %d: %s" % (r.returncode, r.stderr))
+    check("analysis.fail_on_overload: no element set gives breaking_load_n" in r.stdout + r.stderr,
+          "no warning for fail_on_overload without breaking loads: " + r.stdout + r.stderr)
 
 
 for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm, test_overload):
