@@ -318,6 +318,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "unconverged_steps", &tm->unconverged_steps);
     cpl_ckpt_long(t, q, "rejected_attempts", &tm->rejected_attempts);
     cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
+    cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
     cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
     /* the energy balance and guard */
@@ -488,6 +489,7 @@ static int do_solve(run_ctx *c, const cpl_participant *p, const cpl_call *call,
     info->contacts = 0.0;
     info->solver_time_s = NAN;
     info->energy = cpl_energy_report_none();
+    info->jacobian_dropped = 0.0;
     double t0 = nc_clock_now_s();
     int rc = p->solve(p->ctx, call, in0, in1, out0, out1, info, c->err);
     *wait_of(c, p) += nc_clock_now_s() - t0;
@@ -534,7 +536,7 @@ static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *
         trivial = out0[i] == 0.0 && (!out1 || out1[i] == 0.0);
     if (trivial) return 0;
     *verified = 1;
-    cpl_solve_info again = {1, INFINITY, 0.0, NAN, cpl_energy_report_none()};
+    cpl_solve_info again = {1, INFINITY, 0.0, NAN, cpl_energy_report_none(), 0.0};
     /* the repeated solve fills a scratch Jacobian so the one of the first answer stays */
     cpl_call repeat = *call;
     cpl_jacobian scratch = {0};
@@ -656,6 +658,7 @@ typedef struct try_result {
     int fem_solved;         /* the FEM was solved (efficiency option (ii) may skip it) */
     cpl_solve_info dem_info;
     cpl_solve_info fem_info;    /* of the last FEM solve (when fem_solved) */
+    int jacobian_dropped;       /* most particles a linearisation of this try left out */
 } try_result;
 
 /* A failed request that a smaller step may cure: the participant said so. c->err keeps the
@@ -718,8 +721,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     t->iterations = 0;
     t->residual = NAN;
     t->fem_solved = 0;
-    t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN, cpl_energy_report_none()};
+    t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN, cpl_energy_report_none(), 0.0};
     t->fem_info = t->dem_info;
+    t->jacobian_dropped = 0;
 
     const int lazy_fem = L->s.skip_fem_without_contact;
     if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
@@ -774,6 +778,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (halvings) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
         }
         if (all_zero(L->f_dem, n3)) free_seen = 1;
+        /* the linearisation the FEM solves with is the last DEM solve's */
+        if (L->use_jacobian && t->dem_info.jacobian_dropped > t->jacobian_dropped)
+            t->jacobian_dropped = (int)t->dem_info.jacobian_dropped;
         call->jacobian_out = NULL;
         if (L->use_jacobian) {
             call->jacobian_in = &L->jac;
@@ -942,6 +949,7 @@ static int advance_step(run_ctx *c)
     L->timing.steps++;
     if (!ends) L->timing.min_dt_s = fmin(L->timing.min_dt_s, dt);
     if (rejected) L->timing.reduced_steps++;
+    if (t.jacobian_dropped > 0) L->timing.jacobian_dropped_steps++;
     cpl_energy_record energy;
     cpl_energy_step(&L->energy, call.step, L->time_s, t.fem_solved ? &t.fem_info.energy : NULL,
                     &t.dem_info.energy, &energy);
@@ -965,7 +973,8 @@ static int advance_step(run_ctx *c)
                                .near_interface = t.dem_info.near_interface,
                                .min_gap_m = t.dem_info.min_gap_m, .rejected = rejected,
                                .energy = energy,
-                               .jacobian_blocks = L->use_jacobian ? (int)L->jac.n_blocks : -1};
+                               .jacobian_blocks = L->use_jacobian ? (int)L->jac.n_blocks : -1,
+                               .jacobian_dropped = t.jacobian_dropped};
         cpl_total_force(L->f_dem, n3 / 3, rec.contact_force);
         rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");

@@ -79,6 +79,7 @@ typedef struct cpl_solve_info {
     double contacts;        /* DEM: number of contacts at the end of the step */
     double solver_time_s;   /* time the participant spent computing, NAN when not reported */
     cpl_energy_report energy;   /* its energies (cpl_energy.h); valid = 0 when not reported */
+    double jacobian_dropped;    /* DEM: particles its linearisation left out (0 when unknown) */
 } cpl_solve_info;
 
 /* A participant: `ctx` is passed back to every function; all return 0 / -1 (+ err). */
@@ -197,6 +198,9 @@ typedef struct cpl_step_record {
     double min_gap_m;
     int rejected;                   /* tries of this step rejected before this one */
     cpl_energy_record energy;       /* the energy balance after this step */
+    int jacobian_dropped;           /* most particles one DEM solve of the step left out of
+                                       its linearisation (their contact reaches the FEM as
+                                       a force only) */
 } cpl_step_record;
 
 /* Every function may be NULL. */
@@ -221,6 +225,8 @@ typedef struct cpl_timing {
     long rejected_attempts;         /* tries rejected and begun again with a smaller Δt */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
     long backtracks;                /* DEM solves repeated by contact backtracking */
+    long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's
+                                       linearisation */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;

@@ -191,6 +191,13 @@ void cpl_progress_step(cpl_progress *p, const cpl_step_record *rec, int strong)
                              "energy, above the limit %.6g J (energy_tolerance x input energy "
                              "%.6g J + energy_tolerance_abs)", rec->step, rec->time_s,
                              rec->energy.created_j, rec->energy.limit_j, rec->energy.input_j);
+    /* the first step only: the summary gives the count (coupler/README.md) */
+    if (rec->jacobian_dropped > 0 && p->jacobian_warnings++ == 0)
+        cpl_progress_message(p, "warning: step %ld (t = %.6g s): the DEM left %d particle(s) "
+                             "out of the interface Jacobian (a particle touching more net "
+                             "nodes than it linearises, dem_solver/README.md); their contact "
+                             "reaches the FEM as a force only and the coupling converges "
+                             "more slowly", rec->step, rec->time_s, rec->jacobian_dropped);
     if (p->quiet) return;
     double every = p->tty ? 0.1 : p->interval_s;
     if (t - p->last_print < every) return;

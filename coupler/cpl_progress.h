@@ -51,6 +51,8 @@ typedef struct cpl_progress {
     int line_open;              /* a status line is on screen without newline */
     long warnings;              /* unconverged steps reported */
     long energy_warnings;       /* steps above the energy guard's limit (the first is reported) */
+    long jacobian_warnings;     /* steps with particles left out of the DEM's linearisation
+                                   (the first is reported) */
     long rejections;            /* rejected tries reported */
     cpl_step_record last;
     int have_last;

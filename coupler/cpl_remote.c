@@ -220,6 +220,9 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
         info->near_interface = proto_message_value(&r->reply, "near_interface", 1.0) != 0.0;
         info->min_gap_m = proto_message_value(&r->reply, "min_gap_m", INFINITY);
         info->contacts = proto_message_value(&r->reply, "contacts", 0.0);
+        if (call->jacobian_out)
+            info->jacobian_dropped =
+                proto_message_value(&r->reply, "jacobian_dropped_particles", 0.0);
     }
     info->solver_time_s = proto_message_value(&r->reply, "solve_time_s", NAN);
     read_energy(&r->reply, &info->energy);

@@ -197,6 +197,7 @@ static void app_checkpoint_entries(app *a, cpl_ckpt_table *t)
     cpl_history_checkpoint_entries(&a->history, t);
     cpl_ckpt_long(t, "progress", "warnings", &a->progress.warnings);
     cpl_ckpt_long(t, "progress", "energy_warnings", &a->progress.energy_warnings);
+    cpl_ckpt_long(t, "progress", "jacobian_warnings", &a->progress.jacobian_warnings);
     cpl_ckpt_long(t, "progress", "rejections", &a->progress.rejections);
     cpl_ckpt_f64(t, "progress", "max_deflection", &a->progress.max_deflection_m, 1);
 }
@@ -454,6 +455,9 @@ static void print_timing(app *a)
     if (t->backtracks > 0)
         fprintf(o, "coupler: contact backtracking: %ld extra DEM solves halfway back to an "
                 "iterate with contact\n", t->backtracks);
+    if (t->jacobian_dropped_steps > 0)
+        fprintf(o, "coupler: interface Jacobian incomplete in %ld steps: the DEM left particles "
+                "out of its linearisation\n", t->jacobian_dropped_steps);
     fprintf(o, "coupler: interface Jacobian %s\n",
             cpl_loop_uses_jacobian(a->loop) ? "on: the FEM solved with the DEM's contact linearisation"
                                             : "off: plain exchange of forces and displacements");

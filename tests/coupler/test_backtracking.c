@@ -14,7 +14,8 @@
  * found here independently by bisection. Checked: without backtracking the step does not
  * converge in 60 iterations (and cycles: the force is zero in about half of them); with it
  * every step converges to the bisection root (1e-9 m) and the loop counts its extra DEM
- * solves. */
+ * solves. The same model, reporting particles left out of its linearisation from a given
+ * time on, checks that the loop counts those steps and passes the number on. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -35,6 +36,7 @@ typedef struct node_model {
 
 typedef struct obstacle_model {
     double speed_m_s, kc, p;
+    double dropped_from_s;   /* solves ending after this time report 2 dropped particles */
     long solves, zero_answers;
 } obstacle_model;
 
@@ -108,6 +110,8 @@ static int obstacle_solve(void *ctx, const cpl_call *call, const double *u, cons
     info->near_interface = 1;
     info->min_gap_m = -pen;
     info->contacts = pen > 0.0;
+    if (call->jacobian_out && call->time_s + call->dt_s > o->dropped_from_s)
+        info->jacobian_dropped = 2.0;
     if (call->jacobian_out)
         return cpl_jacobian_set(call->jacobian_out, pen > 0.0, nodes, K, NULL, err);
     return 0;
@@ -130,6 +134,7 @@ typedef struct run_log {
     node_model *node;
     obstacle_model *obstacle;
     long steps, converged;
+    long dropped_steps;      /* step records with jacobian_dropped 2 */
     double max_error_m;
     node_model before;       /* committed state at the start of the current step */
 } run_log;
@@ -140,6 +145,7 @@ static int on_step(void *ctx, const cpl_step_record *rec, nc_error *err)
     run_log *l = ctx;
     l->steps++;
     l->converged += rec->converged;
+    l->dropped_steps += rec->jacobian_dropped == 2;
     double root = step_root(&l->before, l->obstacle, rec->time_s, rec->dt_s);
     l->max_error_m = fmax(l->max_error_m, fabs(l->node->u - root));
     l->before.u0 = l->node->u;   /* the accepted state starts the next step */
@@ -147,11 +153,13 @@ static int on_step(void *ctx, const cpl_step_record *rec, nc_error *err)
     return 0;
 }
 
-static void run(int backtracking, run_log *log, long *backtracks)
+static void run(int backtracking, double dropped_from_s, run_log *log, long *backtracks,
+                long *dropped_steps)
 {
     /* a 0.16 kg net node on a 1e5 N/m support, an obstacle at 10 m/s, kc pen^0.5 */
     node_model node = {.m_kg = 0.16, .k_n_m = 1e5};
-    obstacle_model obstacle = {.speed_m_s = 10.0, .kc = 3e6, .p = 0.5};
+    obstacle_model obstacle = {.speed_m_s = 10.0, .kc = 3e6, .p = 0.5,
+                               .dropped_from_s = dropped_from_s};
     cpl_participant fem = {.name = "fem", .ctx = &node, .begin_step = node_begin,
                            .solve = node_solve, .accept = node_accept, .can_jacobian = 1};
     cpl_participant dem = {.name = "dem", .ctx = &obstacle, .begin_step = obstacle_begin,
@@ -175,6 +183,7 @@ static void run(int backtracking, run_log *log, long *backtracks)
     int rc = cpl_loop_run(loop, &fem, &dem, &obs, NULL, &where, &err);
     assert_int_equal(rc, 0);
     *backtracks = cpl_loop_timing(loop)->backtracks;
+    *dropped_steps = cpl_loop_timing(loop)->jacobian_dropped_steps;
     cpl_loop_free(loop);
     log->obstacle = NULL;
     log->node = NULL;
@@ -191,8 +200,9 @@ static void test_without_backtracking_the_iteration_cycles(void **state)
 {
     (void)state;
     run_log log;
-    long backtracks = -1;
-    run(0, &log, &backtracks);
+    long backtracks = -1, dropped = -1;
+    run(0, INFINITY, &log, &backtracks, &dropped);
+    assert_int_equal(dropped, 0);
     assert_int_equal(backtracks, 0);
     assert_int_equal(log.steps, 5);
     assert_true(log.converged < log.steps);
@@ -202,12 +212,25 @@ static void test_backtracking_converges_to_the_step_solution(void **state)
 {
     (void)state;
     run_log log;
-    long backtracks = 0;
-    run(4, &log, &backtracks);
+    long backtracks = 0, dropped = -1;
+    run(4, INFINITY, &log, &backtracks, &dropped);
+    assert_int_equal(dropped, 0);
     assert_int_equal(log.steps, 5);
     assert_int_equal(log.converged, log.steps);
     assert_true(backtracks > 0);
     assert_below(log.max_error_m, 1e-9);
+}
+
+/* 5 steps of 1e-3 s; the solves of steps 3, 4 and 5 (ending after 2.5e-3 s) drop particles */
+static void test_dropped_particles_are_counted(void **state)
+{
+    (void)state;
+    run_log log;
+    long backtracks = 0, dropped = -1;
+    run(4, 2.5e-3, &log, &backtracks, &dropped);
+    assert_int_equal(log.steps, 5);
+    assert_int_equal(dropped, 3);
+    assert_int_equal(log.dropped_steps, 3);
 }
 
 int main(void)
@@ -215,6 +238,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_without_backtracking_the_iteration_cycles),
         cmocka_unit_test(test_backtracking_converges_to_the_step_solution),
+        cmocka_unit_test(test_dropped_particles_are_counted),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

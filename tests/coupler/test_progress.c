@@ -1,6 +1,7 @@
 /* Unit tests of cpl_progress with a fake clock: the remaining time follows the rate of the
  * recent wall time (not the rate since the start), the status line shows the engineering
- * quantities, a terminal line is cut to the terminal width. */
+ * quantities, a terminal line is cut to the terminal width, steps whose DEM linearisation
+ * left particles out are warned about once. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -149,12 +150,39 @@ static void test_terminal_line_is_cut_to_the_width(void **state)
     fclose(out);
 }
 
+static void test_dropped_particles_are_warned_about_once(void **state)
+{
+    (void)state;
+    char buf[4096] = "";
+    FILE *out = fmemopen(buf, sizeof buf, "w");
+    assert_non_null(out);
+    fake_clock c = {0.0};
+    cpl_progress p;
+    cpl_progress_init(&p, out, 0, 1, 10.0, 0.0, 1.0, 0.01);   /* quiet: warnings only */
+    cpl_progress_use_clock(&p, fake_now, &c);
+    const int dropped[4] = {0, 3, 0, 5};
+    for (int i = 0; i < 4; i++) {
+        cpl_step_record rec = {.step = i, .time_s = 0.01 * (i + 1), .dt_s = 0.01,
+                               .iterations = 2, .converged = 1, .residual = 1e-9,
+                               .jacobian_dropped = dropped[i]};
+        cpl_progress_step(&p, &rec, 1);
+    }
+    fflush(out);
+    const char *want = "step 1 (t = 0.02 s): the DEM left 3 particle(s) out of";
+    const char *first = strstr(buf, want);
+    assert_non_null(first);
+    assert_null(strstr(first + strlen(want), "the DEM left"));
+    assert_int_equal(p.jacobian_warnings, 2);
+    fclose(out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_remaining_time_follows_the_recent_rate),
         cmocka_unit_test(test_status_line_shows_contact_rock_and_deflection),
         cmocka_unit_test(test_terminal_line_is_cut_to_the_width),
+        cmocka_unit_test(test_dropped_particles_are_warned_about_once),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
