@@ -779,8 +779,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         }
         if (all_zero(L->f_dem, n3)) free_seen = 1;
         /* the linearisation the FEM solves with is the last DEM solve's */
-        if (L->use_jacobian && t->dem_info.jacobian_dropped > t->jacobian_dropped)
-            t->jacobian_dropped = (int)t->dem_info.jacobian_dropped;
+        /* (a participant's number: NaN and infinities are ignored, huge ones capped) */
+        const double dropped = t->dem_info.jacobian_dropped;
+        if (L->use_jacobian && isfinite(dropped) && dropped > t->jacobian_dropped)
+            t->jacobian_dropped = dropped > 1e9 ? 1000000000 : (int)dropped;
         call->jacobian_out = NULL;
         if (L->use_jacobian) {
             call->jacobian_in = &L->jac;

@@ -127,16 +127,24 @@ static void test_status_line_shows_contact_rock_and_deflection(void **state)
     fclose(out);
 }
 
+/* progress over 1 s of simulation (dt 0.01 s, status every 10 s) into buf, on clock c */
+static FILE *open_progress(cpl_progress *p, char *buf, size_t size, int tty, int quiet,
+                           fake_clock *c)
+{
+    FILE *out = fmemopen(buf, size, "w");
+    assert_non_null(out);
+    cpl_progress_init(p, out, tty, quiet, 10.0, 0.0, 1.0, 0.01);
+    cpl_progress_use_clock(p, fake_now, c);
+    return out;
+}
+
 static void test_terminal_line_is_cut_to_the_width(void **state)
 {
     (void)state;
     char buf[4096] = "";
-    FILE *out = fmemopen(buf, sizeof buf, "w");
-    assert_non_null(out);
     fake_clock c = {0.0};
     cpl_progress p;
-    cpl_progress_init(&p, out, 1, 0, 10.0, 0.0, 1.0, 0.01);
-    cpl_progress_use_clock(&p, fake_now, &c);
+    FILE *out = open_progress(&p, buf, sizeof buf, 1, 0, &c);
     p.width = 40;
     c.t_s = 1.0;
     cpl_step_record rec = {.step = 0, .time_s = 0.01, .dt_s = 0.01, .iterations = 2,
@@ -154,12 +162,9 @@ static void test_dropped_particles_are_warned_about_once(void **state)
 {
     (void)state;
     char buf[4096] = "";
-    FILE *out = fmemopen(buf, sizeof buf, "w");
-    assert_non_null(out);
     fake_clock c = {0.0};
     cpl_progress p;
-    cpl_progress_init(&p, out, 0, 1, 10.0, 0.0, 1.0, 0.01);   /* quiet: warnings only */
-    cpl_progress_use_clock(&p, fake_now, &c);
+    FILE *out = open_progress(&p, buf, sizeof buf, 0, 1, &c);   /* quiet: warnings only */
     const int dropped[4] = {0, 3, 0, 5};
     for (int i = 0; i < 4; i++) {
         cpl_step_record rec = {.step = i, .time_s = 0.01 * (i + 1), .dt_s = 0.01,
