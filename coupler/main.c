@@ -487,10 +487,13 @@ static void print_energy(app *a)
     }
     double limit = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
     fprintf(o, "coupler: energy balance: input %.6g J (largest kinetic + elastic energy), "
-            "energy now %+.6g J from the start (created, limit %.6g J, energy_tolerance %.3g); "
+            "energy created %+.6g J (%s; the guard fires above %.6g J, energy_tolerance %.3g); "
             "interface work mismatch %.6g J, dissipated fem %.6g J, dem %.6g J, external work "
-            "%.6g J, closure %.3g J\n", e->input_j, e->created_j, limit, e->s.tol_rel,
-            e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j, e->sum_ext_j, e->closure_j);
+            "%.6g J, closure %.3g J\n", e->input_j, e->created_j,
+            e->created_j > limit ? "above the limit"
+            : e->created_j > 0.0 ? "within the limit" : "none: the balance lost energy",
+            limit, e->s.tol_rel, e->sum_mismatch_j, e->sum_fem_diss_j, e->sum_dem_diss_j,
+            e->sum_ext_j, e->closure_j);
 }
 
 /* The guard's verdict when it fired: the last line of the summary. */
