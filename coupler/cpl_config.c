@@ -77,7 +77,7 @@ static int parse_efficiency(const cJSON *root, const char *where, cpl_loop_setti
                ? -1 : 0;
 }
 
-/* step_control: dt_min (absent: dt / 64, resolved by the loop) and grow_after. */
+/* step_control: dt_min (absent: dt / 64, resolved by the loop), grow_after, reject_slow. */
 static int parse_step_control(const cJSON *root, const char *where, cpl_loop_settings *s,
                               nc_error *err)
 {
@@ -86,12 +86,13 @@ static int parse_step_control(const cJSON *root, const char *where, cpl_loop_set
     if (!obj) return 0;
     char path[512];
     nc_json_path(path, sizeof path, where, "step_control");
-    static const char *const keys[] = {"dt_min", "grow_after", NULL};
+    static const char *const keys[] = {"dt_min", "grow_after", "reject_slow", NULL};
     long grow = s->grow_after;
     if (nc_json_check_keys(obj, path, keys, err) ||
         nc_json_number_range_opt(obj, path, "dt_min", s->dt_min_s, 1e-300, INFINITY,
                                  &s->dt_min_s, err) ||
-        nc_json_int_opt(obj, path, "grow_after", grow, 1, 1000000000L, &grow, err))
+        nc_json_int_opt(obj, path, "grow_after", grow, 1, 1000000000L, &grow, err) ||
+        nc_json_bool_opt(obj, path, "reject_slow", s->reject_slow, &s->reject_slow, err))
         return -1;
     s->grow_after = (int)grow;
     return 0;

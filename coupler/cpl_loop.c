@@ -65,6 +65,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->max_steps = 0;
     s->dt_min_s = 0.0;   /* dt_s / 64 */
     s->grow_after = 4;
+    s->reject_slow = 1;
     cpl_energy_settings_default(&s->energy);
     s->interface_jacobian = 1;
     s->verify_restore = 1;
@@ -227,6 +228,7 @@ const char *cpl_reject_reason_text(cpl_reject_reason reason)
     case CPL_REJECT_NOT_CONVERGED: return "not converged";
     case CPL_REJECT_DIVERGED: return "diverged";
     case CPL_REJECT_STEP_FAILED: return "solve failed";
+    case CPL_REJECT_TOO_SLOW: return "converging too slowly";
     }
     return "?";
 }
@@ -317,6 +319,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "iterations", &tm->iterations);
     cpl_ckpt_long(t, q, "unconverged_steps", &tm->unconverged_steps);
     cpl_ckpt_long(t, q, "rejected_attempts", &tm->rejected_attempts);
+    cpl_ckpt_long(t, q, "slow_rejections", &tm->slow_rejections);
     cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
@@ -638,18 +641,47 @@ static int report_iteration(run_ctx *c, const cpl_call *call, double residual, d
     return 0;
 }
 
-/* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27). */
-static double residual_uv(cpl_loop *L, int *converged)
+/* How far a residual is from the tolerance: residual / max(tol_abs, tol_rel ‖value‖), below
+ * 1 where cpl_converged() says converged. */
+static double tolerance_ratio(const cpl_loop *L, double residual, double value_norm)
 {
+    return residual / fmax(L->s.tol_abs, L->s.tol_rel * value_norm);
+}
+
+/* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27).
+ * *ratio: the larger field's tolerance_ratio. */
+static double residual_uv(cpl_loop *L, int *converged, double *ratio)
+{
+    const double nu = cpl_scaled_norm(L->u_out, L->n3), nv = cpl_scaled_norm(L->v_out, L->n3);
     double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
     double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
-    *converged = cpl_converged(ru, cpl_scaled_norm(L->u_out, L->n3), L->s.tol_abs, L->s.tol_rel) &&
-                 cpl_converged(rv, cpl_scaled_norm(L->v_out, L->n3), L->s.tol_abs, L->s.tol_rel);
+    *converged = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel) &&
+                 cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel);
+    *ratio = fmax(tolerance_ratio(L, ru, nu), tolerance_ratio(L, rv, nv));
     return fmax(ru, rv);
 }
 
-/* How one try of a step ended (the step is not accepted yet). */
-typedef enum { TRY_CONVERGED = 0, TRY_UNCONVERGED, TRY_DIVERGED, TRY_FAILED } try_outcome;
+/* How one try of a step ended (the step is not accepted yet); TRY_SLOW: given up early by
+ * reject_slow. */
+typedef enum { TRY_CONVERGED = 0, TRY_UNCONVERGED, TRY_SLOW, TRY_DIVERGED, TRY_FAILED } try_outcome;
+
+/* reject_slow (cpl_loop.h, CPL_SLOW_*): whether the try, after iteration k, cannot reach the
+ * tolerance by max_iterations at the rate of its last CPL_SLOW_WINDOW iterations, while a
+ * smaller Δt is left to retry with. ratios: tolerance_ratio of iteration i in slot
+ * i % (CPL_SLOW_WINDOW + 1). Such a try would be rejected anyway after max_iterations; giving
+ * up now saves the rest (on terrain_net 7800 of 34400 iterations). At dt_min the try runs
+ * on, to be accepted or stopped as on_max_iterations says. */
+static int too_slow(const cpl_loop *L, const double *ratios, int k, double dt_s)
+{
+    if (!L->s.reject_slow || k < CPL_SLOW_FIRST || k >= L->s.max_iterations) return 0;
+    const double now = ratios[k % (CPL_SLOW_WINDOW + 1)];
+    const double then = ratios[(k - CPL_SLOW_WINDOW) % (CPL_SLOW_WINDOW + 1)];
+    if (!(now > 0.0 && then > 0.0 && isfinite(now) && isfinite(then))) return 0;
+    const double rate = fmin(1.0, pow(now / then, 1.0 / CPL_SLOW_WINDOW));
+    if (now * pow(rate, L->s.max_iterations - k) <= CPL_SLOW_MARGIN) return 0;
+    int level = L->level;
+    return retry_dt(L, dt_s, &level) > 0.0;
+}
 
 typedef struct try_result {
     try_outcome outcome;    /* weak: CONVERGED / UNCONVERGED is information only */
@@ -738,7 +770,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         L->f_in[i] = L->f[i];
     }
     const int max_it = strong ? L->s.max_iterations : 1;
-    int converged = 0, k;
+    int converged = 0, slow = 0, k;
+    double ratios[CPL_SLOW_WINDOW + 1];     /* tolerance ratios of the last iterations */
     int backtrack_prev = 0;                 /* u_prev, v_prev, r_prev, r_pred are set */
     int free_seen = 0;                      /* an iterate of this try had no contact */
     int contact_required = 0;               /* ... and a later one had contact again */
@@ -795,8 +828,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (solved < 0) return try_failed(c, t);
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
-            t->residual = residual_uv(L, &converged);         /* eqs. (28), (29), (35) */
-            if (!strong || converged || k == max_it) {
+            t->residual = residual_uv(L, &converged, &ratios[k % (CPL_SLOW_WINDOW + 1)]);
+                                                               /* eqs. (28), (29), (35) */
+            slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
+            if (!strong || converged || k == max_it || slow) {
                 if (report_iteration(c, call, t->residual, NAN, solved)) return -1;
                 break;
             }
@@ -824,8 +859,14 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         } else {
             /* algorithm 3: residual and relaxation of the forces, then the structure */
             t->residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);       /* eqs. (30), (36) */
-            converged = cpl_converged(t->residual, cpl_scaled_norm(L->f_dem, n3), L->s.tol_abs,
-                                      L->s.tol_rel);
+            const double norm = cpl_scaled_norm(L->f_dem, n3);
+            converged = cpl_converged(t->residual, norm, L->s.tol_abs, L->s.tol_rel);
+            ratios[k % (CPL_SLOW_WINDOW + 1)] = tolerance_ratio(L, t->residual, norm);
+            if (!converged && too_slow(L, ratios, k, call->dt_s)) {
+                if (report_iteration(c, call, t->residual, NAN, 0)) return -1;
+                slow = 1;
+                break;
+            }
             double alpha;
             if (cpl_relax_update(L->relax, L->f_in, L->f_dem, L->f_in, &alpha, c->err)) {
                 int code = c->err->code;                                   /* eqs. (33), (34) */
@@ -847,7 +888,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         }
     }
     call->jacobian_in = NULL;
-    t->outcome = converged ? TRY_CONVERGED : TRY_UNCONVERGED;
+    t->outcome = converged ? TRY_CONVERGED : slow ? TRY_SLOW : TRY_UNCONVERGED;
     return 0;
 }
 
@@ -857,11 +898,13 @@ static int report_reject(run_ctx *c, const cpl_call *call, const try_result *t, 
 {
     if (!c->obs || !c->obs->on_reject) return 0;
     char message[NC_ERROR_MESSAGE_MAX] = "";
-    if (t->outcome != TRY_UNCONVERGED) snprintf(message, sizeof message, "%s", c->err->message);
+    if (t->outcome == TRY_DIVERGED || t->outcome == TRY_FAILED)
+        snprintf(message, sizeof message, "%s", c->err->message);
     cpl_reject_record rec = {
         .step = call->step, .attempt = c->attempt, .time_s = call->time_s, .dt_s = call->dt_s,
         .next_dt_s = next_dt, .iterations = t->iterations, .residual = t->residual,
         .reason = t->outcome == TRY_UNCONVERGED ? CPL_REJECT_NOT_CONVERGED
+                  : t->outcome == TRY_SLOW      ? CPL_REJECT_TOO_SLOW
                   : t->outcome == TRY_DIVERGED  ? CPL_REJECT_DIVERGED
                                                 : CPL_REJECT_STEP_FAILED,
         .message = message};
@@ -900,6 +943,7 @@ static int advance_step(run_ctx *c)
          * history (of this try, and IQN columns of another Δt) would mislead the retry */
         if (strong) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_HISTORY);
         L->timing.rejected_attempts++;
+        if (t.outcome == TRY_SLOW) L->timing.slow_rejections++;
         if (report_reject(c, &call, &t, next)) return -1;
         memset(c->failure, 0, sizeof *c->failure);
         if (L->level == 0 && level > 0) L->grid_origin_s = L->time_s;

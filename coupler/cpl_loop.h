@@ -127,6 +127,9 @@ typedef struct cpl_loop_settings {
     double dt_min_s;                /* step rejection: smallest retry Δt (<= 0: dt_s / 64;
                                        >= dt_s: no retries) */
     int grow_after;                 /* converged steps in a row before a reduced Δt doubles */
+    int reject_slow;                /* strong: reject a try early when at its recent rate it
+                                       cannot reach the tolerance by max_iterations, if a
+                                       smaller Δt is left (default 1; CPL_SLOW_* below) */
     cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
     int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
                                        both participants can (default 1) */
@@ -139,6 +142,16 @@ typedef struct cpl_loop_settings {
     double checkpoint_interval_s;   /* simulated time between checkpoints (0: none); taken
                                        only when both participants can */
 } cpl_loop_settings;
+
+/* The early rejection of a slow try (reject_slow): from iteration CPL_SLOW_FIRST on, the
+ * residual's rate over the last CPL_SLOW_WINDOW iterations (geometric mean, at most 1),
+ * carried on to max_iterations, must bring it below CPL_SLOW_MARGIN times the tolerance.
+ * The window spans three periods of the three-iteration cycles Aitken falls into on a rock
+ * resting in a net (cases/terrain_net); the values come from replaying that case's recorded
+ * iterations (docs/notes/interface_jacobian.md). */
+#define CPL_SLOW_FIRST 12
+#define CPL_SLOW_WINDOW 9
+#define CPL_SLOW_MARGIN 10.0
 
 /* dt_min of settings whose dt_min_s is unset: six halvings (coupler/README.md says why). */
 #define CPL_DT_MIN_DIVISOR 64.0
@@ -164,7 +177,8 @@ typedef struct cpl_iteration_record {
 typedef enum {
     CPL_REJECT_NOT_CONVERGED = 0,   /* max_iterations reached above the tolerance */
     CPL_REJECT_DIVERGED,            /* the relaxation produced a non-finite value */
-    CPL_REJECT_STEP_FAILED          /* a participant's solve failed with CPL_ERR_STEP_FAILED */
+    CPL_REJECT_STEP_FAILED,         /* a participant's solve failed with CPL_ERR_STEP_FAILED */
+    CPL_REJECT_TOO_SLOW             /* reject_slow: it could not have converged in time */
 } cpl_reject_reason;
 
 /* A rejected try of a step; the step is begun again with next_dt_s. */
@@ -179,7 +193,7 @@ typedef struct cpl_reject_record {
     const char *message;            /* the failure for DIVERGED / STEP_FAILED, else "" */
 } cpl_reject_record;
 
-/* "not converged", "diverged", "solve failed". */
+/* "not converged", "diverged", "solve failed", "converging too slowly". */
 const char *cpl_reject_reason_text(cpl_reject_reason reason);
 
 typedef struct cpl_step_record {
@@ -223,6 +237,7 @@ typedef struct cpl_timing {
     long fem_solves, dem_solves, steps, iterations;
     long unconverged_steps;         /* strong: accepted without converging */
     long rejected_attempts;         /* tries rejected and begun again with a smaller Δt */
+    long slow_rejections;           /* ... of them early, as converging too slowly */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
     long backtracks;                /* DEM solves repeated by contact backtracking */
     long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's

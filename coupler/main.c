@@ -521,8 +521,9 @@ static int print_status(app *a, int *energy_ok)
     FILE *o = a->progress.out;
     if (t->rejected_attempts > 0)
         fprintf(o, "coupler: step control: %ld steps needed a smaller dt (%ld tries rejected and "
-                "repeated), smallest dt %.3g s (nominal %.3g s, dt_min %.3g s)\n",
-                t->reduced_steps, t->rejected_attempts, t->min_dt_s, s->dt_s, dt_min);
+                "repeated, %ld of them early as converging too slowly), smallest dt %.3g s "
+                "(nominal %.3g s, dt_min %.3g s)\n", t->reduced_steps, t->rejected_attempts,
+                t->slow_rejections, t->min_dt_s, s->dt_s, dt_min);
     else
         fprintf(o, "coupler: step control: no step rejected, no dt reduced (nominal %.3g s, "
                 "dt_min %.3g s)\n", s->dt_s, dt_min);

@@ -47,6 +47,7 @@ static void test_minimal_and_defaults(void **state)
     /* step control: dt_min dt / 64, doubling after 4 good steps, unconverged not accepted */
     assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-3 / 64.0, 0.0);
     assert_int_equal(c.loop.grow_after, 4);
+    assert_int_equal(c.loop.reject_slow, 1);
     assert_int_equal(c.accept_unconverged, 0);
     /* energy guard: 1 % of the input energy + 1e-9 J, not accepted */
     assert_near(c.loop.energy.tol_rel, 0.01, 0.0);
@@ -69,7 +70,7 @@ static void test_full_file(void **state)
         " \"efficiency\": {\"far_step\": true, \"far_step_factor\": 100,"
         "   \"skip_fem_without_contact\": true, \"contact_force_threshold\": 1e-9},"
         " \"timeouts\": {\"connect\": 5, \"reply\": 60, \"shutdown\": 2},"
-        " \"step_control\": {\"dt_min\": 1e-4, \"grow_after\": 10},"
+        " \"step_control\": {\"dt_min\": 1e-4, \"grow_after\": 10, \"reject_slow\": false},"
         " \"accept_unconverged\": true,"
         " \"energy_tolerance\": 0.05, \"energy_tolerance_abs\": 1e-3, \"accept_energy_growth\": true,"
         " \"output\": {\"iterations\": false, \"progress_interval\": 1}}";
@@ -95,6 +96,7 @@ static void test_full_file(void **state)
     assert_int_equal(c.write_iterations, 0);
     assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-4, 0.0);
     assert_int_equal(c.loop.grow_after, 10);
+    assert_int_equal(c.loop.reject_slow, 0);
     assert_int_equal(c.accept_unconverged, 1);
     assert_near(c.loop.energy.tol_rel, 0.05, 0.0);
     assert_near(c.loop.energy.tol_abs_j, 1e-3, 0.0);
@@ -136,6 +138,8 @@ static void test_bad_input_messages(void **state)
                  " \"step_control\": {\"dt_min\": 0.2}}", "step_control.dt_min");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"step_control\": {\"grow_after\": 0}}", "step_control.grow_after");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"step_control\": {\"reject_slow\": 1}}", "step_control.reject_slow");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"step_control\": {\"dt_mn\": 0.01}}", "dt_mn: unknown key");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"

@@ -566,19 +566,62 @@ static void test_rejection_on_failed_solve(void **state)
 
 /* Unrelaxed Gauss–Seidel whose contact is 3× stiffer in the window: |J| > 1 there at Δt 0.01
  * (diverges), < 1 at 0.005 and outside the window: the non-converged steps are rejected
- * (after max_iterations) and converge at half the step. */
+ * and converge at half the step — after max_iterations with reject_slow off, at iteration
+ * CPL_SLOW_FIRST with it on (a growing residual cannot reach the tolerance), with the same
+ * results. */
 static void test_rejection_on_divergence(void **state)
 {
     (void)state;
     tm_problem pb = problem_with_J(0.6, 0.01);
     assert_below(1.1, max_abs_J_kc(&pb, 0.01, 3.0));
     assert_below(max_abs_J_kc(&pb, 0.005, 3.0), 0.9);
+    for (int slow = 0; slow < 2; slow++) {
+        cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.155);
+        s.reject_slow = slow;
+        run_result r;
+        run(&pb, &s, &r, stiff_in_window);
+        check_window_run(&pb, &s, &r, stiff_in_window,
+                         slow ? CPL_REJECT_TOO_SLOW : CPL_REJECT_NOT_CONVERGED);
+        assert_int_equal(r.rec.reject[0].iterations, slow ? CPL_SLOW_FIRST : s.max_iterations);
+        assert_int_equal(r.timing.slow_rejections, slow ? 2 : 0);
+        for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+    }
+}
+
+/* reject_slow on a window where the iteration converges, but too slowly: |J| ≈ 0.93 at
+ * Δt 0.01 shrinks the residual by 0.93 per iteration, too slowly for
+ * max_iterations 50: the try is given up at iteration CPL_SLOW_FIRST and converges at half
+ * the step; with max_iterations 400 the same rate is fast enough and nothing is rejected;
+ * at dt_min (no smaller step left) the try runs on to max_iterations and is accepted
+ * unconverged. */
+static void test_reject_slow_convergence(void **state)
+{
+    (void)state;
+    tm_problem pb = problem_with_J(0.458, 0.01);
+    const double j_window = max_abs_J_kc(&pb, 0.01, 3.0);
+    assert_below(0.9, j_window);
+    assert_below(j_window, 0.97);
+    assert_below(max_abs_J_kc(&pb, 0.005, 3.0), 0.5);
     cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.155);
     run_result r;
     run(&pb, &s, &r, stiff_in_window);
-    check_window_run(&pb, &s, &r, stiff_in_window, CPL_REJECT_NOT_CONVERGED);
-    assert_int_equal(r.rec.reject[0].iterations, s.max_iterations);
-    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+    check_window_run(&pb, &s, &r, stiff_in_window, CPL_REJECT_TOO_SLOW);
+    assert_int_equal(r.rec.reject[0].iterations, CPL_SLOW_FIRST);
+    assert_int_equal(r.timing.slow_rejections, 2);
+
+    s.max_iterations = 400;
+    run(&pb, &s, &r, stiff_in_window);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.timing.rejected_attempts, 0);
+    assert_int_equal(r.timing.unconverged_steps, 0);
+
+    s.max_iterations = 50;
+    s.dt_min_s = s.dt_s;
+    run(&pb, &s, &r, stiff_in_window);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.timing.rejected_attempts, 0);
+    assert_below(0, r.timing.unconverged_steps);
+    assert_int_equal(r.rec.converged[5], 0);
 }
 
 /* Never converges: the added-mass limit (contact far stiffer than 1/Δt², particle 10× the
@@ -746,6 +789,7 @@ int main(void)
         cmocka_unit_test(test_interrupt_flag),
         cmocka_unit_test(test_rejection_on_failed_solve),
         cmocka_unit_test(test_rejection_on_divergence),
+        cmocka_unit_test(test_reject_slow_convergence),
         cmocka_unit_test(test_never_converges_policy_at_dt_min),
         cmocka_unit_test(test_failed_solve_at_dt_min_ends_run),
         cmocka_unit_test(test_rejection_with_skip_fem),
