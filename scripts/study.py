@@ -73,6 +73,12 @@ def run(case, label, sets, out_dir, end_time=None, timeout_s=None):
 
 def run_all(case, variants, out_dir, jobs, end_time, timeout_s=None):
     os.makedirs(out_dir, exist_ok=True)
+    if jobs > 1:
+        # several coupled runs share the cores: OpenBLAS's own threads (CHOLMOD in fem_solver)
+        # then fight the other runs' processes; on a three-module barrier beside another run
+        # the FEM's factorisations took 3.3-6.5 s with two threads, 0.8-0.9 s with one (alone:
+        # 0.9-1.0 s with two, 1.4-2.7 s with one, so a single run keeps the default)
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     results = {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
         futures = [pool.submit(run, case, label, sets, out_dir, end_time, timeout_s) for label, sets in variants]
