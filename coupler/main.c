@@ -487,7 +487,8 @@ static void print_energy(app *a)
     }
     double limit = e->s.tol_rel * e->input_j + e->s.tol_abs_j;
     fprintf(o, "coupler: energy balance: input %.6g J (largest kinetic + elastic energy), "
-            "energy created %+.6g J (%s; the guard fires above %.6g J, energy_tolerance %.3g); "
+            "energy created by the end %+.6g J (%s; the guard fires above %.6g J, "
+            "energy_tolerance %.3g); "
             "interface work mismatch %.6g J, dissipated fem %.6g J, dem %.6g J, external work "
             "%.6g J, closure %.3g J\n", e->input_j, e->created_j,
             e->created_j > limit ? "above the limit"
