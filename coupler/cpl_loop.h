@@ -14,7 +14,8 @@
  * first SOLVE of the step: a skipped step sends it nothing (no BEGIN_STEP / ACCEPT_STEP), and
  * its next BEGIN_STEP carries the later time.
  * Step rejection: a strong step that does not converge in max_iterations (or whose iteration
- * diverges), or in which a participant's solve fails with CPL_ERR_STEP_FAILED, is rejected:
+ * diverges, or, with reject_slow, cannot converge in time at its recent rate: CPL_SLOW_*), or
+ * in which a participant's solve fails with CPL_ERR_STEP_FAILED, is rejected:
  * the relaxation history is dropped and the step is begun again at the same start time
  * (the participants restore their start-of-step state on the repeated BEGIN_STEP) with the
  * largest Δt·2^-k below the rejected step, as long as that is >= dt_min. After grow_after
