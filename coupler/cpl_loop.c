@@ -717,8 +717,8 @@ static int all_zero(const double *f, size_t n3)
 }
 
 /* The resultant that the linearisation j about (u0, v0), with force f0 there, predicts at
- * (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)] with the symmetric parts of K and C, which
- * is what the FEM solved with (j NULL: the constant force f0). */
+ * (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)], what the FEM solved with (j NULL: the
+ * constant force f0). */
 static void predicted_resultant(const cpl_jacobian *j, const double *f0, const double *u0,
                                 const double *v0, const double *u1, const double *v1,
                                 size_t n3, double out[3])
@@ -726,17 +726,13 @@ static void predicted_resultant(const cpl_jacobian *j, const double *f0, const d
     resultant(f0, n3, out);
     if (!j) return;
     for (size_t b = 0; b < j->n_blocks; b++) {
-        /* block (i, j) with the motion of j on i and, transposed, the motion of i on j */
-        const size_t f = 3 * (size_t)j->nodes[2 * b], m = 3 * (size_t)j->nodes[2 * b + 1];
+        /* block (i, j): the motion of node j on the force of node i */
+        const size_t m = 3 * (size_t)j->nodes[2 * b + 1];
         const double *K = j->stiffness + 9 * b, *C = j->damping + 9 * b;
         for (int r = 0; r < 3; r++)
             for (int q = 0; q < 3; q++) {
-                out[r] -= 0.5 * K[3 * r + q] * (u1[m + q] - u0[m + q]);
-                out[q] -= 0.5 * K[3 * r + q] * (u1[f + r] - u0[f + r]);
-                if (j->has_damping) {
-                    out[r] -= 0.5 * C[3 * r + q] * (v1[m + q] - v0[m + q]);
-                    out[q] -= 0.5 * C[3 * r + q] * (v1[f + r] - v0[f + r]);
-                }
+                out[r] -= K[3 * r + q] * (u1[m + q] - u0[m + q]);
+                if (j->has_damping) out[r] -= C[3 * r + q] * (v1[m + q] - v0[m + q]);
             }
     }
 }

@@ -280,6 +280,7 @@ void fem_analysis_free(fem_analysis *s)
     if (!s) return;
     fem_sparse_free(&s->K);
     fem_ijac_free(&s->lin);
+    fem_gmres_free(&s->gmres);
     state_free(&s->cur); state_free(&s->start); state_free(&s->saved);
     free(s->eq); free(s->dof_of_eq); free(s->slot); free(s->pairs);
     free(s->f_model); free(s->f_coupling);
@@ -504,11 +505,12 @@ static double residual_norm(const fem_analysis *s)
 }
 
 /* Factorises and solves K du = r on the free equations; names the node when singular. */
-static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
+/* Factorises the current matrix values (counted in stats.factor_s). */
+static int factorize(fem_analysis *s, nc_error *err)
 {
     double t0 = nc_clock_now_s();
     int bad = -1;
-    if (!reuse && fem_sparse_factorize(&s->K, &bad, err)) {
+    if (fem_sparse_factorize(&s->K, &bad, err)) {
         if (bad >= 0 && bad < s->neq) {
             int dof = s->dof_of_eq[bad];
             nc_error_prefix(err, "node %d (dof %s)", dof / 3, dof_name(dof % 3));
@@ -519,13 +521,17 @@ static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
         }
         return -1;
     }
-    if (!reuse) {
-        s->stats.factorizations++;
-        if (s->K.use_lu) s->stats.lu_factorizations++;
-    }
+    s->stats.factorizations++;
+    if (s->K.use_lu) s->stats.lu_factorizations++;
+    s->stats.factor_s += nc_clock_now_s() - t0;
+    return 0;
+}
+
+static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
+{
+    if (!reuse && factorize(s, err)) return -1;
     s->stats.solves++;
     double t1 = nc_clock_now_s();
-    s->stats.factor_s += t1 - t0;
     for (int q = 0; q < s->neq; q++) s->rhs[q] = s->r[s->dof_of_eq[q]];
     if (fem_sparse_solve(&s->K, s->rhs, s->du, err)) return -1;
     s->stats.solve_s += nc_clock_now_s() - t1;
@@ -592,6 +598,46 @@ static int pcg_solve(fem_analysis *s, nc_error *err)
     s->stats.pcg_iterations += k > FEM_PCG_MAX_IT ? FEM_PCG_MAX_IT : k;
     if (rc) s->stats.pcg_failures++;
     s->stats.solves++;
+    s->stats.solve_s += nc_clock_now_s() - t0;
+    return rc;
+}
+
+/* The Newton step with an unsymmetric tangent (an interface linearisation with a skew
+ * part, fem_gmres.h): GMRES on the matrix plus the skew part, preconditioned by the
+ * factorisation of the matrix (refactorised first with `refactor`; else the kept one).
+ * Returns 0, 1 when GMRES did not reach tol within max_it (du holds its last iterate), -1 on
+ * error. */
+#define FEM_GMRES_TOL 1e-12  /* relative residual of a step with a fresh factorisation */
+#define FEM_GMRES_MAX_IT 60  /* more than the skew part's rank for up to 20 contact nodes */
+
+static int apply_tangent(void *ctx, const double *x, double *y, nc_error *err)
+{
+    (void)err;
+    fem_analysis *s = ctx;
+    fem_sparse_matvec(&s->K, x, y);
+    fem_ijac_skew_apply(&s->lin, s->skew_lk, s->skew_lc, x, y);
+    return 0;
+}
+
+static int apply_factor(void *ctx, const double *x, double *y, nc_error *err)
+{
+    fem_analysis *s = ctx;
+    return fem_sparse_solve(&s->K, x, y, err);
+}
+
+static int skew_solve(fem_analysis *s, int refactor, double tol, int max_it, nc_error *err)
+{
+    if (refactor && factorize(s, err)) return -1;
+    if (fem_gmres_reserve(&s->gmres, s->neq, FEM_GMRES_MAX_IT, err)) return -1;
+    double t0 = nc_clock_now_s();
+    for (int q = 0; q < s->neq; q++) s->rhs[q] = s->r[s->dof_of_eq[q]];
+    int its = 0;
+    int rc = fem_gmres_solve(&s->gmres, apply_tangent, apply_factor, s, s->rhs, s->du, tol, max_it,
+                             &its, err);
+    s->stats.solves++;
+    s->stats.gmres_solves++;
+    s->stats.gmres_iterations += its;
+    if (rc == 1) s->stats.gmres_failures++;
     s->stats.solve_s += nc_clock_now_s() - t0;
     return rc;
 }
@@ -717,14 +763,33 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
             mode = !s->K.use_lu ? 2 : s->factor_lin == s->lin_serial ? 1 : 0;
         else mode = 0;
         int cg_slow = 0;
-        if (mode == 2) {
-            long before = s->stats.pcg_iterations;
-            int rc = pcg_solve(s, err);
-            cg_slow = s->stats.pcg_iterations - before > FEM_PCG_CHEAP;
-            if (rc < 0) return -1;
-            if (rc == 1) mode = 0;   /* the kept factor is too far off: refactorise */
+        if (s->lin.active && s->lin.has_skew) {
+            /* an unsymmetric tangent: GMRES around the symmetric factorisation, an inexact
+             * step with a kept factor as CG would make, else to FEM_GMRES_TOL */
+            s->skew_lk = l_k;
+            s->skew_lc = l_c;
+            int rc = 1;
+            if (mode == 2) {
+                long before = s->stats.gmres_iterations;
+                rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_PCG_MAX_IT, err);
+                cg_slow = s->stats.gmres_iterations - before > FEM_PCG_CHEAP;
+                if (rc < 0) return -1;
+                if (rc == 1) mode = 0;
+            }
+            /* not reaching FEM_GMRES_TOL with a fresh factor leaves an inexact step, which
+             * the line search below judges like any other */
+            if (mode != 2 && skew_solve(s, mode == 0, FEM_GMRES_TOL, FEM_GMRES_MAX_IT, err) < 0)
+                return -1;
+        } else {
+            if (mode == 2) {
+                long before = s->stats.pcg_iterations;
+                int rc = pcg_solve(s, err);
+                cg_slow = s->stats.pcg_iterations - before > FEM_PCG_CHEAP;
+                if (rc < 0) return -1;
+                if (rc == 1) mode = 0;   /* the kept factor is too far off: refactorise */
+            }
+            if (mode != 2 && linear_solve(s, mode == 1, err)) return -1;
         }
-        if (mode != 2 && linear_solve(s, mode == 1, err)) return -1;
         if (mode == 0) {
             s->factor_cm = c_m;
             s->factor_ck = c_k;

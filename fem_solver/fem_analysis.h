@@ -18,6 +18,7 @@
 #ifndef FEM_ANALYSIS_H
 #define FEM_ANALYSIS_H
 
+#include "fem_gmres.h"
 #include "fem_interface_jacobian.h"
 #include "fem_model.h"
 #include "fem_sparse.h"
@@ -46,6 +47,8 @@ typedef struct fem_stats {
     long assemblies, factorizations, lu_factorizations, solves, line_search_cuts;
     long pattern_growths;  /* times an interface linearisation added node pairs to the pattern */
     long pcg_solves, pcg_iterations, pcg_failures;
+    long gmres_solves, gmres_iterations, gmres_failures; /* Newton steps with the skew part
+                                  of an interface linearisation (fem_gmres.h) */
     long roundoff_converged;   /* solves ended at the rounding floor above the tolerance
                                   (within FEM_ROUNDOFF_TOL_FACTOR of it) */
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
@@ -77,6 +80,8 @@ typedef struct fem_analysis {
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
+    fem_gmres gmres;       /* work space of the Newton steps with lin's skew part */
+    double skew_lk, skew_lc; /* the tangent weights of lin during such a step */
     long lin_serial;       /* counts set/clear calls: which linearisation a factor holds */
     int n_pairs, cap_pairs;/* node pairs in the pattern that share no element: added when a
                               linearisation couples them (a particle touching several
@@ -123,7 +128,10 @@ int fem_analysis_restore(fem_analysis *s, nc_error *err);
  *  - initial acceleration: F(u_0, v_0) (the matrix is M).
  * At u = u^k, v = v^k (a converged coupling iteration) F = F^k, the plain result. The
  * matrix holds the symmetric part of K, C (the residual is exact). cur.fc holds F at the
- * solution. Returns 0, or -1 (err says why; the linearisation is then cleared). */
+ * solution. A skew part of K or C (an unsymmetric linearisation) stays in the residual and
+ * enters each Newton step through GMRES preconditioned by the factorisation of the symmetric
+ * matrix (fem_gmres.h), so Newton keeps its exact tangent. Returns 0, or -1 (err says why;
+ * the linearisation is then cleared). */
 int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const double *v_ref,
                                    int n_blocks, const int *block_nodes, const double *K_blocks,
                                    const double *C_blocks, nc_error *err);

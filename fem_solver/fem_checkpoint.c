@@ -102,6 +102,9 @@ static void analysis_entries(nc_ckpt_table *t, fem_analysis *s)
     nc_ckpt_add(t, NULL, "stats/pcg_iterations", NC_CKPT_LONG, &st->pcg_iterations, 1);
     nc_ckpt_add(t, NULL, "stats/pcg_failures", NC_CKPT_LONG, &st->pcg_failures, 1);
     nc_ckpt_add(t, NULL, "stats/roundoff_converged", NC_CKPT_LONG, &st->roundoff_converged, 1);
+    nc_ckpt_add(t, NULL, "stats/gmres_solves", NC_CKPT_LONG, &st->gmres_solves, 1);
+    nc_ckpt_add(t, NULL, "stats/gmres_iterations", NC_CKPT_LONG, &st->gmres_iterations, 1);
+    nc_ckpt_add(t, NULL, "stats/gmres_failures", NC_CKPT_LONG, &st->gmres_failures, 1);
     nc_ckpt_add(t, NULL, "stats/assembly_s", NC_CKPT_F64, &st->assembly_s, 1);
     nc_ckpt_add(t, NULL, "stats/factor_s", NC_CKPT_F64, &st->factor_s, 1);
     nc_ckpt_add(t, NULL, "stats/solve_s", NC_CKPT_F64, &st->solve_s, 1);

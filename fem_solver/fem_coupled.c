@@ -110,13 +110,14 @@ static int set_linearisation(coupled *c, const proto_message *cmd, int project, 
         proto_message_get_f64(cmd, "jacobian_displacement", n, 3, &u_k, NULL, err) ||
         proto_message_get_f64(cmd, "jacobian_velocity", n, 3, &v_k, NULL, err))
         return -1;
-    /* The symmetric part (K + K^T)/2, in the residual as well as in the matrix: the FEM's
-     * Newton iterations then have their exact tangent, and the coupled solution does not
-     * change: the correction -K (u - u^k) vanishes where the interface iteration converges
-     * (u = u^k). With the full K in the residual but only its symmetric part in the matrix,
-     * Newton diverges on a granite rock on a steel net (cases/steel_net). The antisymmetric
-     * part (friction, the turning contact normal), and with `project` the negative part
-     * (fem_linearisation_psd.h), are left to the interface iteration. */
+    /* The full K, in the residual and, through GMRES around the factorisation of the
+     * symmetric matrix, in every Newton step (fem_analysis_set_linearisation): the FEM then
+     * solves the linearised problem exactly, and the interface iteration is Newton's method
+     * (with only the symmetric part it converged linearly, at the rate of the skew part:
+     * friction, the closest point sliding along an edge, the rock's lever;
+     * docs/notes/interface_jacobian.md). With `project` (a retry after a Newton failure)
+     * the positive semi-definite part of the symmetric part (fem_linearisation_psd.h), in
+     * both: the rest is left to the interface iteration. */
     if (b > c->lin_cap) {
         int *nn = realloc(c->lin_nodes, 2 * b * sizeof *nn);
         if (!nn) return nc_error_set(err, 1, "out of memory for %zu Jacobian blocks", b);
@@ -130,13 +131,15 @@ static int set_linearisation(coupled *c, const proto_message *cmd, int project, 
                                     "node (0..%zu)", k, (int)nodes[2 * k + e], n - 1);
             c->lin_nodes[2 * k + e] = m->iface_nodes[nodes[2 * k + e]];
         }
-    if ((project ? fem_psd_project : fem_psd_symmetric)(&c->psd, b, c->lin_nodes, K, C, err))
-        return -1;
+    if (project && fem_psd_project(&c->psd, b, c->lin_nodes, K, C, err)) return -1;
     for (size_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
             c->lin_u[3 * m->iface_nodes[i] + d] = u_k[3 * i + d];
             c->lin_v[3 * m->iface_nodes[i] + d] = v_k[3 * i + d];
         }
+    if (!project)
+        return fem_analysis_set_linearisation(s, c->lin_u, c->lin_v, (int)b, c->lin_nodes, K, C,
+                                              err);
     return fem_analysis_set_linearisation(s, c->lin_u, c->lin_v, (int)c->psd.n_blocks,
                                           c->psd.nodes, c->psd.K, C ? c->psd.C : NULL, err);
 }

@@ -48,11 +48,51 @@ static int reserve(fem_ijac *j, int ndof, int n_blocks)
         if (C) j->C = C;
         int *slot = realloc(j->slot, 9 * n * sizeof *slot);
         if (slot) j->slot = slot;
+        int *row_eq = realloc(j->row_eq, 9 * n * sizeof *row_eq);
+        if (row_eq) j->row_eq = row_eq;
+        int *col_eq = realloc(j->col_eq, 9 * n * sizeof *col_eq);
+        if (col_eq) j->col_eq = col_eq;
         double *weight = realloc(j->weight, 9 * n * sizeof *weight);
         if (weight) j->weight = weight;
-        if (!nodes || !K || !C || !slot || !weight) return -1;
+        if (!nodes || !K || !C || !slot || !row_eq || !col_eq || !weight) return -1;
         j->cap_blocks = n_blocks;
     }
+    return 0;
+}
+
+/* Whether the entries `value` (K or C) have a skew part on the free equations: the entries
+ * (p, q) and (q, p) of one slot differ. Both are summed with opposite signs into slot_sum
+ * (kept zero between calls); an exactly symmetric input (fem_linearisation_psd's parts) has
+ * none. Entries of one dof pair (p == q) cannot be skew. A skew part below 1e-12 of the
+ * entries is rounding and ignored. */
+static int skew_in(fem_ijac *j, const double *value)
+{
+    const int n = 9 * j->n_blocks;
+    double all2 = 0.0, skew2 = 0.0;
+    for (int e = 0; e < n; e++) {
+        const int slot = j->slot[e], p = j->row_eq[e], q = j->col_eq[e];
+        if (slot < 0 || p == q) continue;
+        j->slot_sum[slot] += (p < q ? 1.0 : -1.0) * value[e];
+        all2 += value[e] * value[e];
+    }
+    for (int e = 0; e < n; e++) {
+        const int slot = j->slot[e];
+        if (slot < 0 || j->row_eq[e] == j->col_eq[e]) continue;
+        skew2 += j->slot_sum[slot] * j->slot_sum[slot];
+        j->slot_sum[slot] = 0.0;
+    }
+    return skew2 > 1e-24 * all2;
+}
+
+static int detect_skew(fem_ijac *j, int nnz)
+{
+    if (nnz > j->cap_slots) {
+        free(j->slot_sum);
+        j->slot_sum = calloc((size_t)nnz, sizeof *j->slot_sum);
+        if (!j->slot_sum) { j->cap_slots = 0; return -1; }
+        j->cap_slots = nnz;
+    }
+    j->has_skew = skew_in(j, j->K) || skew_in(j, j->C);
     return 0;
 }
 
@@ -86,6 +126,8 @@ int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, cons
                                         b, ni, nj);
             }
             j->slot[9 * b + e] = slot;
+            j->row_eq[9 * b + e] = p;
+            j->col_eq[9 * b + e] = q;
             /* (p, q) and (q, p) share one upper-triangle slot: half of each is the symmetric part */
             j->weight[9 * b + e] = p == q ? 1.0 : 0.5;
         }
@@ -101,6 +143,10 @@ int fem_ijac_set(fem_ijac *j, int ndof, const int *eq, const fem_sparse *A, cons
     memcpy(j->v_ref, v_ref, (size_t)ndof * sizeof(double));
     memset(j->df, 0, (size_t)ndof * sizeof(double));
     j->n_blocks = n_blocks;
+    if (detect_skew(j, A->nnz)) {
+        fem_ijac_clear(j);
+        return nc_error_set(err, 1, "interface linearisation: out of memory for %d matrix entries", A->nnz);
+    }
     j->active = 1;
     return 0;
 }
@@ -109,6 +155,7 @@ void fem_ijac_clear(fem_ijac *j)
 {
     j->active = 0;
     j->n_blocks = 0;
+    j->has_skew = 0;
 }
 
 void fem_ijac_force(fem_ijac *j, const double *u, const double *v)
@@ -145,10 +192,26 @@ void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x)
     }
 }
 
+void fem_ijac_skew_apply(const fem_ijac *j, double c_k, double c_c, const double *x, double *y)
+{
+    if (!j->has_skew) return;
+    const int n = 9 * j->n_blocks;
+    for (int e = 0; e < n; e++) {
+        const int p = j->row_eq[e], q = j->col_eq[e];
+        if (p < 0 || q < 0 || p == q) continue;
+        /* entry (p, q) of K is entry (q, p) of K^T: (K - K^T)/2 has +K/2 at (p, q) and
+         * -K/2 at (q, p) */
+        const double half = 0.5 * (c_k * j->K[e] + c_c * j->C[e]);
+        y[p] += half * x[q];
+        y[q] -= half * x[p];
+    }
+}
+
 void fem_ijac_free(fem_ijac *j)
 {
     if (!j) return;
     free(j->nodes); free(j->K); free(j->C); free(j->slot); free(j->weight);
+    free(j->row_eq); free(j->col_eq); free(j->slot_sum);
     free(j->u_ref); free(j->v_ref); free(j->df);
     memset(j, 0, sizeof *j);
 }

@@ -18,8 +18,9 @@
  * the pattern by such pairs (a rock touching several elements couples their nodes through
  * its own motion).
  * The matrix receives the symmetric part (K + K^T)/2 (the pattern is a symmetric upper
- * triangle): the residual stays exact, so an unsymmetric K only slows Newton down to linear
- * convergence, it does not change the solution.
+ * triangle) and the residual the full K; fem_ijac_skew_apply() gives the rest of the tangent,
+ * the skew part (K - K^T)/2, which the Newton step adds through GMRES (fem_gmres.h) when
+ * has_skew says there is one.
  */
 #ifndef FEM_INTERFACE_JACOBIAN_H
 #define FEM_INTERFACE_JACOBIAN_H
@@ -33,6 +34,10 @@ typedef struct fem_ijac {
     int *nodes;              /* [2 n_blocks] (i, j) */
     double *K, *C;           /* [9 n_blocks] N/m and N s/m */
     int *slot;               /* [9 n_blocks] value slot of entry (r, c), -1: no matrix entry */
+    int *row_eq, *col_eq;    /* [9 n_blocks] equations of entry (r, c) (-1: a supported dof) */
+    int has_skew;            /* K or C has a skew part on the free equations */
+    double *slot_sum;        /* [cap_slots] work space of the skew check, kept zero */
+    int cap_slots;
     double *weight;          /* [9 n_blocks] share of the entry in its slot (1 or 1/2) */
     double *u_ref, *v_ref;   /* [ndof] reference displacement (m) and velocity (m/s) */
     double *df;              /* [ndof] dF at the last evaluation (N) */
@@ -56,6 +61,9 @@ void fem_ijac_clear(fem_ijac *j);
 void fem_ijac_force(fem_ijac *j, const double *u, const double *v);
 /* x[slot] += sym(c_k K + c_c C), the tangent -d(dF)/du with dv/du = c_c. */
 void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x);
+/* y[eq] += skew(c_k K + c_c C) x[eq] on the free equations: the part of the tangent that
+ * fem_ijac_scatter leaves out (nothing when has_skew is 0). */
+void fem_ijac_skew_apply(const fem_ijac *j, double c_k, double c_c, const double *x, double *y);
 void fem_ijac_free(fem_ijac *j);
 
 #endif

@@ -120,17 +120,6 @@ static int push_halves(fem_psd *p, const int *nodes, const double *K, const doub
     return 0;
 }
 
-int fem_psd_symmetric(fem_psd *p, size_t b, const int *nodes, const double *K, const double *C,
-                      nc_error *err)
-{
-    p->n_blocks = 0;
-    p->has_damping = C != NULL;
-    p->last_clipped = 0;
-    for (size_t k = 0; k < b; k++)
-        if (push_halves(p, nodes, K, C, k, err)) return -1;
-    return 0;
-}
-
 int fem_psd_project(fem_psd *p, size_t b, const int *nodes, const double *K, const double *C,
                     nc_error *err)
 {

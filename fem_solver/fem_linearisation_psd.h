@@ -13,11 +13,10 @@
  * the negative part is real and the structure carries it (a sphere across a prestressed
  * cable) clipping costs interface iterations (cases/rest_position 5.3 → 7.8 per contact
  * step), so fem_coupled.c uses the projection only to retry a step whose Newton iteration
- * failed with the plain symmetric part.
+ * failed with the full linearisation.
  *
  * Contract: blocks (b of them) map the motion of node nodes[2k+1] to the force on node
- * nodes[2k], row-major; C may be NULL. fem_psd_symmetric() writes the symmetric part as it
- * is: (i, j) K/2 and (j, i) Kᵀ/2 for every block. fem_psd_project() groups the nodes into connected
+ * nodes[2k], row-major; C may be NULL. fem_psd_project() groups the nodes into connected
  * components of the block graph, and for each component of at most FEM_PSD_MAX_NODES nodes
  * replaces (K + Kᵀ)/2 (and (C + Cᵀ)/2) by its projection V max(Λ, 0) Vᵀ (LAPACK dsyev).
  * The result is a list of full blocks, (i, j) and (j, i) both present, one per node pair of a
@@ -47,9 +46,7 @@ typedef struct fem_psd {
     double *dense_k, *dense_c, *eig, *work, *vec;
 } fem_psd;
 
-/* Both: 0, or -1 with err (out of memory, LAPACK failure). */
-int fem_psd_symmetric(fem_psd *p, size_t b, const int *nodes, const double *K, const double *C,
-                      nc_error *err);
+/* 0, or -1 with err (out of memory, LAPACK failure). */
 int fem_psd_project(fem_psd *p, size_t b, const int *nodes, const double *K, const double *C,
                     nc_error *err);
 void fem_psd_free(fem_psd *p);

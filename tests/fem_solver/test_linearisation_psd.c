@@ -5,8 +5,7 @@
  *  - an unsymmetric but semi-definite symmetric part: the projection is (K + Kᵀ)/2 itself;
  *  - an edge contact coupling two nodes, [[a, −a], [−a, a]] ⊗ n nᵀ − s I: the projection
  *    keeps the eigenvalue 2a − s along (n, −n) and clips the rest;
- *  - two separate contacts are projected separately (no block between them), and
- *    fem_psd_symmetric gives the two half blocks of each block as before;
+ *  - two separate contacts are projected separately (no block between them);
  * every result checked by assembling the dense matrix and comparing entry by entry. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -133,15 +132,6 @@ static void test_edge_contact_and_separate_components(void **state)
     edge_blocks(2, 3, n, (4.0 * a - s) / 2.0, 0.0, wn + 8, W + 36);
     assemble(8, wn, W, E);
     assert_dense_near(A, E, 1e-12 * 4.0 * a);
-    /* the plain symmetric part: two halves per block, summing to (K + Kᵀ)/2 */
-    assert_int_equal(fem_psd_symmetric(&p, 8, nodes, K, NULL, &err), 0);
-    assert_int_equal(p.n_blocks, 16);
-    assemble(p.n_blocks, p.nodes, p.K, A);
-    assemble(8, nodes, K, E);
-    double S[3 * NMAX][3 * NMAX];
-    for (int i = 0; i < 3 * NMAX; i++)
-        for (int j = 0; j < 3 * NMAX; j++) S[i][j] = 0.5 * (E[i][j] + E[j][i]);
-    assert_dense_near(A, S, 0.0);
     fem_psd_free(&p);
 }
 
