@@ -20,11 +20,14 @@ tmp_root=$(mktemp -d "${TMPDIR:-/tmp}/netcouple-tests.XXXXXX")
 trap 'rm -rf "$tmp_root"' EXIT
 passed=0; failed=0; skipped=0
 failed_names=()
+timings="$tmp_root/timings"   # "seconds name" per test file, for the slowest-tests list
+: >"$timings"
 
 run_cmocka() {
   local prog=$1 log
   log="$tmp_root/$(basename "$prog").log"
   echo "== $prog"
+  local start=$SECONDS
   # cmocka prints "[  PASSED  ] N test(s)." and "[  FAILED  ] N test(s)..."
   NC_TMP="$tmp_root" CMOCKA_MESSAGE_OUTPUT=stdout "$prog" >"$log" 2>&1
   local rc=$?
@@ -36,11 +39,13 @@ run_cmocka() {
   if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then f=1; fi   # crashed before its summary
   passed=$((passed + p)); failed=$((failed + f))
   [ "$f" -gt 0 ] && failed_names+=("$prog")
+  echo "$((SECONDS - start)) $prog" >>"$timings"
 }
 
 run_script() {
   local script=$1 rc
   echo "== $script"
+  local start=$SECONDS
   local dir="$tmp_root/$(basename "$script").d"
   mkdir -p "$dir"
   case "$script" in
@@ -51,6 +56,7 @@ run_script() {
   if [ $rc -eq 0 ]; then passed=$((passed + 1)); echo "-- PASS $script"
   elif [ $rc -eq 77 ]; then skipped=$((skipped + 1)); echo "-- SKIP $script"
   else failed=$((failed + 1)); failed_names+=("$script"); echo "-- FAIL $script (exit $rc)"; fi
+  echo "$((SECONDS - start)) $script" >>"$timings"
 }
 
 while IFS= read -r prog; do
@@ -64,6 +70,8 @@ while IFS= read -r script; do
 done < <(cd "$root" && find tests -type f \( -name 'test_*.sh' -o -name 'test_*.py' \) | sort)
 
 echo
+echo "slowest tests (seconds):"
+sort -rn "$timings" | head -8 | sed 's/^/  /'
 if [ ${#failed_names[@]} -gt 0 ]; then
   echo "failed: ${failed_names[*]}"
 fi
