@@ -142,7 +142,7 @@ static int build_pattern(fem_analysis *s, nc_error *err)
     }
     fem_sparse_free(&s->K);
     memset(&s->K, 0, sizeof s->K);
-    int rc = fem_sparse_build(&s->K, s->neq, (int)ne, elem_eq, slot, m->settings.factorization, err);
+    int rc = fem_sparse_build(&s->K, s->neq, (int)ne, elem_eq, slot, s->factor_mode, err);
     free(elem_eq);
     free(chain);
     free(s->slot);
@@ -223,6 +223,8 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
     s->mass_x = calloc(nd, sizeof(double));
     s->mass_y = calloc(nd, sizeof(double));
     s->a_unshifted = calloc(nd, sizeof(double));
+    s->factor_mode = m->settings.factorization;
+    s->stats.ldlt_switch_step = -1;
     s->n_chain_pairs = chain_pair_count(m);
     size_t nc = 3 * (size_t)m->max_chain_nodes;
     s->chain_f = calloc(nc, sizeof(double));
@@ -523,6 +525,10 @@ static int factorize(fem_analysis *s, nc_error *err)
     }
     s->stats.factorizations++;
     if (s->K.use_lu) s->stats.lu_factorizations++;
+    if (s->K.switched_to_ldlt && s->factor_mode == 0) {
+        s->factor_mode = 1;   /* a rebuilt pattern (its growth) starts as LDL^T */
+        s->stats.ldlt_switch_step = s->cur.step;
+    }
     s->stats.factor_s += nc_clock_now_s() - t0;
     return 0;
 }

@@ -49,6 +49,8 @@ typedef struct fem_stats {
     long pcg_solves, pcg_iterations, pcg_failures;
     long gmres_solves, gmres_iterations, gmres_failures; /* Newton steps with the skew part
                                   of an interface linearisation (fem_gmres.h) */
+    long ldlt_switch_step;     /* step at which an indefinite matrix turned the "auto"
+                                  factorisation to LDL^T (-1: never) */
     long roundoff_converged;   /* solves ended at the rounding floor above the tolerance
                                   (within FEM_ROUNDOFF_TOL_FACTOR of it) */
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
@@ -88,6 +90,8 @@ typedef struct fem_analysis {
                               elements), so the pattern only grows */
     int *pairs;            /* [2 n_pairs] */
     long factor_lin, saved_factor_lin;
+    int factor_mode;       /* the pattern's factorisation (fem_sparse_build's mode): the
+                              model's, until an "auto" factor turns to LDL^T for good */
     fem_stats stats;
 } fem_analysis;
 

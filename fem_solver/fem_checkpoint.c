@@ -87,6 +87,7 @@ static void analysis_entries(nc_ckpt_table *t, fem_analysis *s)
     nc_ckpt_add(t, NULL, "analysis/lin_serial", NC_CKPT_LONG, &s->lin_serial, 1);
     nc_ckpt_add(t, NULL, "analysis/factor_lin", NC_CKPT_LONG, &s->factor_lin, 1);
     nc_ckpt_add(t, NULL, "analysis/saved_factor_lin", NC_CKPT_LONG, &s->saved_factor_lin, 1);
+    nc_ckpt_add(t, NULL, "analysis/factor_mode", NC_CKPT_INT, &s->factor_mode, 1);
     /* statistics: the summary and the SOLVE replies report them */
     nc_ckpt_add(t, NULL, "stats/iterations", NC_CKPT_INT, &st->iterations, 1);
     nc_ckpt_add(t, NULL, "stats/residual_norm", NC_CKPT_F64, &st->residual_norm, 1);
@@ -105,6 +106,7 @@ static void analysis_entries(nc_ckpt_table *t, fem_analysis *s)
     nc_ckpt_add(t, NULL, "stats/gmres_solves", NC_CKPT_LONG, &st->gmres_solves, 1);
     nc_ckpt_add(t, NULL, "stats/gmres_iterations", NC_CKPT_LONG, &st->gmres_iterations, 1);
     nc_ckpt_add(t, NULL, "stats/gmres_failures", NC_CKPT_LONG, &st->gmres_failures, 1);
+    nc_ckpt_add(t, NULL, "stats/ldlt_switch_step", NC_CKPT_LONG, &st->ldlt_switch_step, 1);
     nc_ckpt_add(t, NULL, "stats/assembly_s", NC_CKPT_F64, &st->assembly_s, 1);
     nc_ckpt_add(t, NULL, "stats/factor_s", NC_CKPT_F64, &st->factor_s, 1);
     nc_ckpt_add(t, NULL, "stats/solve_s", NC_CKPT_F64, &st->solve_s, 1);

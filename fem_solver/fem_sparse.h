@@ -5,9 +5,13 @@
  * built once from the element connectivity together with a map from each element's 6x6
  * entries to value slots, so assembling is a scatter without search. CHOLMOD analyses the
  * pattern once (fill-reducing ordering, symbolic factor) and refactorises numerically every
- * Newton iteration. A matrix that is not positive definite (a truss in compression) falls
- * back to UMFPACK LU; a singular one is reported with the failing equation in *bad_eq so
- * the caller can name the node.
+ * Newton iteration. A matrix that is not positive definite (a truss in compression, the
+ * negative part of a contact linearisation) stops a supernodal LL^T: with mode "auto" the
+ * factor then becomes a simplicial LDL^T for good (switched_to_ldlt), which takes an
+ * indefinite matrix unless a pivot is zero; LL^T by request, or an LDL^T that meets a zero
+ * pivot, falls back to UMFPACK LU (several times slower, and not kept across a restore). A
+ * singular matrix is reported with the failing equation in *bad_eq so the caller can name
+ * the node.
  */
 #ifndef FEM_SPARSE_H
 #define FEM_SPARSE_H
@@ -32,6 +36,8 @@ typedef struct fem_sparse {
     double *factor_x;         /* [nnz] the values L (or the LU) was computed from, and ... */
     double *saved_factor_x;   /* ... those of L_saved: a checkpoint stores them, since the
                                  same values on the same pattern give the same factors */
+    int auto_mode;            /* mode 0: a supernodal factor may become simplicial LDL^T */
+    int switched_to_ldlt;     /* it did (fem_sparse_factorize) */
     /* LU fallback */
     int use_lu;               /* the last factorisation is LU */
     int lu_count;             /* how many times LU was used */
@@ -45,9 +51,10 @@ typedef struct fem_sparse {
  * slot_map (output, caller allocated): [36 n_elem] value slot of entry (a, b) of the
  * element matrix (row-major), -1 when the entry is not stored (lower triangle, fixed dof). */
 /* mode: 0 = let CHOLMOD choose (simplicial LDL^T for small/sparse factors, supernodal
- * LL^T for large ones), 1 = simplicial LDL^T, 2 = supernodal LL^T. LDL^T without pivoting
- * accepts an indefinite matrix as long as no pivot is zero; LL^T stops at the first
- * non-positive pivot, and then UMFPACK LU takes over. */
+ * LL^T for large ones; a supernodal one that meets an indefinite matrix becomes simplicial
+ * LDL^T), 1 = simplicial LDL^T, 2 = supernodal LL^T. LDL^T without pivoting accepts an
+ * indefinite matrix as long as no pivot is zero; LL^T stops at the first non-positive pivot,
+ * and then UMFPACK LU takes over. */
 int fem_sparse_build(fem_sparse *s, int n, int n_elem, const int *elem_eq, int *slot_map,
                      int mode, nc_error *err);
 /* Factorises the current values. On a singular matrix returns -1 with *bad_eq >= 0. */
