@@ -6,7 +6,7 @@
 
 cpl_energy_report cpl_energy_report_none(void)
 {
-    cpl_energy_report r = {0, NAN, NAN, NAN, NAN, NAN, NAN};
+    cpl_energy_report r = {0, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
     return r;
 }
 
@@ -39,6 +39,7 @@ static void unavailable(cpl_energy_record *rec)
                         &rec->dem_kinetic_j, &rec->dem_elastic_j, &rec->dem_potential_j,
                         &rec->fem_interface_work_j, &rec->dem_interface_work_j,
                         &rec->interface_created_j, &rec->fem_dissipated_j, &rec->dem_dissipated_j,
+                        &rec->fem_numerical_j,
                         &rec->external_work_j, &rec->created_j, &rec->input_j, &rec->limit_j,
                         &rec->closure_j};
     for (size_t i = 0; i < sizeof fields / sizeof *fields; i++) *fields[i] = NAN;
@@ -56,6 +57,7 @@ void cpl_energy_step(cpl_energy *e, long step, double end_time_s, const cpl_ener
     } else {
         f = e->fem_last;
         f.interface_work_j = f.external_work_j = f.dissipated_j = 0.0;
+        f.numerical_j = isfinite(f.numerical_j) ? 0.0 : NAN;
         if (!e->started) f.valid = 0;
     }
     if (!e->available || !f.valid || !dem->valid) {
@@ -88,6 +90,7 @@ void cpl_energy_step(cpl_energy *e, long step, double end_time_s, const cpl_ener
     rec->dem_interface_work_j = dem->interface_work_j;
     rec->interface_created_j = mismatch;
     rec->fem_dissipated_j = f.dissipated_j;
+    rec->fem_numerical_j = f.numerical_j;
     rec->dem_dissipated_j = dem->dissipated_j;
     rec->external_work_j = f.external_work_j + dem->external_work_j;
     rec->created_j = total(&f) + total(dem) - e->e0_j - e->sum_ext_j;

@@ -37,6 +37,8 @@ typedef struct cpl_energy_report {
     double external_work_j;    /* what its own loads put in over the step beyond the change
                                   of their potential (0 for constant loads) */
     double dissipated_j;       /* energy dissipated over the step */
+    double numerical_j;        /* the integrator's share of it (information only; NAN when
+                                  not reported) */
 } cpl_energy_report;
 
 /* A report with valid = 0 and NAN values. */
@@ -50,6 +52,9 @@ typedef struct cpl_energy_record {
     double fem_interface_work_j, dem_interface_work_j;   /* of the step */
     double interface_created_j;                          /* their sum, of the step */
     double fem_dissipated_j, dem_dissipated_j;           /* of the step */
+    double fem_numerical_j;    /* of the step: the part of fem_dissipated_j the structure's
+                                  integrator dissipated, not its damping or elements (NAN
+                                  when the FEM does not say) */
     double external_work_j;                              /* of the step, both sides */
     double created_j;          /* accumulated, see above */
     double input_j;            /* reference energy of the guard */

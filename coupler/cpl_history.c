@@ -11,7 +11,8 @@
 static const char *const energy_names[CPL_HISTORY_ENERGY_SERIES] = {
     "fem_kinetic", "fem_elastic", "fem_potential", "dem_kinetic", "dem_elastic", "dem_potential",
     "fem_interface_work", "dem_interface_work", "interface_created", "fem_dissipated",
-    "dem_dissipated", "external_work", "created", "input", "limit", "closure"};
+    "dem_dissipated", "external_work", "created", "input", "limit", "closure",
+    "fem_numerical_dissipated"};
 
 static void energy_values(const cpl_energy_record *e, double *v)
 {
@@ -19,7 +20,7 @@ static void energy_values(const cpl_energy_record *e, double *v)
         e->fem_kinetic_j, e->fem_elastic_j, e->fem_potential_j, e->dem_kinetic_j,
         e->dem_elastic_j, e->dem_potential_j, e->fem_interface_work_j, e->dem_interface_work_j,
         e->interface_created_j, e->fem_dissipated_j, e->dem_dissipated_j, e->external_work_j,
-        e->created_j, e->input_j, e->limit_j, e->closure_j};
+        e->created_j, e->input_j, e->limit_j, e->closure_j, e->fem_numerical_j};
     memcpy(v, all, sizeof all);
 }
 

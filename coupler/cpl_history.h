@@ -26,7 +26,7 @@
 #include "cpl_loop.h"
 #include "nc_h5.h"
 
-#define CPL_HISTORY_ENERGY_SERIES 16
+#define CPL_HISTORY_ENERGY_SERIES 17
 
 typedef struct cpl_history {
     nc_h5_file h5;

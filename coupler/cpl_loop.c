@@ -266,10 +266,10 @@ static void energy_report_entries(cpl_ckpt_table *t, const char *prefix, cpl_ene
 {
     cpl_ckpt_int(t, prefix, "valid", &r->valid);
     double *v[] = {&r->kinetic_j, &r->elastic_j, &r->potential_j, &r->interface_work_j,
-                   &r->external_work_j, &r->dissipated_j};
+                   &r->external_work_j, &r->dissipated_j, &r->numerical_j};
     const char *names[] = {"kinetic", "elastic", "potential", "interface_work",
-                           "external_work", "dissipated"};
-    for (int i = 0; i < 6; i++) cpl_ckpt_f64(t, prefix, names[i], v[i], 1);
+                           "external_work", "dissipated", "numerical"};
+    for (int i = 0; i < 7; i++) cpl_ckpt_f64(t, prefix, names[i], v[i], 1);
 }
 
 void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)

@@ -157,6 +157,7 @@ static void read_energy(const proto_message *reply, cpl_energy_report *e)
     e->interface_work_j = proto_message_value(reply, "interface_work_j", NAN);
     e->external_work_j = proto_message_value(reply, "external_work_j", NAN);
     e->dissipated_j = proto_message_value(reply, "dissipated_energy_j", NAN);
+    e->numerical_j = proto_message_value(reply, "numerical_dissipation_j", NAN);
     e->valid = isfinite(e->kinetic_j) && isfinite(e->elastic_j) && isfinite(e->potential_j) &&
                isfinite(e->interface_work_j) && isfinite(e->external_work_j) &&
                isfinite(e->dissipated_j);

@@ -15,11 +15,16 @@ fem.h5, dem.h5, coupling.h5) and prints, and with --plot draws:
   - overload: per element set with a breaking load, the largest axial force of every FEM step
     against it and the elements that exceeded it (fem.h5 `/element_sets`, when present; the
     model has no rope failure, so forces beyond the breaking load are not physical);
+  - force-time curves (--plot): the largest axial force of each element set and the largest
+    anchor reaction at every fem.h5 output step;
   - the energy balance (coupling.h5 `/energy`, every accepted step): the block's kinetic
     energy at the first contact and at the end, and where it went: brakes (fem.h5
     `element_dissipated_energy`, output steps), the rest of the FEM's dissipation (Rayleigh and
     the integrator's), strain and kinetic energy of the structure, contact dissipation (DEM),
-    the interface mismatch and the guard's created energy.
+    the interface mismatch and the guard's created energy; with coupling.h5's
+    `fem_numerical_dissipated` also the split of the FEM's own dissipation into Rayleigh
+    damping and the integrator's, and what no mechanism of the model accounts for (the
+    integrator's share and the interface mismatch) against the block's energy.
 --json FILE writes the same figures as JSON (keys as printed). Exit status 0, or 2 with a
 message naming the file when the folder lacks what is needed.
 """
@@ -208,7 +213,22 @@ def report(run):
         "created_limit_j": float(g("limit")[-1]),
         "guard_fired": bool(g("above").any()),
     }
-    return out, (mt, mu, t_dem, v_along, ct, g)
+    # the integrator's share of the FEM's dissipation (coupling.h5 from the version that
+    # records it): what no physical mechanism of the model (brakes, Rayleigh damping, contact
+    # dashpots) accounts for, together with the interface mismatch
+    numerical = cpl["energy/fem_numerical_dissipated"][()] if "energy/fem_numerical_dissipated" in cpl else None
+    if numerical is not None and np.isfinite(numerical).all():
+        e = out["energy"]
+        e["fem_numerical_dissipation_j"] = float(numerical.sum())
+        e["fem_rayleigh_dissipation_j"] = e["fem_other_dissipation_j"] - e["fem_numerical_dissipation_j"]
+        e["unattributed_j"] = e["fem_numerical_dissipation_j"] - e["interface_mismatch_j"]
+        e["unattributed_ratio"] = e["unattributed_j"] / e["block_kinetic_at_contact_j"]
+    # force-time curves (output steps): the largest |N| of each set, the largest anchor reaction
+    forces = {name: np.abs(axial[:, eset == i]).max(axis=1) for i, name in enumerate(names)
+              if (eset == i).any()}
+    if anchor_cols:
+        forces["anchor reaction"] = rmag[:, anchor_cols].max(axis=1)
+    return out, (mt, mu, t_dem, v_along, ct, g, t_out, forces)
 
 
 def print_report(r):
@@ -255,14 +275,20 @@ def print_report(r):
       % (e["fem_strain_end_j"], e["fem_kinetic_end_j"], e["interface_mismatch_j"]))
     p("    created (largest) %.4g J, guard limit %.4g J: %s"
       % (e["created_max_j"], e["created_limit_j"], "FIRED" if e["guard_fired"] else "silent"))
+    if "unattributed_j" in e:
+        p("    of the other FEM dissipation: Rayleigh damping %.4g J, the integrator %.4g J; not "
+          "attributed to a mechanism of the model (integrator + interface mismatch): %.4g J, "
+          "%.2g %% of the block's kinetic energy at contact"
+          % (e["fem_rayleigh_dissipation_j"], e["fem_numerical_dissipation_j"], e["unattributed_j"],
+             100 * e["unattributed_ratio"]))
 
 
 def plot(r, series, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    mt, mu, t_dem, v_along, ct, g = series
-    fig, ax = plt.subplots(3, 1, figsize=(7, 9), sharex=True)
+    mt, mu, t_dem, v_along, ct, g, t_out, forces = series
+    fig, ax = plt.subplots(4, 1, figsize=(7, 11.5), sharex=True)
     ax[0].plot(mt, mu)
     ax[0].set_ylabel("net_centre along impact (m)")
     ax[1].plot(t_dem, v_along, "o-")
@@ -272,8 +298,12 @@ def plot(r, series, path):
     ax[2].plot(ct, np.cumsum(g("fem_dissipated")), label="fem dissipated")
     ax[2].plot(ct, np.cumsum(g("dem_dissipated")), label="contact dissipated")
     ax[2].set_ylabel("energy (J)")
-    ax[2].set_xlabel("t (s)")
     ax[2].legend()
+    for name, f in forces.items():
+        ax[3].plot(t_out, f / 1e3, label=name)
+    ax[3].set_ylabel("largest force (kN, output steps)")
+    ax[3].set_xlabel("t (s)")
+    ax[3].legend(fontsize=8, ncol=2)
     fig.tight_layout()
     fig.savefig(path)
 
@@ -282,7 +312,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("run", help="run folder (scripts/run_case.sh --out)")
     ap.add_argument("--json", help="also write the figures as JSON here")
-    ap.add_argument("--plot", help="draw elongation, block velocity and energies to this image")
+    ap.add_argument("--plot", help="draw elongation, block velocity, energies and forces to this image")
     a = ap.parse_args()
     r, series = report(a.run)
     print_report(r)

@@ -21,7 +21,8 @@
 #    energy (coupling.h5 /energy/created) never above 1 % of the input energy + 1e-9 J;
 #  - the block's kinetic energy just before contact is 1/2 m v^2 within 1 %; the interface
 #    work balances: the DEM's and the FEM's work at the interface differ by < 2 % of the
-#    impact energy (measured 14 J of 30 kJ);
+#    impact energy (measured 36 J of 30 kJ); the energy no mechanism of the model accounts
+#    for (the FEM integrator's dissipation and that mismatch) is < 2 % of it (measured 0.95 %);
 #  - the block is stopped: its velocity along the impact direction falls to <= 0 within the
 #    run (it rebounds), and it rebounds with less energy than it came with: the block's
 #    kinetic energy at the end < 0.75 of the impact energy;
@@ -89,6 +90,13 @@ print("impact energy %.1f J, block kinetic at contact %.1f J, at the end %.1f J,
 # agree to 2 % of the impact energy (a step converged only loosely at the contact nodes loses
 # energy there: 5.9 kJ of 30 kJ with the interface residual's velocity part left out)
 assert abs(e["interface_mismatch_j"]) < 0.02 * e_in, "the interface work does not balance"
+# and the rest of the balance: what no mechanism of the model (brakes, Rayleigh damping,
+# contact dashpots, strain and kinetic energy) accounts for -- the FEM integrator's
+# dissipation and the interface mismatch -- stays below 2 % of the impact energy (measured 0.95 %)
+print("not attributed to a mechanism: %.1f J (integrator %.1f J)"
+      % (e["unattributed_j"], e["fem_numerical_dissipation_j"]))
+assert 0.0 <= e["fem_numerical_dissipation_j"] and abs(e["unattributed_j"]) < 0.02 * e_in, \
+    "the energy balance does not close to 2 %"
 assert abs(e["block_kinetic_at_contact_j"] - e_in) < 0.01 * e_in, "impact energy"
 assert rep["block_stop_s"] is not None, "the block was not stopped"
 assert e["block_kinetic_end_j"] < 0.75 * e_in, "the block rebounds with too much energy"

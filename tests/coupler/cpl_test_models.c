@@ -153,7 +153,7 @@ static void structure_energy(const tm_structure *s, const double *F, cpl_energy_
             D += 0.5 * du * s->K[i * nd + j] * (s->u[j] - s->u0[j]);
         }
     }
-    *e = (cpl_energy_report){1, T, U, 0.0, W, 0.0, D};
+    *e = (cpl_energy_report){1, T, U, 0.0, W, 0.0, D, NAN};
 }
 
 static int s_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
@@ -254,7 +254,7 @@ static int p_solve(void *ctx, const cpl_call *call, const double *in0, const dou
     double f = tm_overlaps(call->time_s, dt, p->stiff_from_s, p->stiff_until_s)
                    ? p->stiff_factor : 1.0;
     cpl_energy_report *e = &info->energy;
-    *e = (cpl_energy_report){1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    *e = (cpl_energy_report){1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NAN};
     for (size_t i = 0; i < p->nd; i++) {
         double kc = f * p->kc[i];
         double x1 = (p->mp[i] * (p->x0[i] + dt * p->y0[i]) +
