@@ -2,7 +2,8 @@
 """paraview_view.py — a picture (or an animation) of a netcouple run folder, made with ParaView.
 
     xvfb-run -a pvpython scripts/paraview_view.py RUN_DIR [--out FILE.png] [--time T]
-                        [--animation DIR] [--size W H]
+                        [--animation DIR] [--size W H] [--azimuth DEG] [--zoom F]
+                        [--tube-scale F]
 
 Opens what the folder holds with ParaView's default reader: fem.xdmf (the net, drawn as tubes
 coloured by axial_force in N), particles.xdmf (each rock a sphere of its true radius: Glyph of
@@ -10,6 +11,10 @@ a unit-diameter sphere scaled by 2 x radius) and, without fem.xdmf, dem_net.xdmf
 copy of the net). --time picks the output time shown (default: when the net's largest
 displacement occurred, fem.h5 /output/displacement attribute max_time, else the last step);
 --animation DIR also writes one PNG per output step into DIR (frame_0000.png, ...).
+The camera looks obliquely from the side the rock comes from (-y), z up; --azimuth turns it
+about the vertical through the scene's centre, --zoom moves it closer (2: half the distance;
+a long barrier with far anchors needs it to show its net); --tube-scale thins (< 1) or
+thickens the ropes' tubes (radius 0.4 % of the scene by default).
 Needs Debian's python3-paraview (and xvfb for xvfb-run on a machine without a display).
 """
 import argparse
@@ -41,6 +46,9 @@ def main():
     ap.add_argument("--time", type=float, help="output time to show")
     ap.add_argument("--animation", help="folder for one PNG per output step")
     ap.add_argument("--size", type=int, nargs=2, default=[1200, 700], metavar=("W", "H"))
+    ap.add_argument("--azimuth", type=float, default=0.0, help="turn the camera about z (degrees)")
+    ap.add_argument("--zoom", type=float, default=1.0, help="> 1 moves the camera closer")
+    ap.add_argument("--tube-scale", type=float, default=1.0, help="tube radius factor")
     args = ap.parse_args()
     d = args.run_dir
     files = {name: os.path.join(d, name) for name in ("fem.xdmf", "particles.xdmf", "dem_net.xdmf")
@@ -123,12 +131,17 @@ def main():
     size = max(b[1] - b[0], b[3] - b[2], b[5] - b[4], 1e-3)
     if tube is not None:
         # a tube radius of 0.4 % of the scene keeps thin ropes visible at any scale
-        tube.Radius = 0.004 * size
+        tube.Radius = 0.004 * size * args.tube_scale
         UpdatePipeline(t, tube)
     view.CameraFocalPoint = c
     view.CameraPosition = [c[0] + 0.6 * size, c[1] - 1.6 * size, c[2] + 0.7 * size]
     view.CameraViewUp = [0, 0, 1]
     view.ResetCamera()
+    camera = view.GetActiveCamera()
+    if args.azimuth:
+        camera.Azimuth(args.azimuth)
+    if args.zoom != 1.0:
+        camera.Dolly(args.zoom)
     label = Text(Text=os.path.basename(os.path.abspath(d)))
     lr = Show(label, view)
     lr.Color = [0, 0, 0]
