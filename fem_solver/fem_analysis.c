@@ -506,8 +506,7 @@ static double residual_norm(const fem_analysis *s)
     return sqrt(r2);
 }
 
-/* Factorises and solves K du = r on the free equations; names the node when singular. */
-/* Factorises the current matrix values (counted in stats.factor_s). */
+/* Factorises the current matrix values; names the node when singular. */
 static int factorize(fem_analysis *s, nc_error *err)
 {
     double t0 = nc_clock_now_s();
@@ -533,6 +532,7 @@ static int factorize(fem_analysis *s, nc_error *err)
     return 0;
 }
 
+/* Solves K du = r on the free equations, factorising first unless `reuse`. */
 static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
 {
     if (!reuse && factorize(s, err)) return -1;
@@ -774,10 +774,9 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
              * step with a kept factor as CG would make, else to FEM_GMRES_TOL */
             s->skew_lk = l_k;
             s->skew_lc = l_c;
-            int rc = 1;
             if (mode == 2) {
                 long before = s->stats.gmres_iterations;
-                rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_PCG_MAX_IT, err);
+                int rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_PCG_MAX_IT, err);
                 cg_slow = s->stats.gmres_iterations - before > FEM_PCG_CHEAP;
                 if (rc < 0) return -1;
                 if (rc == 1) mode = 0;

@@ -29,14 +29,19 @@ typedef struct dense {
     double Minv[NMAX][NMAX];   /* the preconditioner (identity when not set) */
 } dense;
 
+static void matvec(const double M[NMAX][NMAX], int n, const double *x, double *y)
+{
+    for (int i = 0; i < n; i++) {
+        y[i] = 0;
+        for (int j = 0; j < n; j++) y[i] += M[i][j] * x[j];
+    }
+}
+
 static int apply_A(void *ctx, const double *x, double *y, nc_error *err)
 {
     (void)err;
     const dense *d = ctx;
-    for (int i = 0; i < d->n; i++) {
-        y[i] = 0;
-        for (int j = 0; j < d->n; j++) y[i] += d->A[i][j] * x[j];
-    }
+    matvec(d->A, d->n, x, y);
     return 0;
 }
 
@@ -44,10 +49,7 @@ static int apply_Minv(void *ctx, const double *x, double *y, nc_error *err)
 {
     (void)err;
     const dense *d = ctx;
-    for (int i = 0; i < d->n; i++) {
-        y[i] = 0;
-        for (int j = 0; j < d->n; j++) y[i] += d->Minv[i][j] * x[j];
-    }
+    matvec(d->Minv, d->n, x, y);
     return 0;
 }
 
