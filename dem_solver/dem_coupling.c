@@ -40,20 +40,27 @@ void dem_snapshot_free(dem_snapshot *p)
     memset(p, 0, sizeof *p);
 }
 
-/* Boxes of the net edges at their current position into the net's item grid. */
-static int build_net_grid(dem_sim *s, nc_error *err)
+/* Boxes of the net edges into the net's item grid: each edge's box holds it at positions
+ * `from` and `to` and, since the wall moves linearly between them, everywhere in between. */
+static int build_net_grid_over(dem_sim *s, const double *from, const double *to, nc_error *err)
 {
     dem_net *net = &s->model.net;
     for (size_t e = 0; e < net->n_edges; e++) {
-        const double *a = net->cur + 3 * (size_t)net->edges[2 * e];
-        const double *b = net->cur + 3 * (size_t)net->edges[2 * e + 1];
+        const double *p[4] = {from + 3 * (size_t)net->edges[2 * e], from + 3 * (size_t)net->edges[2 * e + 1],
+                              to + 3 * (size_t)net->edges[2 * e], to + 3 * (size_t)net->edges[2 * e + 1]};
         for (int k = 0; k < 3; k++) {
-            net->box_lo[3 * e + k] = fmin(a[k], b[k]);
-            net->box_hi[3 * e + k] = fmax(a[k], b[k]);
+            net->box_lo[3 * e + k] = fmin(fmin(p[0][k], p[1][k]), fmin(p[2][k], p[3][k]));
+            net->box_hi[3 * e + k] = fmax(fmax(p[0][k], p[1][k]), fmax(p[2][k], p[3][k]));
         }
     }
     double inflate = s->model.r_max + net->cable_radius_m + net->near_distance_m;
     return dem_item_grid_build(net->grid, net->n_edges, net->box_lo, net->box_hi, inflate, err);
+}
+
+/* The grid of the net edges at their current position. */
+static int build_net_grid(dem_sim *s, nc_error *err)
+{
+    return build_net_grid_over(s, s->model.net.cur, s->model.net.cur, err);
 }
 
 int dem_sim_set_interface(dem_sim *s, size_t n_nodes, const int32_t *node_ids,
@@ -299,6 +306,11 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
         if (flown) substeps = 0; /* reported as 1 step below */
     }
     if (jac && dem_net_jacobian_begin(jac, s, dt_step, substeps, err)) return -1;
+    /* One grid for every sub-step, of the edges' boxes over the whole step: the contact
+     * search finds the same edges within reach as with a grid of the current positions (it
+     * tests each candidate's distance), and rebuilding the grid at every sub-step took 70 % of
+     * the DEM's time on a net of 2000 edges. */
+    if (substeps > 0 && build_net_grid_over(s, net->start, net->end, err)) return -1;
     for (long sub = 0; sub < substeps; sub++) {
         /* The wall is placed where it is at the END of the sub-step (default): the last
          * sub-step uses exactly the position the FEM returned, so even a single sub-step
@@ -311,7 +323,6 @@ int dem_sim_solve_coupled_jacobian(dem_sim *s, double dt_step, const double *dis
         double frac = ((double)sub + (net->wall_at_middle ? 0.5 : 1.0)) / (double)substeps;
         for (size_t k = 0; k < 3 * nn; k++)
             net->cur[k] = net->start[k] + frac * (net->end[k] - net->start[k]);
-        if (build_net_grid(s, err)) return -1;
         if (jac) { /* the particles as the contact pass saw them, before they move */
             if (dem_sim_step_forces(s, h, err) || dem_net_jacobian_record(jac, s, sub, err)) return -1;
             dem_sim_step_advance(s, h);

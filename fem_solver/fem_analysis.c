@@ -615,6 +615,12 @@ static int pcg_solve(fem_analysis *s, nc_error *err)
  * error. */
 #define FEM_GMRES_TOL 1e-12  /* relative residual of a step with a fresh factorisation */
 #define FEM_GMRES_MAX_IT 60  /* more than the skew part's rank for up to 20 contact nodes */
+#define FEM_GMRES_KEPT_MAX_IT 40  /* with a kept factorisation */
+#define FEM_GMRES_CHEAP 15   /* more GMRES iterations than this with a kept factorisation:
+                                refactorise next time. A fresh one already leaves GMRES the
+                                skew part's rank (7-9 on the three-module barrier), and there
+                                a factorisation costs about 60 iterations: at 6, as for CG,
+                                nearly every Newton step refactorised */
 
 static int apply_tangent(void *ctx, const double *x, double *y, nc_error *err)
 {
@@ -776,8 +782,8 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
             s->skew_lc = l_c;
             if (mode == 2) {
                 long before = s->stats.gmres_iterations;
-                int rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_PCG_MAX_IT, err);
-                cg_slow = s->stats.gmres_iterations - before > FEM_PCG_CHEAP;
+                int rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_GMRES_KEPT_MAX_IT, err);
+                cg_slow = s->stats.gmres_iterations - before > FEM_GMRES_CHEAP;
                 if (rc < 0) return -1;
                 if (rc == 1) mode = 0;
             }
@@ -1010,13 +1016,21 @@ static int begin_dynamic_step(fem_analysis *s, double dt_s, newton_setup *ns, nc
 
 int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
 {
+    return fem_analysis_step_from(s, dt_s, NULL, err);
+}
+
+int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, nc_error *err)
+{
     const fem_settings *set = &s->m->settings;
     newton_setup ns;
     if (begin_dynamic_step(s, dt_s, &ns, err)) return -1;
     double t1 = s->cur.time_s + dt_s;
     /* predictor: the start-of-step displacement (for these stiff, strongly nonlinear nets it
-     * did better than the constant-acceleration predictor), supports at their end value */
+     * did better than the constant-acceleration predictor) or the caller's guess, supports
+     * at their end value */
     apply_supports(s, ns.lambda);
+    if (u_guess)
+        for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_guess[s->dof_of_eq[q]];
     if (newton(s, &ns, err)) {
         /* leave the state as it was before the call */
         if (set->coupling_load_constant)

@@ -105,6 +105,10 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
 int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err);
 /* One implicit dynamic step of dt_s from the current state. */
 int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err);
+/* The same with Newton started from u_guess [ndof] on the free dofs (NULL: from the
+ * start-of-step displacement): a coupled step solved again with a corrected interface force
+ * starts from its previous solution. */
+int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, nc_error *err);
 /* Load factor of the model loads at time t (load_ramp_s). */
 double fem_analysis_load_factor(const fem_analysis *s, double time_s);
 

@@ -1,7 +1,8 @@
 /* fem_coupled — the FEM as the netcouple protocol participant "fem": its handlers of the serve
  * loop (protocol/proto_serve.h). INTERFACE replies the interface mesh, BEGIN_STEP saves the
  * start-of-step state (the coupler owns time), a repeated SOLVE restores it (the loop decides
- * when), SOLVE takes the interface force and replies displacement + velocity, ACCEPT_STEP
+ * when) and, with the same dt, starts Newton from the previous solution, SOLVE takes the
+ * interface force and replies displacement + velocity, ACCEPT_STEP
  * writes monitor and output rows when due. A run ended inside a solved but not accepted step
  * writes the last accepted state. See fem_run.h.
  * Interface-Jacobian coupling (capability "jacobian", protocol/README.md §3.1): a SOLVE that
@@ -38,6 +39,9 @@ typedef struct coupled {
     int *lin_nodes;           /* [2 blocks] model node numbers of the received blocks */
     size_t lin_cap;
     fem_psd psd;              /* the blocks the FEM solves with */
+    double *guess_u;          /* [ndof] the last solution of this step, Newton's start when
+                                 the step is solved again with the same dt */
+    double guess_dt_s;        /* its dt; 0: none (a new step, a resume) */
     const char *dir;          /* output folder */
     long written_step;
     double next_output_s;     /* time of the next full output */
@@ -79,6 +83,7 @@ static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
     coupled *c = ctx;
     if (start_output(c, err)) return -1;
     if (isfinite(cmd->time_s)) c->s.cur.time_s = cmd->time_s;   /* the coupler owns time */
+    c->guess_dt_s = 0;
     return fem_analysis_save(&c->s, err);
 }
 
@@ -144,6 +149,21 @@ static int set_linearisation(coupled *c, const proto_message *cmd, int project, 
                                           c->psd.nodes, c->psd.K, C ? c->psd.C : NULL, err);
 }
 
+/* A dynamic step of dt. Solved again with the same dt (the next interface iteration), Newton
+ * starts from the previous solution: the interface force changed by the iteration's
+ * correction only, which late in the iteration is small, so it needs one or two Newton
+ * iterations instead of the four to six it needs from the start-of-step displacement. If that
+ * start fails, the step is solved from the start-of-step displacement. */
+static int step_from_guess(coupled *c, double dt, nc_error *err)
+{
+    fem_analysis *s = &c->s;
+    if (c->guess_dt_s == dt) {
+        if (fem_analysis_step_from(s, dt, c->guess_u, err) == 0) return 0;
+        if (err->code != FEM_ERR_NEWTON) return -1;
+    }
+    return fem_analysis_step(s, dt, err);
+}
+
 /* Solves the step with the interface force of `cmd`; fills the reply arrays. */
 static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
@@ -159,6 +179,8 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         for (int d = 0; d < 3; d++) s->f_coupling[3 * m->iface_nodes[i] + d] = force[3 * i + d];
     if (set_linearisation(c, cmd, 0, err)) return -1;
     double dt = cmd->dt_s;
+    const long floor_before = s->stats.roundoff_converged;
+    const int retries_before = c->sum->semidefinite_retries;
     if (m->settings.type == FEM_STATIC) {
         /* quasi-static coupling: equilibrium under the loads, velocity from the increment */
         double t0 = s->cur.time_s;
@@ -168,7 +190,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         memcpy(s->cur.fc, s->f_coupling, (size_t)s->ndof * sizeof(double));   /* for the energy */
         s->cur.time_s = t0 + dt;
         s->cur.step = step0 + 1;
-    } else if (fem_analysis_step(s, dt, err)) {
+    } else if (step_from_guess(c, dt, err)) {
         /* Newton failed with the symmetric part of the linearisation: a negative part of it
          * can make the step's problem indefinite; retry once with its semi-definite part */
         if (err->code != FEM_ERR_NEWTON || !s->lin.active) return -1;
@@ -183,6 +205,15 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         if (fem_analysis_step(s, dt, err))
             return nc_error_prefix(err, "%s; retried with the semi-definite part of the "
                                         "interface linearisation", first);
+    }
+    /* the next solve of this step starts from this solution, unless it ended at the rounding
+     * floor or with the semi-definite retry: the same input again might then take another
+     * Newton path, and the same input twice must give the same answer bit for bit */
+    c->guess_dt_s = 0;
+    if (m->settings.type != FEM_STATIC && s->stats.roundoff_converged == floor_before &&
+        c->sum->semidefinite_retries == retries_before) {
+        memcpy(c->guess_u, s->cur.u, (size_t)s->ndof * sizeof(double));
+        c->guess_dt_s = dt;
     }
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
@@ -275,6 +306,7 @@ static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, 
 {
     (void)reply;
     coupled *c = ctx;
+    c->guess_dt_s = 0;
     if (fem_checkpoint_load(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
                             &c->run_entries, err) ||
         fem_output_reopen(&c->out, c->m, c->dir, err)) {
@@ -323,7 +355,9 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->iface_v = calloc(3 * (n + 1), sizeof(double));
     c->lin_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
     c->lin_v = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
-    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->lin_u || !c->lin_v) {
+    c->guess_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
+    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->lin_u || !c->lin_v ||
+        !c->guess_u) {
         nc_error_set(err, 1, "out of memory");
         goto done;
     }
@@ -377,7 +411,7 @@ done:
     fem_analysis_free(&c->s);
     nc_ckpt_table_free(&c->run_entries);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
-    free(c->lin_u); free(c->lin_v); free(c->lin_nodes);
+    free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->guess_u);
     fem_psd_free(&c->psd);
     free(c);
     sum.wall_s = nc_clock_now_s() - t0;

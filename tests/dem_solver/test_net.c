@@ -1,7 +1,9 @@
 /* test_net — the coupled net wall (eqs. (13)–(15), consistent nodal loads): a sphere resting on
  * an edge loads both nodes with the lever rule and in total its weight; a shared vertex is one
  * contact; the rebound on an edge returns the requested restitution; a small sphere passes
- * between two edges and a large one does not; nodal forces are impulse-consistent. */
+ * between two edges and a large one does not; nodal forces are impulse-consistent; an edge that
+ * sweeps from far away into a sphere within one coupling step is found in the sub-step it
+ * reaches it. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -305,6 +307,43 @@ static void test_net_does_not_pass_through_resting_sphere(void **state)
     dem_sim_free(&s);
 }
 
+/* The contact search of a coupling step uses one grid of the edges' boxes over the whole step
+ * (dem_coupling.c): an edge that starts 1.95 m below a sphere, far beyond any search distance,
+ * and ends 5 cm into it must still be found in the last sub-steps. The same motion as 100
+ * coupling steps of one sub-step each is the reference: same sub-step positions, total
+ * impulse equal within 1e-9 relative. */
+static void test_edge_sweeping_into_sphere(void **state)
+{
+    (void)state;
+    dem_sim big, small;
+    build_one(&big, 0.5, 0.0, 2.0, 0.1, 0.0, 0.3, "hertz_mindlin", 0.0, 1e-5);
+    build_one(&small, 0.5, 0.0, 2.0, 0.1, 0.0, 0.3, "hertz_mindlin", 0.0, 1e-5);
+    set_one_edge(&big);
+    set_one_edge(&small);
+    nc_error err;
+    double f[6], disp[6] = {0}, vel[6] = {0}, impulse_small = 0.0;
+    dem_coupled_info info;
+    const double rise_m = 1.95, dt = 1e-3;
+    const int n = 100;
+    vel[2] = vel[5] = rise_m / dt;
+    for (int k = 1; k <= n; k++) {
+        disp[2] = disp[5] = rise_m * k / n;
+        assert_int_equal(dem_sim_begin_step(&small, &err), 0);
+        assert_int_equal(dem_sim_solve_coupled(&small, dt / n, disp, vel, f, &info, &err), 0);
+        impulse_small += (f[2] + f[5]) * dt / n;
+    }
+    assert_int_equal(dem_sim_begin_step(&big, &err), 0);
+    assert_int_equal(dem_sim_solve_coupled(&big, dt, disp, vel, f, &info, &err), 0);
+    double impulse_big = (f[2] + f[5]) * dt;
+    print_message("impulse on the edge: one step %.9e N s, 100 steps %.9e N s; sphere vz %.4f m/s\n",
+                  impulse_big, impulse_small, big.model.bod.vel[2]);
+    assert_true(impulse_big < 0.0);              /* the sphere pushes the edge back down */
+    assert_true(big.model.bod.vel[2] > 0.0);     /* and is pushed up */
+    assert_near_rel(impulse_big, impulse_small, 1e-9);
+    dem_sim_free(&big);
+    dem_sim_free(&small);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -316,6 +355,7 @@ int main(void)
         cmocka_unit_test(test_free_flight_far_from_net),
         cmocka_unit_test(test_interface_errors),
         cmocka_unit_test(test_net_does_not_pass_through_resting_sphere),
+        cmocka_unit_test(test_edge_sweeping_into_sphere),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
