@@ -133,7 +133,8 @@ typedef struct dem_net {
     int wall_at_middle;    /* 1: in each sub-step the wall is where it is at the middle of the
                               sub-step; 0: at its end */
     double *box_lo, *box_hi; /* 3 per edge: scratch for the grid */
-    struct dem_item_grid *grid;
+    struct dem_item_grid *grid; /* the edges' boxes at their current position, or over the
+                                   whole coupling step during its sub-steps (dem_coupling.c) */
 } dem_net;
 
 /* Mass properties given for a cluster (dem.json `mass_kg`, `center_of_mass`, `inertia_kg_m2`)

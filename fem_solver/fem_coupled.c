@@ -160,6 +160,8 @@ static int step_from_guess(coupled *c, double dt, nc_error *err)
     if (c->guess_dt_s == dt) {
         if (fem_analysis_step_from(s, dt, c->guess_u, err) == 0) return 0;
         if (err->code != FEM_ERR_NEWTON) return -1;
+        c->sum->warm_start_fallbacks++;
+        c->sum->newton_iterations += s->stats.iterations;   /* work done, if in vain */
     }
     return fem_analysis_step(s, dt, err);
 }
@@ -297,6 +299,7 @@ static int fresh_state(coupled *c, nc_error *err)
     c->sum->steps = c->sum->newton_iterations = 0;
     c->sum->failed_solves = 0;
     c->sum->semidefinite_retries = 0;
+    c->sum->warm_start_fallbacks = 0;
     if (fem_analysis_init(&c->s, c->m, err)) return -1;
     if (c->m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) return -1;
     return 0;
@@ -344,6 +347,8 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     nc_ckpt_add(&c->run_entries, NULL, "run/failed_solves", NC_CKPT_INT, &sum.failed_solves, 1);
     nc_ckpt_add(&c->run_entries, NULL, "run/semidefinite_retries", NC_CKPT_INT,
                 &sum.semidefinite_retries, 1);
+    nc_ckpt_add(&c->run_entries, NULL, "run/warm_start_fallbacks", NC_CKPT_INT,
+                &sum.warm_start_fallbacks, 1);
     proto_participant *p = NULL;
     proto_serve_summary served;
     memset(&served, 0, sizeof served);

@@ -32,6 +32,9 @@ typedef struct fem_run_summary {
     int failed_solves;          /* coupled: SOLVE commands answered with an error */
     int semidefinite_retries;   /* coupled: steps solved again with the semi-definite part of
                                    the interface linearisation after a Newton failure */
+    int warm_start_fallbacks;   /* coupled: repeated solves whose Newton start from the
+                                   previous solution failed, solved again from the start of
+                                   the step (their failed iterations are in newton_iterations) */
     fem_stats stats;
 } fem_run_summary;
 

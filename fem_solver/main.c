@@ -155,14 +155,15 @@ int main(int argc, char **argv)
             "%ld factorisations %.3f s%s, %ld LU fallbacks, %ld solves ended at the rounding floor, "
             "%ld Newton steps through GMRES with an unsymmetric interface linearisation "
             "(%ld GMRES iterations, %ld short of its tolerance), "
-            "%d steps retried with the semi-definite interface linearisation)\n",
+            "%d steps retried with the semi-definite interface linearisation, "
+            "%d repeated solves restarted from the start of the step)\n",
             input, model.n_nodes, model.n_elements, sum.steps, sum.newton_iterations,
             sum.output_steps, sum.final_time_s, sum.max_displacement_m, where,
             sum.max_displacement_node < 0 ? " (at the end)" : "", sum.wall_s,
             sum.stats.assembly_s, sum.stats.factorizations, sum.stats.factor_s, ldlt,
             sum.stats.lu_factorizations,
             sum.stats.roundoff_converged, sum.stats.gmres_solves, sum.stats.gmres_iterations,
-            sum.stats.gmres_failures, sum.semidefinite_retries);
+            sum.stats.gmres_failures, sum.semidefinite_retries, sum.warm_start_fallbacks);
     /* each set with a breaking load: its largest force against it, a warning when exceeded */
     for (int k = 0; sum.overload && k < model.n_sets; k++)
         if (sum.overload[k].breaking_load_n > 0.0 && sum.overload[k].peak_element >= 0) {
