@@ -153,7 +153,7 @@ static int set_linearisation(coupled *c, const proto_message *cmd, int project, 
  * starts from the previous solution: the interface force changed by the iteration's
  * correction only, which late in the iteration is small, so it needs one or two Newton
  * iterations instead of the four to six it needs from the start-of-step displacement. If that
- * start fails, the step is solved from the start-of-step displacement. */
+ * start fails, the step is solved from the start-of-step state as a first solve would be. */
 static int step_from_guess(coupled *c, double dt, nc_error *err)
 {
     fem_analysis *s = &c->s;
@@ -162,6 +162,9 @@ static int step_from_guess(coupled *c, double dt, nc_error *err)
         if (err->code != FEM_ERR_NEWTON) return -1;
         c->sum->warm_start_fallbacks++;
         c->sum->newton_iterations += s->stats.iterations;   /* work done, if in vain */
+        /* the failed Newton left its factorisation: start again from the saved one, so that
+         * the fallback is the cold solve bit for bit */
+        if (fem_analysis_restore(s, err)) return -1;
     }
     return fem_analysis_step(s, dt, err);
 }

@@ -1,7 +1,8 @@
 /* test_dynamic — implicit dynamics against analytic references: the taut string's first
  * natural frequency, discrete energy conservation of Newmark (1/4, 1/2), Rayleigh decay
  * rate, numerical damping of generalized-alpha/Bossak, bit-identical repetition of a
- * step after restoring the start-of-step state, and the momentum a coupling force transfers
+ * step after restoring the start-of-step state, Newton started from a given guess (the
+ * warm start of a repeated coupled solve), and the momentum a coupling force transfers
  * per step (analysis.coupling_load). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -250,6 +251,73 @@ static void test_restore_bitwise(void **state)
     fem_model_free(&m);
 }
 
+/* fem_analysis_step_from (the warm start of a repeated coupled solve, fem_coupled.c): from
+ * the solution of a force 2 % off (an interface iteration's correction late in a step) it
+ * reaches the cold start's solution within Newton's displacement tolerance in fewer
+ * iterations; from its own solution in 0 iterations, bit for
+ * bit; from a guess Newton cannot recover from it fails with FEM_ERR_NEWTON and leaves the
+ * displacement at the start of the step, and after a restore (which also puts back the
+ * factorisation the failed Newton replaced) the cold start that follows (the fallback)
+ * gives the cold answer bit for bit. */
+static void test_warm_start(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    fem_element_set set = {"net", 1e8, 1e-5, 7850, 1e5, FEM_CABLE, 0.0};
+    if (!fem_test_net(&m, 9, &set, &err)) fail_msg("%s", err.message);
+    m.self_weight = 1;
+    m.tau_per_s = 3.0;
+    m.settings.max_iterations = 8;
+    assert_int_equal(fem_model_finalize(&m, &err), 0);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    const double dt = 1e-3;
+    const int centre = 40;
+    size_t bytes = (size_t)s.ndof * sizeof(double);
+    double *u_cold = malloc(bytes), *v_cold = malloc(bytes), *u_other = malloc(bytes),
+           *guess = malloc(bytes);
+    assert_int_equal(fem_analysis_save(&s, &err), 0);
+    s.f_coupling[3 * centre + 2] = -51.0;
+    assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
+    memcpy(u_other, s.cur.u, bytes);
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    s.f_coupling[3 * centre + 2] = -50.0;
+    assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
+    long cold_iterations = s.stats.iterations;
+    memcpy(u_cold, s.cur.u, bytes);
+    memcpy(v_cold, s.cur.v, bytes);
+    /* from the other force's solution */
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    assert_int_equal(fem_analysis_step_from(&s, dt, u_other, &err), 0);
+    print_message("Newton iterations: cold %ld, from another force's solution %ld\n",
+                  cold_iterations, (long)s.stats.iterations);
+    assert_true(s.stats.iterations < cold_iterations);
+    for (int i = 0; i < s.ndof; i++) assert_near(s.cur.u[i], u_cold[i], 1e-9);
+    /* from its own solution */
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    assert_int_equal(fem_analysis_step_from(&s, dt, u_cold, &err), 0);
+    assert_int_equal(s.stats.iterations, 0);
+    assert_memory_equal(u_cold, s.cur.u, bytes);
+    assert_memory_equal(v_cold, s.cur.v, bytes);
+    /* from 10 m away in every direction: fails, the start of the step untouched */
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    for (int i = 0; i < s.ndof; i++) guess[i] = u_cold[i] + 10.0;
+    double *u_start = malloc(bytes);
+    memcpy(u_start, s.cur.u, bytes);
+    assert_int_equal(fem_analysis_step_from(&s, dt, guess, &err), -1);
+    assert_int_equal(err.code, FEM_ERR_NEWTON);
+    assert_memory_equal(u_start, s.cur.u, bytes);
+    assert_int_equal(fem_analysis_restore(&s, &err), 0);
+    assert_int_equal(fem_analysis_step(&s, dt, &err), 0);
+    assert_memory_equal(u_cold, s.cur.u, bytes);
+    assert_memory_equal(v_cold, s.cur.v, bytes);
+    free(u_cold); free(v_cold); free(u_other); free(guess); free(u_start);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
 /* Momentum balance of a coupling force that changes every step, on a free (unsupported)
  * 4-element truss line, no damping: internal forces cancel, so the total momentum
  * sum_e rho A L0 / 2 (v_k + v_l) must equal the impulse the forces delivered. With
@@ -317,6 +385,7 @@ int main(void)
         cmocka_unit_test(test_rayleigh_decay),
         cmocka_unit_test(test_numerical_damping),
         cmocka_unit_test(test_restore_bitwise),
+        cmocka_unit_test(test_warm_start),
         cmocka_unit_test(test_coupling_load_momentum),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
