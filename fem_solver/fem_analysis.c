@@ -3,14 +3,19 @@
  *
  * One residual/tangent form serves every analysis. With the generalized-alpha weights
  * (alpha_m, alpha_f; Newmark: 0, 0; Bossak: alpha_f = 0) the step equation is
- *   r = F_ext - M (a_am + tau v_af) - (1 - alpha_f) [F_int(u) + kappa K_T(u) v] - alpha_f fd_n
+ *   r = F_ext - M (a_am + tau v_af) - (1 - alpha_f) [F_int(u) + C_K v] - alpha_f fd_n
  * with a_am = (1-alpha_m) a_{n+1} + alpha_m a_n, v_af likewise, and the Newmark relations
- * for a_{n+1}, v_{n+1} as functions of u_{n+1}. Its tangent is c_m M + c_k K_T with
+ * for a_{n+1}, v_{n+1} as functions of u_{n+1}. Its tangent is c_m M + c_k K_T + c_c C_K with
  *   c_m = (1-alpha_m)/(beta dt^2) + tau (1-alpha_f) gamma/(beta dt),
- *   c_k = (1-alpha_f) (1 + kappa gamma/(beta dt)).
- * The statics is the same with no inertia (c_m = 0, c_k = 1). The kappa term uses the
- * current tangent K_T(u) (eq. (12)) and its derivative with respect to u is left out of the
- * Newton matrix (exact for a linear system; kappa = 0 in all paper cases). F_ext is taken
+ *   c_k = 1 - alpha_f,   c_c = (1-alpha_f) gamma/(beta dt).
+ * The statics is the same with no inertia (c_m = 0, c_k = 1, c_c = 0). The stiffness-
+ * proportional damping C_K = kappa K_T(u_n) takes the tangent (eq. (12)) at the start of
+ * the step and keeps it over the step (freeze_damping): K_T(u) changes with every slack or
+ * taut element, and a C_K(u) would need its derivative in the Newton matrix, without which
+ * Newton stalls on a net's slack ropes. With C_K fixed the tangent is exact. The damping stays
+ * implicit: a_n keeps the previous step's damping force (shifting a_n to the new C_K, as a
+ * step-constant coupling load is, makes the change of C_K explicit, which is unstable for
+ * kappa K / M dt >~ 1 on light nodes). F_ext is taken
  * at the end of the step for every method (model loads at the ramp value of t_{n+1};
  * coupling forces are constant over the step anyway). An interface linearisation adds
  * dF = -K (u - u^k) - C (v - v^k) to the coupling force at the same end-of-step point with
@@ -89,6 +94,53 @@ static void member_ctx(const fem_model *m, int b, const double *u, const double 
 static int chain_node(const fem_model *m, int first, int count, int j)
 {
     return j < count ? m->conn[2 * (first + j)] : m->conn[2 * (first + count - 1) + 1];
+}
+
+/* The frozen damping matrix C_K: per member kappa K_T, 3x3 for a pair element (the block of
+ * its second node's force over the relative velocity), 3n x 3n for a chain of n nodes. */
+static int damping_alloc(fem_analysis *s)
+{
+    const fem_model *m = s->m;
+    s->damping_at = malloc(((size_t)m->n_members + 1) * sizeof *s->damping_at);
+    if (!s->damping_at) return -1;
+    size_t at = 0;
+    for (int b = 0; b < m->n_members; b++) {
+        const int first = m->member_first[b];
+        const size_t dim = 3 * (size_t)(m->member_first[b + 1] - first + 1);
+        s->damping_at[b] = at;
+        at += element_ops(m, first)->chain ? dim * dim : 9;
+    }
+    s->damping_at[m->n_members] = at;
+    s->damping_K = calloc(at, sizeof(double));
+    s->damping_start = calloc(3 * (size_t)m->n_nodes, sizeof(double));
+    s->damping_end = calloc(3 * (size_t)m->n_nodes, sizeof(double));
+    return s->damping_K && s->damping_start && s->damping_end ? 0 : -1;
+}
+
+/* Member b's damping force C_K v: a pair element's force on its second node (the first takes
+ * minus it) in out[0..2], a chain member's on each of its n nodes in out[0..3n-1]. */
+static void member_damping_force(const fem_analysis *s, int b, const double *v, double *out)
+{
+    const fem_model *m = s->m;
+    const int first = m->member_first[b], count = m->member_first[b + 1] - first;
+    const double *C = s->damping_K + s->damping_at[b];
+    if (!element_ops(m, first)->chain) {
+        const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
+        for (int i = 0; i < 3; i++) {
+            out[i] = 0.0;
+            for (int j = 0; j < 3; j++) out[i] += C[3 * i + j] * (v[l + j] - v[k + j]);
+        }
+        return;
+    }
+    const int dim = 3 * (count + 1);
+    for (int a = 0; a < dim; a++) {
+        double cv = 0.0;
+        for (int q = 0; q <= count; q++) {
+            const int node = 3 * chain_node(m, first, count, q);
+            for (int d = 0; d < 3; d++) cv += C[a * dim + 3 * q + d] * v[node + d];
+        }
+        out[a] = cv;
+    }
 }
 
 /* Pseudo-elements of the pattern for the node pairs of a chain member that are not
@@ -223,6 +275,10 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
     s->mass_x = calloc(nd, sizeof(double));
     s->mass_y = calloc(nd, sizeof(double));
     s->a_unshifted = calloc(nd, sizeof(double));
+    if (m->kappa_s != 0.0 && damping_alloc(s)) {
+        free(elem_eq);
+        return nc_error_set(err, 1, "%s: out of memory for the damping matrix", m->source);
+    }
     s->factor_mode = m->settings.factorization;
     s->stats.ldlt_switch_step = -1;
     s->n_chain_pairs = chain_pair_count(m);
@@ -290,6 +346,7 @@ void fem_analysis_free(fem_analysis *s)
     free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
     free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
     free(s->chain_f); free(s->chain_v); free(s->chain_K);
+    free(s->damping_K); free(s->damping_at); free(s->damping_start); free(s->damping_end);
     memset(s, 0, sizeof *s);
 }
 
@@ -300,12 +357,6 @@ double fem_analysis_load_factor(const fem_analysis *s, double time_s)
     return time_s >= ramp ? 1.0 : (time_s <= 0 ? 0.0 : time_s / ramp);
 }
 
-/* Residual r (all dofs; meaningful on free ones) and, with matrix != 0, the tangent
- * c_m M + c_k K_T (+ l_k K + l_c C of a linearisation) into the fixed pattern. w is the
- * mass-term vector, v the velocity used by the kappa term and the linearisation's C term
- * (NULL: none), wf = 1 - alpha_f, fd_n the alpha_f part. Also fills cur.fd and axial, and
- * lin.df when a linearisation is set. Returns the force scale used by the relative
- * tolerance. */
 /* Adds scale * B (3x3, row-major) to the block of pseudo-element slots sl at node sides
  * (ra, cb) (0: its first node, 1: its second). */
 static void scatter_block(double *x, const int *sl, int ra, int cb, const double *B, double scale)
@@ -343,24 +394,17 @@ static const int *chain_block_slots(const fem_analysis *s, int first, int count,
 
 /* A chain member's share of the assembly (see assemble): returns 1 when slack. */
 static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_element_ops *ops,
-                          int q0, double c_m, double c_k, const double *w, const double *v,
-                          int matrix, double *fd, double *scale2)
+                          int q0, double c_m, double c_k, double c_c, const double *w,
+                          const double *v, int matrix, double *fd, double *scale2)
 {
     const fem_model *m = s->m;
     const int n = c->count + 1, dim = 3 * n;
-    const double kappa = m->kappa_s;
     double *f = s->chain_f, *K = s->chain_K;
-    int slack = ops->chain_response(c, f, (matrix || (kappa != 0.0 && v)) ? K : NULL,
-                                    s->axial + c->first);
-    if (kappa != 0.0 && v) {
-        /* stiffness-proportional damping force kappa K_T v */
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < 3; i++) s->chain_v[3 * j + i] = v[3 * chain_node(m, c->first, c->count, j) + i];
-        for (int a = 0; a < dim; a++) {
-            double kv = 0;
-            for (int b = 0; b < dim; b++) kv += K[a * dim + b] * s->chain_v[b];
-            f[a] += kappa * kv;
-        }
+    const double *C = s->damping_K ? s->damping_K + s->damping_at[c->member] : NULL;
+    int slack = ops->chain_response(c, f, matrix ? K : NULL, s->axial + c->first);
+    if (C && v) {
+        member_damping_force(s, c->member, v, s->chain_v);
+        for (int a = 0; a < dim; a++) f[a] += s->chain_v[a];
     }
     for (int j = 0; j < n; j++) {
         const int node = 3 * chain_node(m, c->first, c->count, j);
@@ -399,20 +443,36 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
                 int ra, cb;
                 const int *sl = chain_block_slots(s, c->first, c->count, q0, i, j, &ra, &cb);
                 scatter_block(s->K.x, sl, ra, cb, B, c_k);
+                if (C && c_c != 0.0) {
+                    for (int a = 0; a < 3; a++)
+                        for (int b = 0; b < 3; b++) B[3 * a + b] = C[(3 * i + a) * dim + 3 * j + b];
+                    scatter_block(s->K.x, sl, ra, cb, B, c_c);
+                }
             }
     return slack;
 }
 
-static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, double l_k,
-                       double l_c, const double *w, const double *v, double wf,
-                       const double *fd_n, int matrix, const double *hist)
+/* The weights of the step equation's tangent c_m M + c_k K_T + c_c C_K (+ l_k K + l_c C of
+ * an interface linearisation) and of its internal force, wf = 1 - alpha_f (see the top of
+ * this file). */
+typedef struct step_weights {
+    double c_m, c_k, c_c, l_k, l_c, wf;
+} step_weights;
+
+/* Residual r (all dofs; meaningful on free ones) and, with matrix != 0, the tangent with the
+ * weights sw into the fixed pattern. w is the mass-term vector, v the velocity used by the
+ * damping C_K and the linearisation's C term (NULL: none), fd_n the alpha_f part. Also fills
+ * cur.fd and axial, and lin.df when a linearisation is set. Returns the force scale used by
+ * the relative tolerance. */
+static double assemble(fem_analysis *s, double lambda, const step_weights *sw, const double *w,
+                       const double *v, const double *fd_n, int matrix, const double *hist)
 {
     const fem_model *m = s->m;
+    const double c_m = sw->c_m, c_k = sw->c_k, c_c = sw->c_c, wf = sw->wf;
     double t0 = nc_clock_now_s();
     const double *u = s->cur.u;
     double *fd = s->cur.fd;
     double *x = s->K.x;
-    const double kappa = m->kappa_s;
     if (matrix) memset(x, 0, (size_t)s->K.nnz * sizeof *x);
     memset(fd, 0, (size_t)s->ndof * sizeof *fd);
     double scale2 = 0, fext2 = 0;
@@ -424,7 +484,7 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
             s->r[i] = lambda * s->f_model[i] + s->f_coupling[i] + df[i];
             fext2 += s->r[i] * s->r[i];
         }
-        if (matrix && (l_k != 0.0 || l_c != 0.0)) fem_ijac_scatter(&s->lin, l_k, l_c, x);
+        if (matrix && (sw->l_k != 0.0 || sw->l_c != 0.0)) fem_ijac_scatter(&s->lin, sw->l_k, sw->l_c, x);
     } else {
         for (int i = 0; i < s->ndof; i++) {
             s->r[i] = lambda * s->f_model[i] + s->f_coupling[i];
@@ -438,7 +498,7 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
         fem_element_ctx ctx;
         member_ctx(m, mb, u, hist, &ctx);
         if (ops->chain) {
-            slack_count += assemble_chain(s, &ctx, ops, q0, c_m, c_k, w, v, matrix, fd, &scale2);
+            slack_count += assemble_chain(s, &ctx, ops, q0, c_m, c_k, c_c, w, v, matrix, fd, &scale2);
             if (ctx.count > 1) q0 += ctx.count * (ctx.count - 1) / 2;
             continue;
         }
@@ -447,13 +507,11 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
         int slack;
         s->axial[e] = ops->pair_response(&ctx, f, Kb, &slack);
         slack_count += slack;
-        if (kappa != 0.0 && v) {
-            /* stiffness-proportional damping force kappa K_T (v_l - v_k) */
-            for (int i = 0; i < 3; i++) {
-                double kv = 0;
-                for (int j = 0; j < 3; j++) kv += Kb[3 * i + j] * (v[l + j] - v[k + j]);
-                f[i] += kappa * kv;
-            }
+        const double *C = s->damping_K ? s->damping_K + s->damping_at[mb] : NULL;
+        if (C && v) {
+            double cv[3];
+            member_damping_force(s, mb, v, cv);
+            for (int i = 0; i < 3; i++) f[i] += cv[i];
         }
         for (int c = 0; c < 3; c++) {
             fd[l + c] += f[c];
@@ -481,7 +539,9 @@ static double assemble(fem_analysis *s, double lambda, double c_m, double c_k, d
                     int slot = sl[6 * a + b];
                     if (slot < 0) continue;
                     int same = (a < 3) == (b < 3);
-                    double val = c_k * Kb[3 * (a % 3) + (b % 3)] * (same ? 1.0 : -1.0);
+                    double kc = c_k * Kb[3 * (a % 3) + (b % 3)];
+                    if (C) kc += c_c * C[3 * (a % 3) + (b % 3)];
+                    double val = same ? kc : -kc;
                     if (a % 3 == b % 3) val += c_m * (same ? m11 : m12);
                     x[slot] += val;
                 }
@@ -674,8 +734,7 @@ typedef struct newton_setup {
 
 /* Kinematics, residual and tangent at the current iterate; returns the residual norm and
  * sets *tol from the force scale. */
-static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, double c_k, double l_k,
-                       double l_c, double wf, double *tol)
+static double evaluate(fem_analysis *s, const newton_setup *ns, const step_weights *sw, double *tol)
 {
     const fem_model *m = s->m;
     const double *w = NULL, *vk = NULL;
@@ -690,7 +749,7 @@ static double evaluate(fem_analysis *s, const newton_setup *ns, double c_m, doub
         vk = s->cur.v;
     }
     /* elements respond from the history committed at the start of the step */
-    double scale = assemble(s, ns->lambda, c_m, c_k, l_k, l_c, w, vk, wf,
+    double scale = assemble(s, ns->lambda, sw, w, vk,
                             ns->dynamic && ns->alpha_f != 0.0 ? s->start.fd : NULL, 1,
                             s->start.element_history);
     *tol = fmax(m->settings.residual_tol_n, m->settings.relative_tol * scale);
@@ -703,17 +762,18 @@ static void set_free_u(fem_analysis *s, double alpha)
 }
 
 /* Tangent weights of the step equation (see the top of this file). */
-static void newton_weights(const fem_model *m, const newton_setup *ns, double *c_m, double *c_k,
-                           double *l_k, double *l_c, double *wf)
+static step_weights newton_weights(const fem_model *m, const newton_setup *ns)
 {
-    *c_m = 0; *c_k = 1; *wf = 1; *l_k = 1; *l_c = 0;
+    step_weights sw = {.c_m = 0, .c_k = 1, .c_c = 0, .l_k = 1, .l_c = 0, .wf = 1};
     if (ns->dynamic) {
         double bdt = ns->beta * ns->dt;
-        *c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
-        *c_k = (1.0 - ns->alpha_f) * (1.0 + m->kappa_s * ns->gamma / bdt);
-        *wf = 1.0 - ns->alpha_f;
-        *l_c = ns->gamma / bdt;
+        sw.c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
+        sw.c_k = 1.0 - ns->alpha_f;
+        sw.c_c = (1.0 - ns->alpha_f) * ns->gamma / bdt;
+        sw.wf = 1.0 - ns->alpha_f;
+        sw.l_c = ns->gamma / bdt;
     }
+    return sw;
 }
 
 /* Newton iterations for the current step; cur holds the predictor on entry.
@@ -727,13 +787,12 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
 {
     const fem_model *m = s->m;
     const fem_settings *set = &m->settings;
-    double c_m, c_k, l_k, l_c, wf;
-    newton_weights(m, ns, &c_m, &c_k, &l_k, &l_c, &wf);
+    const step_weights sw = newton_weights(m, ns);
     double tol, dunorm = 0;
-    double rnorm = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &tol);
+    double rnorm = evaluate(s, ns, &sw, &tol);
     /* a factorisation of the same matrix form kept from an earlier step (modified Newton) */
-    int factorized = set->modified_newton && s->K.have_factor && s->factor_cm == c_m &&
-                     s->factor_ck == c_k;
+    int factorized = set->modified_newton && s->K.have_factor && s->factor_cm == sw.c_m &&
+                     s->factor_ck == sw.c_k;
     int it, refresh = !factorized;
     double dfull = INFINITY;   /* max-norm of the last full Newton increment */
     double coord_max_m = 0.0;  /* largest nodal coordinate: the scale of its rounding */
@@ -778,8 +837,8 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
         if (s->lin.active && s->lin.has_skew) {
             /* an unsymmetric tangent: GMRES around the symmetric factorisation, an inexact
              * step with a kept factor as CG would make, else to FEM_GMRES_TOL */
-            s->skew_lk = l_k;
-            s->skew_lc = l_c;
+            s->skew_lk = sw.l_k;
+            s->skew_lc = sw.l_c;
             if (mode == 2) {
                 long before = s->stats.gmres_iterations;
                 int rc = skew_solve(s, 0, FEM_PCG_TOL, FEM_GMRES_KEPT_MAX_IT, err);
@@ -802,8 +861,8 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
             if (mode != 2 && linear_solve(s, mode == 1, err)) return -1;
         }
         if (mode == 0) {
-            s->factor_cm = c_m;
-            s->factor_ck = c_k;
+            s->factor_cm = sw.c_m;
+            s->factor_ck = sw.c_k;
             s->factor_lin = s->lin_serial;
         }
         factorized = 1;
@@ -818,14 +877,14 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
         double alpha = 1.0, best_alpha = 1.0, best = INFINITY, trial_tol = tol;
         for (int ls = 0; ls <= 4; ls++) {
             set_free_u(s, alpha);
-            double r = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &trial_tol);
+            double r = evaluate(s, ns, &sw, &trial_tol);
             if (r < best) { best = r; best_alpha = alpha; }
             if (r < rnorm || r <= trial_tol) break;
             alpha *= 0.5;
         }
         if (best_alpha != alpha) {   /* the last trial was not the best one: go back to it */
             set_free_u(s, best_alpha);
-            best = evaluate(s, ns, c_m, c_k, l_k, l_c, wf, &trial_tol);
+            best = evaluate(s, ns, &sw, &trial_tol);
         }
         s->stats.line_search_cuts += best_alpha < 1.0;
         /* refresh when the kept factorisation stops contracting fast, after a line-search cut,
@@ -838,8 +897,19 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     }
     s->stats.iterations = it - 1;
     s->stats.residual_norm = rnorm;
-    return nc_error_set(err, FEM_ERR_NEWTON, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m)",
-                        set->max_iterations, rnorm, tol, dunorm);
+    /* where it failed: the free dof with the largest residual at the last iterate */
+    int worst = -1;
+    double worst_n = 0.0;
+    for (int q = 0; q < s->neq; q++) {
+        const int d = s->dof_of_eq[q];
+        if (fabs(s->r[d]) > worst_n) { worst_n = fabs(s->r[d]); worst = d; }
+    }
+    char where[96] = "";
+    if (worst >= 0)
+        snprintf(where, sizeof where, "; largest residual %.3g N at node %d (dof %s)", worst_n, worst / 3,
+                 dof_name(worst % 3));
+    return nc_error_set(err, FEM_ERR_NEWTON, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m%s)",
+                        set->max_iterations, rnorm, tol, dunorm, where);
 }
 
 /* The step converged: every element with history writes it at the solution, from the
@@ -908,6 +978,41 @@ static void method_weights(const fem_settings *set, double *beta, double *gamma,
     }
 }
 
+/* C_K = kappa K_T at the state (u, hist) into damping_K, and F_int(u) into fd [ndof]. */
+static void freeze_damping(fem_analysis *s, const double *u, const double *hist, double *fd)
+{
+    const fem_model *m = s->m;
+    const double kappa = m->kappa_s;
+    memset(fd, 0, (size_t)s->ndof * sizeof *fd);
+    for (int b = 0; b < m->n_members; b++) {
+        const int first = m->member_first[b];
+        const fem_element_ops *ops = element_ops(m, first);
+        double *C = s->damping_K + s->damping_at[b];
+        const size_t n_c = s->damping_at[b + 1] - s->damping_at[b];
+        fem_element_ctx ctx;
+        member_ctx(m, b, u, hist, &ctx);
+        if (ops->chain) {
+            double *f = s->chain_f;
+            ops->chain_response(&ctx, f, C, s->chain_v);   /* chain_v: the axial forces, unused */
+            for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
+            for (int j = 0; j <= ctx.count; j++) {
+                const int node = 3 * chain_node(m, first, ctx.count, j);
+                for (int i = 0; i < 3; i++) fd[node + i] += f[3 * j + i];
+            }
+        } else {
+            const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
+            double f[3];
+            int slack;
+            ops->pair_response(&ctx, f, C, &slack);
+            for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
+            for (int i = 0; i < 3; i++) {
+                fd[l + i] += f[i];
+                fd[k + i] -= f[i];
+            }
+        }
+    }
+}
+
 /* cur.fc = the coupling force of the last evaluation (at the solution) */
 static void store_coupling_force(fem_analysis *s)
 {
@@ -928,7 +1033,9 @@ int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
     s->factor_lin = s->lin_serial;
     double tau = m->tau_per_s;
     for (int i = 0; i < s->ndof; i++) s->w[i] = tau * s->cur.v[i];
-    assemble(s, lambda, 1.0, 0.0, 0.0, 0.0, s->w, s->cur.v, 1.0, NULL, 1, s->cur.element_history);
+    if (s->damping_K) freeze_damping(s, s->cur.u, s->cur.element_history, s->damping_start);
+    const step_weights mass_only = {.c_m = 1, .c_k = 0, .c_c = 0, .l_k = 0, .l_c = 0, .wf = 1};
+    assemble(s, lambda, &mass_only, s->w, s->cur.v, NULL, 1, s->cur.element_history);
     if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
     for (int q = 0; q < s->neq; q++) s->cur.a[s->dof_of_eq[q]] = s->du[q];
@@ -995,16 +1102,30 @@ static int shift_start_acceleration(fem_analysis *s, nc_error *err)
     return 0;
 }
 
-/* The start of a dynamic step: start state saved, start acceleration shifted for a
- * step-constant coupling load, integrator weights and the end-of-step load factor in ns. */
+/* Undoes begin_dynamic_step's shift of the start acceleration, before the state returns to
+ * the start of the step. */
+static void unshift_start(fem_analysis *s)
+{
+    if (s->m->settings.coupling_load_constant)
+        memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+}
+
+/* The start of a dynamic step: start state saved, the step's damping C_K frozen (and the
+ * damping force a_n stands for, start.fd - F_int(u_n), kept for the energy balance), the
+ * start acceleration shifted for a step-constant coupling load, integrator weights and the
+ * end-of-step load factor in ns. */
 static int begin_dynamic_step(fem_analysis *s, double dt_s, newton_setup *ns, nc_error *err)
 {
     const fem_settings *set = &s->m->settings;
     state_copy(&s->start, &s->cur, s->ndof);
+    if (s->damping_K) {
+        freeze_damping(s, s->start.u, s->start.element_history, s->damping_start);
+        for (int i = 0; i < s->ndof; i++) s->damping_start[i] = s->start.fd[i] - s->damping_start[i];
+    }
     if (set->coupling_load_constant) {
         memcpy(s->a_unshifted, s->start.a, (size_t)s->ndof * sizeof(double));
         if (shift_start_acceleration(s, err)) {
-            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+            unshift_start(s);
             return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
         }
     }
@@ -1021,7 +1142,6 @@ int fem_analysis_step(fem_analysis *s, double dt_s, nc_error *err)
 
 int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, nc_error *err)
 {
-    const fem_settings *set = &s->m->settings;
     newton_setup ns;
     if (begin_dynamic_step(s, dt_s, &ns, err)) return -1;
     double t1 = s->cur.time_s + dt_s;
@@ -1033,8 +1153,7 @@ int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, 
         for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_guess[s->dof_of_eq[q]];
     if (newton(s, &ns, err)) {
         /* leave the state as it was before the call */
-        if (set->coupling_load_constant)
-            memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+        unshift_start(s);
         state_copy(&s->cur, &s->start, s->ndof);
         fem_analysis_update_axial(s);
         return nc_error_prefix(err, "%s: step %ld (t = %g s -> %g s)", s->m->source,
@@ -1050,16 +1169,15 @@ int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, 
 int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end, double *r,
                                nc_error *err)
 {
-    int shifted = s->m->settings.coupling_load_constant;
     newton_setup ns;
     if (begin_dynamic_step(s, dt_s, &ns, err)) return -1;
     for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_end[s->dof_of_eq[q]];
     apply_supports(s, ns.lambda);
-    double c_m, c_k, l_k, l_c, wf, tol;
-    newton_weights(s->m, &ns, &c_m, &c_k, &l_k, &l_c, &wf);
-    evaluate(s, &ns, c_m, c_k, l_k, l_c, wf, &tol);
+    const step_weights sw = newton_weights(s->m, &ns);
+    double tol;
+    evaluate(s, &ns, &sw, &tol);
     memcpy(r, s->r, (size_t)s->ndof * sizeof(double));
-    if (shifted) memcpy(s->start.a, s->a_unshifted, (size_t)s->ndof * sizeof(double));
+    unshift_start(s);
     state_copy(&s->cur, &s->start, s->ndof);
     fem_analysis_update_axial(s);
     return 0;
@@ -1132,7 +1250,7 @@ void fem_analysis_node_balance(const fem_analysis *s, double lambda, double *f)
      * unchanged for cables */
     const fem_model *m = s->m;
     const double *u = s->cur.u, *v = s->cur.v, *a = s->cur.a;
-    const double tau = m->tau_per_s, kappa = m->kappa_s;
+    const double tau = m->tau_per_s;
     for (int i = 0; i < 3 * m->n_nodes; i++) f[i] = -lambda * s->f_model[i] - s->f_coupling[i];
     for (int b = 0; b < m->n_members; b++) {
         const int first = m->member_first[b];
@@ -1140,35 +1258,27 @@ void fem_analysis_node_balance(const fem_analysis *s, double lambda, double *f)
         fem_element_ctx ctx;
         member_ctx(m, b, u, s->cur.element_history, &ctx);
         if (ops->chain) {
-            const int n = ctx.count + 1, dim = 3 * n;
-            double *fc = s->chain_f, *K = s->chain_K, *axial = s->chain_v;
+            const int n = ctx.count + 1;
+            double *fc = s->chain_f, *cv = s->chain_v;
             /* the work arrays are scratch: nothing of the state lives there */
-            ops->chain_response(&ctx, fc, K, axial);
+            ops->chain_response(&ctx, fc, NULL, cv);
+            if (s->damping_K) member_damping_force(s, b, v, cv);
             for (int j = 0; j < n; j++) {
                 const int node = 3 * chain_node(m, first, ctx.count, j);
-                for (int c = 0; c < 3; c++) {
-                    double kv = 0.0;
-                    if (kappa != 0.0)
-                        for (int q = 0; q < n; q++)
-                            for (int d = 0; d < 3; d++)
-                                kv += K[(3 * j + c) * dim + 3 * q + d] * v[3 * chain_node(m, first, ctx.count, q) + d];
-                    f[node + c] += fc[3 * j + c] + kappa * kv;
-                }
+                for (int c = 0; c < 3; c++) f[node + c] += fc[3 * j + c] + (s->damping_K ? cv[3 * j + c] : 0.0);
             }
         }
         for (int e = first; e < m->member_first[b + 1]; e++) {
             const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-            double fl[3] = {0, 0, 0}, Kb[9] = {0};
+            double fl[3] = {0, 0, 0}, Kb[9] = {0}, cv[3] = {0, 0, 0};
             int slack;
             if (!ops->chain) ops->pair_response(&ctx, fl, Kb, &slack);
+            if (!ops->chain && s->damping_K) member_damping_force(s, b, v, cv);
             double m11, m12;
             fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
             for (int c = 0; c < 3; c++) {
-                double kv = 0.0;
-                if (kappa != 0.0)
-                    for (int j = 0; j < 3; j++) kv += Kb[3 * c + j] * (v[l + j] - v[k + j]);
-                f[l + c] += fl[c] + kappa * kv;
-                f[k + c] -= fl[c] + kappa * kv;
+                f[l + c] += fl[c] + cv[c];
+                f[k + c] -= fl[c] + cv[c];
                 double wk = a[k + c] + tau * v[k + c], wl = a[l + c] + tau * v[l + c];
                 f[k + c] += m11 * wk + m12 * wl;
                 f[l + c] += m12 * wk + m11 * wl;
@@ -1235,38 +1345,27 @@ double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strai
     return T + W;
 }
 
-/* kappa v_m^T K_T v_m of the chain members (mid-step velocity, tangent at the end) */
-static int rayleigh_chains(const fem_analysis *s, double *rayleigh)
+/* f = C_K v [ndof], the damping force of the step's C_K at the velocities v */
+static void damping_force(const fem_analysis *s, const double *v, double *f)
 {
     const fem_model *m = s->m;
-    double *K = NULL, *f = NULL, *vm = NULL, *axial = NULL;
-    int rc = 0;
-    for (int b = 0; b < m->n_members && !rc; b++) {
+    memset(f, 0, (size_t)s->ndof * sizeof *f);
+    for (int b = 0; b < m->n_members; b++) {
         const int first = m->member_first[b], count = m->member_first[b + 1] - first;
-        const fem_element_ops *ops = element_ops(m, first);
-        if (!ops->chain) continue;
-        const size_t nc = 3 * (size_t)m->max_chain_nodes;
-        if (!K) {
-            K = malloc(nc * nc * sizeof *K);
-            f = malloc(nc * sizeof *f);
-            vm = malloc(nc * sizeof *vm);
-            axial = malloc((size_t)m->max_chain_nodes * sizeof *axial);
-            if (!K || !f || !vm || !axial) { rc = -1; break; }
-        }
-        fem_element_ctx c;
-        member_ctx(m, b, s->cur.u, s->cur.element_history, &c);
-        ops->chain_response(&c, f, K, axial);
-        const int dim = 3 * (count + 1);
-        for (int j = 0; j <= count; j++)
+        if (element_ops(m, first)->chain) {
+            member_damping_force(s, b, v, s->chain_v);
+            for (int j = 0; j <= count; j++)
+                for (int i = 0; i < 3; i++) f[3 * chain_node(m, first, count, j) + i] += s->chain_v[3 * j + i];
+        } else {
+            const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
+            double cv[3];
+            member_damping_force(s, b, v, cv);
             for (int i = 0; i < 3; i++) {
-                int d = 3 * chain_node(m, first, count, j) + i;
-                vm[3 * j + i] = 0.5 * (s->start.v[d] + s->cur.v[d]);
+                f[l + i] += cv[i];
+                f[k + i] -= cv[i];
             }
-        for (int a = 0; a < dim; a++)
-            for (int q = 0; q < dim; q++) *rayleigh += m->kappa_s * vm[a] * K[a * dim + q] * vm[q];
+        }
     }
-    free(K); free(f); free(vm); free(axial);
-    return rc;
 }
 
 int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy *e)
@@ -1297,32 +1396,31 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
         v0 -= lam0 * s->f_model[i] * s->start.u[i];
         v1 -= lam1 * s->f_model[i] * s->cur.u[i];
     }
-    /* Rayleigh C = tau M + kappa K_T at the mid-step velocity, K_T at the end of the step */
+    /* Rayleigh: tau M at the mid-step velocity; C_K = kappa K_T(u_n) as the integrator applies
+     * it, like the coupling force: the damping force a_n stands for (the previous step's C_K)
+     * and the end's with the load weights */
     double rayleigh = 0;
-    if (inertia && (m->tau_per_s != 0.0 || m->kappa_s != 0.0)) {
+    if (inertia && (m->tau_per_s != 0.0 || s->damping_K)) {
         for (int e = 0; e < m->n_elements; e++) {
             const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-            double vk[3], vl[3], dv[3], f[3], Kb[9], m11, m12;
+            double vk[3], vl[3], m11, m12;
             for (int c = 0; c < 3; c++) {
                 vk[c] = 0.5 * (s->start.v[k + c] + s->cur.v[k + c]);
                 vl[c] = 0.5 * (s->start.v[l + c] + s->cur.v[l + c]);
-                dv[c] = vl[c] - vk[c];
             }
             fem_element_bar_mass(m->rhoA[e], m->L0[e], m->lumped_mass, &m11, &m12);
             for (int c = 0; c < 3; c++)
                 rayleigh += m->tau_per_s * (m11 * (vk[c] * vk[c] + vl[c] * vl[c]) + 2.0 * m12 * vk[c] * vl[c]);
-            const fem_element_ops *ops = element_ops(m, e);
-            if (m->kappa_s != 0.0 && !ops->chain) {
-                int slack;
-                fem_element_ctx ctx;
-                member_ctx(m, m->member_of[e], s->cur.u, s->cur.element_history, &ctx);
-                ops->pair_response(&ctx, f, Kb, &slack);
-                for (int i = 0; i < 3; i++)
-                    for (int j = 0; j < 3; j++) rayleigh += m->kappa_s * dv[i] * Kb[3 * i + j] * dv[j];
+        }
+        rayleigh *= dt;
+        if (s->damping_K) {
+            damping_force(s, s->cur.v, s->damping_end);
+            for (int q = 0; q < s->neq; q++) {
+                int i = s->dof_of_eq[q];
+                rayleigh += ((1.0 - gamma) * s->damping_start[i] + gamma * s->damping_end[i]) *
+                            (s->cur.u[i] - s->start.u[i]);
             }
         }
-        if (m->kappa_s != 0.0 && rayleigh_chains(s, &rayleigh)) return -1;
-        rayleigh *= dt;
     }
     e->kinetic_j = T1;
     e->strain_j = W1;

@@ -30,7 +30,7 @@ typedef struct fem_state {
     double time_s;
     long step;
     double *u, *v, *a;  /* [ndof] displacement (m), velocity (m/s), acceleration (m/s^2) */
-    double *fd;         /* [ndof] F_int(u) + kappa K_T(u) v at this state (alpha methods) */
+    double *fd;         /* [ndof] F_int(u) + C_K v at this state (alpha methods) */
     double *fc;         /* [ndof] coupling force the acceleration a was computed with (N);
                            with a linearisation, F(u, v) at this state */
     int n_history;      /* = model history_count */
@@ -79,6 +79,12 @@ typedef struct fem_analysis {
     double *a_unshifted;   /* [ndof] start-of-step acceleration before the load shift */
     int n_chain_pairs;     /* pattern pseudo-elements of chain members' non-neighbour nodes */
     double *chain_f, *chain_v, *chain_K; /* chain member work arrays (3n, 3n, 3n x 3n) */
+    /* stiffness-proportional damping C_K = kappa K_T(u_n), frozen over each step (kappa != 0
+     * only): per member from damping_K + damping_at[b] (3x3 for a pair element, 3n x 3n for a
+     * chain); damping_start [ndof] the damping force the start acceleration stands for (the
+     * previous step's C_K times v_n), damping_end [ndof] work space for C_K v_n+1 */
+    double *damping_K, *damping_start, *damping_end;
+    size_t *damping_at;    /* [n_members + 1] */
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
@@ -159,7 +165,8 @@ int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end
 /* Recomputes s->axial and stats.slack_elements at the current state. */
 void fem_analysis_update_axial(fem_analysis *s);
 /* The force balance of every dof at the current state into f [ndof] (N):
- *   f = F_int(u) + kappa K_T(u) v + M (a + tau v) - lambda f_model - f_coupling,
+ *   f = F_int(u) + C_K v + M (a + tau v) - lambda f_model - f_coupling,
+ * C_K = kappa K_T(u_n) of the last step (see fem_analysis.c),
  * which is what a support takes on a prescribed dof (0 on free dofs at equilibrium). */
 void fem_analysis_node_balance(const fem_analysis *s, double lambda, double *f);
 /* Per element (mesh segment) at the current committed history: the member's stroke (m;
@@ -175,7 +182,9 @@ double fem_analysis_energy(const fem_analysis *s, double *kinetic, double *strai
  *                   v_n+1 - v_n = dt ((1 - gamma) a_n + gamma a_n+1) gives the start and end
  *                   force (the trapezoid for Newmark); fc_n the coupling force the start-of-
  *                   step acceleration stands for (start.fc; f_coupling with "step_constant");
- *   rayleigh      = Δt v_m^T C v_m, v_m = (v_n + v_n+1) / 2, C = tau M + kappa K_T(u_n+1);
+ *   rayleigh      = Δt v_m^T tau M v_m, v_m = (v_n + v_n+1) / 2, + ((1 - gamma) fk_n + gamma
+ *                   C_K v_n+1) · Δu, C_K = kappa K_T(u_n) of the step and fk_n the damping
+ *                   force a_n stands for (the previous step's C_K v_n);
  *   element_dissipation = Δ of the energy the elements dissipate (a brake's plastic work,
  *                   fem_element.h), from the history at the start and the end;
  *   numerical     = load_work + coupling_work - Δ(kinetic + strain) - rayleigh

@@ -269,7 +269,7 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r)
 {
     /* The support takes what the net's own balance leaves on a prescribed dof:
-     * R = F_int(u) + M a + C v - lambda f_model - f_coupling, C = tau M + kappa K_T. */
+     * R = F_int(u) + M a + C v - lambda f_model - f_coupling, C = tau M + kappa K_T(u_n). */
     const fem_model *m = s->m;
     double *f = o->force;
     fem_analysis_node_balance(s, lambda, f);   /* every element type's forces */

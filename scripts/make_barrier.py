@@ -41,11 +41,21 @@ published value was available here).
 import argparse
 import json
 import math
+import os
 import sys
 
 STEEL_E = 1.0e11          # rope modulus (steel rope, project standard)
 STEEL_RHO = 7850.0
 G = 9.81
+
+
+def repo_relative(arg):
+    """A path inside the repository as seen from its root (the summary does not name the
+    machine it was written on); anything else unchanged."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    if os.path.isabs(arg) and os.path.commonpath([root, arg]) == root:
+        return os.path.relpath(arg, root)
+    return arg
 
 
 def rope_area(d, f=0.58):
@@ -109,6 +119,9 @@ def parse_args(argv):
     a.add_argument("--end-time", type=float, default=1.0, help="dynamic: end time (s)")
     a.add_argument("--alpha-b", type=float, default=-0.3, help="dynamic: Bossak alpha")
     a.add_argument("--rayleigh-tau", type=float, default=0.0, help="mass-proportional damping (1/s)")
+    a.add_argument("--rayleigh-kappa", type=float, default=0.0,
+                   help="stiffness-proportional damping of every element (s): the ropes' internal "
+                        "friction, a damping ratio kappa w / 2 at a frequency w")
     a.add_argument("--output-interval", type=int, default=10, help="full output every N steps")
     o = p.add_argument_group("output")
     o.add_argument("--output", required=True, help="fem.json to write")
@@ -340,7 +353,7 @@ def build(args):
         "self_weight": True,
         "gravity_m_s2": [0.0, 0.0, -G],
         "mass": "consistent",
-        "rayleigh": {"tau_per_s": args.rayleigh_tau, "kappa_s": 0.0},
+        "rayleigh": {"tau_per_s": args.rayleigh_tau, "kappa_s": args.rayleigh_kappa},
         "interface": {"element_sets": [net_set]},
         "monitor_nodes": ["net_centre", "post_tops"],
         "output": {"interval_steps": args.output_interval},
@@ -380,7 +393,7 @@ def summary(args, fem, info):
     sets = {st["name"]: st for st in fem["element_sets"]}
     total = sum(info["masses"].values())
     lines = ["# Barrier model (scripts/make_barrier.py)", "",
-             "Command: `scripts/make_barrier.py %s`" % " ".join(sys.argv[1:]), "",
+             "Command: `scripts/make_barrier.py %s`" % " ".join(map(repo_relative, sys.argv[1:])), "",
              "## Topology", "",
              "- %d module(s), post spacing %g m, height %g m, tilt %g deg downslope" %
              (args.modules, args.spacing, args.height, args.tilt_deg),

@@ -137,7 +137,8 @@ for k, i in enumerate(by_set["post"]):
 
 # 4. equilibrium under self-weight and prestress (one module, damped dynamics to rest)
 dpath, dfem, _ = make("barrier1", "--modules", "1", "--mesh-size", "0.5", "--dt", "0.01", "--end-time", "12",
-                      "--rayleigh-tau", "10", "--output-interval", "100")
+                      "--rayleigh-tau", "10", "--rayleigh-kappa", "2e-5", "--output-interval", "100")
+check(dfem["rayleigh"] == {"tau_per_s": 10.0, "kappa_s": 2e-5}, "Rayleigh damping as given: %s" % dfem["rayleigh"])
 dfem["analysis"]["load_ramp_s"] = 1.0
 with open(dpath, "w") as f:
     json.dump(dfem, f)

@@ -246,6 +246,9 @@ static void test_newton_failure(void **state)
             print_message("expected error reply: %s\n", err.message);
             assert_non_null(strstr(err.message, "Newton did not converge"));
             assert_non_null(strstr(err.message, "step 0"));
+            /* and where: the node and dof with the largest residual */
+            assert_non_null(strstr(err.message, "largest residual"));
+            assert_non_null(strstr(err.message, " at node "));
             /* retryable: a smaller step may converge (the coupler decides) */
             assert_int_equal(err.code, PROTO_ERR_STEP_FAILED);
         } else {
