@@ -143,6 +143,23 @@ static void member_damping_force(const fem_analysis *s, int b, const double *v, 
     }
 }
 
+/* f [ndof] += member b's nodal vector mf: a pair element's force on its second node (the
+ * first takes minus it), mf[0..2]; a chain member's on each node, mf[0..3n-1]. */
+static void add_member_force(const fem_model *m, int b, const double *mf, double *f)
+{
+    const int first = m->member_first[b], count = m->member_first[b + 1] - first;
+    if (!element_ops(m, first)->chain) {
+        const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
+        for (int i = 0; i < 3; i++) {
+            f[l + i] += mf[i];
+            f[k + i] -= mf[i];
+        }
+        return;
+    }
+    for (int j = 0; j <= count; j++)
+        for (int i = 0; i < 3; i++) f[3 * chain_node(m, first, count, j) + i] += mf[3 * j + i];
+}
+
 /* Pseudo-elements of the pattern for the node pairs of a chain member that are not
  * neighbours (its tangent is dense), in member order, rows i, columns j > i + 1. */
 static int chain_pair_count(const fem_model *m)
@@ -991,25 +1008,12 @@ static void freeze_damping(fem_analysis *s, const double *u, const double *hist,
         const size_t n_c = s->damping_at[b + 1] - s->damping_at[b];
         fem_element_ctx ctx;
         member_ctx(m, b, u, hist, &ctx);
-        if (ops->chain) {
-            double *f = s->chain_f;
-            ops->chain_response(&ctx, f, C, s->chain_v);   /* chain_v: the axial forces, unused */
-            for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
-            for (int j = 0; j <= ctx.count; j++) {
-                const int node = 3 * chain_node(m, first, ctx.count, j);
-                for (int i = 0; i < 3; i++) fd[node + i] += f[3 * j + i];
-            }
-        } else {
-            const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
-            double f[3];
-            int slack;
-            ops->pair_response(&ctx, f, C, &slack);
-            for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
-            for (int i = 0; i < 3; i++) {
-                fd[l + i] += f[i];
-                fd[k + i] -= f[i];
-            }
-        }
+        double pair_f[3], *f = ops->chain ? s->chain_f : pair_f;
+        int slack;
+        if (ops->chain) ops->chain_response(&ctx, f, C, s->chain_v);   /* chain_v: axial, unused */
+        else ops->pair_response(&ctx, f, C, &slack);
+        for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
+        add_member_force(m, b, f, fd);
     }
 }
 
@@ -1351,20 +1355,9 @@ static void damping_force(const fem_analysis *s, const double *v, double *f)
     const fem_model *m = s->m;
     memset(f, 0, (size_t)s->ndof * sizeof *f);
     for (int b = 0; b < m->n_members; b++) {
-        const int first = m->member_first[b], count = m->member_first[b + 1] - first;
-        if (element_ops(m, first)->chain) {
-            member_damping_force(s, b, v, s->chain_v);
-            for (int j = 0; j <= count; j++)
-                for (int i = 0; i < 3; i++) f[3 * chain_node(m, first, count, j) + i] += s->chain_v[3 * j + i];
-        } else {
-            const int k = 3 * m->conn[2 * first], l = 3 * m->conn[2 * first + 1];
-            double cv[3];
-            member_damping_force(s, b, v, cv);
-            for (int i = 0; i < 3; i++) {
-                f[l + i] += cv[i];
-                f[k + i] -= cv[i];
-            }
-        }
+        double pair_cv[3], *cv = element_ops(m, m->member_first[b])->chain ? s->chain_v : pair_cv;
+        member_damping_force(s, b, v, cv);
+        add_member_force(m, b, cv, f);
     }
 }
 

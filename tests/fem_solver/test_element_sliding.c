@@ -135,55 +135,68 @@ static const char *const two_shackles_json =
     " \"analysis\": {\"type\": \"static\"}}\n";
 
 /* The assembled step tangent (c_m M + c_k K_T through the pattern, the two shackles'
- * non-neighbour blocks included) against central differences of the step residual. */
+ * non-neighbour blocks included) against central differences of the step residual; again
+ * with stiffness-proportional damping (kappa 1e-3 s, c_c C_K with C_K = kappa K_T at the start
+ * of the step, the rope's dense blocks included), whose tangent must differ from the first
+ * by more than 5 % of its largest entry, so the damping's blocks are checked too. */
 static void test_two_shackles(void **state)
 {
     (void)state;
-    fem_model m;
-    nc_error err;
-    if (fem_input_load(fem_test_write("shackles.json", two_shackles_json), &m, &err))
-        fail_msg("%s", err.message);
-    m.settings.type = FEM_DYNAMIC;
-    fem_analysis s;
-    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
-    assert_int_equal(s.n_chain_pairs, 6);
-    const int nd = s.ndof, ne = s.neq;
-    assert_int_equal(ne, 6);
-    double u[15], r[15], rp[15], rm[15], x[6], y[6], kmax = 0;
-    /* a general state, the shackles pulled down 5 cm so the rope is taut */
-    for (int i = 0; i < nd; i++) u[i] = 0.003 * sin(1.3 * i);
-    u[5] -= 0.05;
-    u[11] -= 0.05;
-    double K[36];
-    for (int q = 0; q < ne; q++) {
-        assert_int_equal(fem_analysis_step_residual(&s, 1e-3, u, r, &err), 0);
-        memset(x, 0, sizeof x);
-        x[q] = 1;
-        fem_sparse_matvec(&s.K, x, y);
-        for (int p = 0; p < ne; p++) {
-            K[6 * p + q] = y[p];
-            kmax = fmax(kmax, fabs(y[p]));
+    double K_plain[36];
+    for (int pass = 0; pass < 2; pass++) {
+        fem_model m;
+        nc_error err;
+        if (fem_input_load(fem_test_write("shackles.json", two_shackles_json), &m, &err))
+            fail_msg("%s", err.message);
+        m.settings.type = FEM_DYNAMIC;
+        m.kappa_s = pass ? 1e-3 : 0.0;
+        fem_analysis s;
+        assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+        assert_int_equal(s.n_chain_pairs, 6);
+        const int nd = s.ndof, ne = s.neq;
+        assert_int_equal(ne, 6);
+        double u[15], r[15], rp[15], rm[15], x[6], y[6], kmax = 0;
+        /* a general state, the shackles pulled down 5 cm so the rope is taut */
+        for (int i = 0; i < nd; i++) u[i] = 0.003 * sin(1.3 * i);
+        u[5] -= 0.05;
+        u[11] -= 0.05;
+        double K[36];
+        for (int q = 0; q < ne; q++) {
+            assert_int_equal(fem_analysis_step_residual(&s, 1e-3, u, r, &err), 0);
+            memset(x, 0, sizeof x);
+            x[q] = 1;
+            fem_sparse_matvec(&s.K, x, y);
+            for (int p = 0; p < ne; p++) {
+                K[6 * p + q] = y[p];
+                kmax = fmax(kmax, fabs(y[p]));
+            }
         }
+        for (int q = 0; q < ne; q++) {
+            int d = s.dof_of_eq[q];
+            double h = 1e-7;
+            u[d] += h;
+            fem_analysis_step_residual(&s, 1e-3, u, rp, &err);
+            u[d] -= 2 * h;
+            fem_analysis_step_residual(&s, 1e-3, u, rm, &err);
+            u[d] += h;
+            for (int p = 0; p < ne; p++)
+                assert_near(K[6 * p + q], -(rp[s.dof_of_eq[p]] - rm[s.dof_of_eq[p]]) / (2 * h), 1e-7 * kmax);
+        }
+        /* the shackles (nodes 1 and 3) are coupled: the rope's force depends on both */
+        double coupling = 0, damping = 0;
+        for (int p = 0; p < 3; p++)
+            for (int q = 3; q < 6; q++) coupling = fmax(coupling, fabs(K[6 * p + q]));
+        if (pass)
+            for (int i = 0; i < 36; i++) damping = fmax(damping, fabs(K[i] - K_plain[i]));
+        else
+            memcpy(K_plain, K, sizeof K);
+        print_message("kappa %g s: largest shackle-shackle entry %.3e N/m of %.3e N/m, damping's "
+                      "largest entry %.3e N/m\n", m.kappa_s, coupling, kmax, damping);
+        assert_true(coupling > 1e-2 * kmax);
+        if (pass) assert_true(damping > 5e-2 * kmax);
+        fem_analysis_free(&s);
+        fem_model_free(&m);
     }
-    for (int q = 0; q < ne; q++) {
-        int d = s.dof_of_eq[q];
-        double h = 1e-7;
-        u[d] += h;
-        fem_analysis_step_residual(&s, 1e-3, u, rp, &err);
-        u[d] -= 2 * h;
-        fem_analysis_step_residual(&s, 1e-3, u, rm, &err);
-        u[d] += h;
-        for (int p = 0; p < ne; p++)
-            assert_near(K[6 * p + q], -(rp[s.dof_of_eq[p]] - rm[s.dof_of_eq[p]]) / (2 * h), 1e-7 * kmax);
-    }
-    /* the shackles (nodes 1 and 3) are coupled: the rope's force depends on both */
-    double coupling = 0;
-    for (int p = 0; p < 3; p++)
-        for (int q = 3; q < 6; q++) coupling = fmax(coupling, fabs(K[6 * p + q]));
-    print_message("largest shackle-shackle entry %.3e N/m of %.3e N/m\n", coupling, kmax);
-    assert_true(coupling > 1e-2 * kmax);
-    fem_analysis_free(&s);
-    fem_model_free(&m);
 }
 
 /* chain tangent against central differences of the chain force, every entry */

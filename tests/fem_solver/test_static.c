@@ -10,6 +10,7 @@
 #include "../nc_test_assert.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "../../fem_solver/fem_analysis.h"
@@ -196,6 +197,34 @@ static void test_flat_net_singular(void **state)
     fem_model_free(&m);
 }
 
+/* A Newton failure says where: a prestressed 2-element cable (ends fixed, so node 1 is the
+ * only free node) under a transverse load far beyond what one Newton iteration can balance
+ * fails, and the message names node 1 and dof z (the load's direction: by symmetry the two
+ * elements' x forces cancel) with the largest residual, which is the z residual itself. */
+static void test_newton_failure_names_dof(void **state)
+{
+    (void)state;
+    fem_model m;
+    fem_test_line(&m, 2, 2.0, 1e9, 1e-4, 7850, 1e6, FEM_CABLE, 1);
+    m.f_point[3 * 1 + 2] = -1e6;
+    m.settings.type = FEM_STATIC;
+    m.settings.max_iterations = 1;
+    nc_error err;
+    assert_int_equal(fem_model_finalize(&m, &err), 0);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(fem_analysis_static(&s, 1.0, &err), -1);
+    print_message("expected error: %s\n", err.message);
+    assert_int_equal(err.code, FEM_ERR_NEWTON);
+    const char *at = strstr(err.message, "largest residual ");
+    assert_non_null(at);
+    double largest = strtod(at + strlen("largest residual "), NULL);
+    assert_near_rel(largest, fabs(s.r[3 * 1 + 2]), 1e-2);
+    assert_non_null(strstr(err.message, "N at node 1 (dof z)"));
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -203,6 +232,7 @@ int main(void)
         cmocka_unit_test(test_rounding_floor),
         cmocka_unit_test(test_compressed_truss_lu),
         cmocka_unit_test(test_flat_net_singular),
+        cmocka_unit_test(test_newton_failure_names_dof),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
