@@ -50,6 +50,9 @@ typedef struct fem_element_ops {
      * keys of its own. */
     int (*parse)(const struct cJSON *o, const char *where, FILE *warnings, double *param,
                  nc_error *err);
+    /* Checks a member of the built model against the set's parameters (c->u and c->hist are
+     * NULL: the reference state); NULL: nothing to check. */
+    int (*check)(const fem_element_ctx *c, nc_error *err);
     /* Two-node types: force on node l f_l[3] (node k gets -f_l), 3x3 block Kb[9] of the
      * tangent [Kb -Kb; -Kb Kb]; returns the axial force (N); *slack = 1 when it carries
      * nothing. */

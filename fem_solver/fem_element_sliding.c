@@ -10,27 +10,77 @@
  * dg_j/dx_j = P_j-1 + P_j, dg_j/dx_j-1 = -P_j-1, dg_j/dx_j+1 = -P_j, P_i = (I - e_i e_i^T)/l_i:
  * a dense material part (the force depends on the whole length) and a tridiagonal geometric
  * part. Strain energy (N_+ = max(N, 0)): L0 (N_+(L)^2 - N_+(L0)^2) / (2 EA). The same law as
- * the sliding cable element of Kratos' CableNetApplication (one strain over the whole rope). */
+ * the sliding cable element of Kratos' CableNetApplication (one strain over the whole rope).
+ *
+ * Shackle contact (shackle_gap_m = g > 0): consecutive nodes of the chain cannot come closer
+ * than g (the shackles' size; a net node cannot slide past its neighbour or into an anchor).
+ * A segment shorter than g pushes its two nodes apart with the compression-only penalty
+ *   N_c = -k_c (g - l)  (l < g),  k_c = shackle_stiffness_n_per_m, default EA / g,
+ * a bar force along the segment: f_s+1 = N_c e_s = -f_s, tangent k_c e e^T + (N_c / l)(I - e e^T)
+ * on the segment's blocks, energy k_c (g - l)^2 / 2. It acts whether the rope is taut or slack.
+ * Without it a segment can shrink to zero length, where e_s flips and N / l grows without
+ * bound, and Newton fails (docs/notes/shackle_contact.md). */
 #include "fem_element.h"
 #include "fem_model.h"
+#include "nc_json.h"
 
 #include <math.h>
 #include <string.h>
+
+/* set->param layout: the gap g (m, 0: no contact) and the stiffness k_c (N/m, 0: EA / g) */
+enum { SLIDING_GAP, SLIDING_CONTACT_K };
+
+static double contact_stiffness(const fem_element_ctx *c)
+{
+    const double k = c->param[SLIDING_CONTACT_K];
+    return k > 0.0 ? k : c->m->EA[c->first] / c->param[SLIDING_GAP];
+}
+
+/* segment s's chord d (node s -> s+1) and length */
+static double segment(const fem_element_ctx *c, int s, double d[3])
+{
+    const fem_model *m = c->m;
+    const int e = c->first + s, k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
+    for (int i = 0; i < 3; i++) d[i] = m->X[l + i] + c->u[l + i] - m->X[k + i] - c->u[k + i];
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+/* adds the shackle contact's force and tangent (see the top of this file) */
+static void add_contact(const fem_element_ctx *c, double *f, double *K)
+{
+    const double gap = c->param[SLIDING_GAP];
+    if (!(gap > 0.0)) return;
+    const double kc = contact_stiffness(c);
+    const int dim = 3 * (c->count + 1);
+    for (int s = 0; s < c->count; s++) {
+        double d[3], len = segment(c, s, d);
+        if (len >= gap || !(len > 0.0)) continue;
+        const double Nc = -kc * (gap - len);
+        for (int i = 0; i < 3; i++) {
+            f[3 * s + i] -= Nc * d[i] / len;
+            f[3 * (s + 1) + i] += Nc * d[i] / len;
+        }
+        if (!K) continue;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double ee = d[i] * d[j] / (len * len);
+                double B = kc * ee + Nc / len * ((i == j) - ee);
+                K[(3 * s + i) * dim + 3 * s + j] += B;
+                K[(3 * (s + 1) + i) * dim + 3 * (s + 1) + j] += B;
+                K[(3 * s + i) * dim + 3 * (s + 1) + j] -= B;
+                K[(3 * (s + 1) + i) * dim + 3 * s + j] -= B;
+            }
+    }
+}
 
 /* rope length L, reference L0 and force N (not clipped) of the member */
 static double rope_force(const fem_element_ctx *c, double *L, double *L0)
 {
     const fem_model *m = c->m;
-    double len = 0.0, ref = 0.0;
+    double len = 0.0, ref = 0.0, d[3];
     for (int s = 0; s < c->count; s++) {
-        const int e = c->first + s, k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double l2 = 0.0;
-        for (int i = 0; i < 3; i++) {
-            double d = m->X[l + i] + c->u[l + i] - m->X[k + i] - c->u[k + i];
-            l2 += d * d;
-        }
-        len += sqrt(l2);
-        ref += m->L0[e];
+        len += segment(c, s, d);
+        ref += m->L0[c->first + s];
     }
     *L = len;
     *L0 = ref;
@@ -38,28 +88,14 @@ static double rope_force(const fem_element_ctx *c, double *L, double *L0)
     return m->EA[e0] * (len - ref) / ref + m->AS[e0];
 }
 
-static int sliding_response(const fem_element_ctx *c, double *f, double *K, double *axial)
+/* the rope's force N g_j and tangent (see the top of this file) into zeroed f and K */
+static void rope_response(const fem_element_ctx *c, double N, double L0, double *f, double *K)
 {
-    const fem_model *m = c->m;
-    const int ns = c->count, n = ns + 1, dim = 3 * n;
-    double L, L0;
-    double N = rope_force(c, &L, &L0);
-    int slack = N < 0.0;
-    if (slack) N = 0.0;
-    for (int s = 0; s < ns; s++) axial[s] = N;
-    memset(f, 0, (size_t)dim * sizeof *f);
-    if (K) memset(K, 0, (size_t)dim * (size_t)dim * sizeof *K);
-    if (slack) return 1;
-    const double k_ax = m->EA[c->first] / L0;
+    const int ns = c->count, dim = 3 * (ns + 1);
+    const double k_ax = c->m->EA[c->first] / L0;
     /* g_j = e_j-1 - e_j accumulated in f (scaled by N at the end) */
     for (int s = 0; s < ns; s++) {
-        const int e = c->first + s, k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
-        double d[3], l2 = 0.0;
-        for (int i = 0; i < 3; i++) {
-            d[i] = m->X[l + i] + c->u[l + i] - m->X[k + i] - c->u[k + i];
-            l2 += d[i] * d[i];
-        }
-        double len = sqrt(l2);
+        double d[3], len = segment(c, s, d), l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         for (int i = 0; i < 3; i++) {
             double ei = d[i] / len;
             f[3 * s + i] -= ei;           /* node s: -e_s */
@@ -81,7 +117,21 @@ static int sliding_response(const fem_element_ctx *c, double *f, double *K, doub
         for (int a = 0; a < dim; a++)
             for (int b = 0; b < dim; b++) K[a * dim + b] += k_ax * f[a] * f[b];
     for (int a = 0; a < dim; a++) f[a] *= N;
-    return 0;
+}
+
+static int sliding_response(const fem_element_ctx *c, double *f, double *K, double *axial)
+{
+    const int dim = 3 * (c->count + 1);
+    double L, L0;
+    double N = rope_force(c, &L, &L0);
+    int slack = N < 0.0;
+    if (slack) N = 0.0;
+    for (int s = 0; s < c->count; s++) axial[s] = N;
+    memset(f, 0, (size_t)dim * sizeof *f);
+    if (K) memset(K, 0, (size_t)dim * (size_t)dim * sizeof *K);
+    if (!slack) rope_response(c, N, L0, f, K);
+    add_contact(c, f, K);
+    return slack;
 }
 
 static double sliding_energy(const fem_element_ctx *c)
@@ -90,13 +140,57 @@ static double sliding_energy(const fem_element_ctx *c)
     double L, L0;
     double N = fmax(rope_force(c, &L, &L0), 0.0), Np = fmax(m->AS[c->first], 0.0);
     double EA = m->EA[c->first];
-    return EA > 0.0 ? L0 * (N * N - Np * Np) / (2.0 * EA) : 0.0;
+    double energy = EA > 0.0 ? L0 * (N * N - Np * Np) / (2.0 * EA) : 0.0;
+    const double gap = c->param[SLIDING_GAP];
+    if (gap > 0.0) {
+        const double kc = contact_stiffness(c);
+        for (int s = 0; s < c->count; s++) {
+            double d[3], len = segment(c, s, d);
+            if (len < gap) energy += 0.5 * kc * (gap - len) * (gap - len);
+        }
+    }
+    return energy;
+}
+
+static const char *const sliding_keys[] = {"shackle_gap_m", "shackle_stiffness_n_per_m", NULL};
+
+static int sliding_parse(const struct cJSON *o, const char *w, FILE *warnings, double *p,
+                         nc_error *err)
+{
+    (void)warnings;
+    if (nc_json_number_range_opt(o, w, "shackle_gap_m", 0.0, 0.0, INFINITY, &p[SLIDING_GAP], err) ||
+        nc_json_number_range_opt(o, w, "shackle_stiffness_n_per_m", 0.0, 0.0, INFINITY,
+                                 &p[SLIDING_CONTACT_K], err))
+        return -1;
+    if (p[SLIDING_CONTACT_K] > 0.0 && !(p[SLIDING_GAP] > 0.0))
+        return nc_error_set(err, 1, "%s.shackle_stiffness_n_per_m: given without shackle_gap_m "
+                                    "(the contact acts below the gap; give both)", w);
+    return 0;
+}
+
+/* A segment shorter than the gap at rest would push its nodes apart from the start. */
+static int sliding_check(const fem_element_ctx *c, nc_error *err)
+{
+    const fem_model *m = c->m;
+    const double gap = c->param[SLIDING_GAP];
+    for (int s = 0; s < c->count; s++) {
+        const int e = c->first + s;
+        if (m->L0[e] < gap)
+            return nc_error_set(err, 1, "%s: elements[%d] (nodes %d-%d of sliding_cable set \"%s\") "
+                                        "is %g m long at rest, shorter than the set's shackle_gap_m %g m",
+                                m->source, e, m->conn[2 * e], m->conn[2 * e + 1], c->set->name,
+                                m->L0[e], gap);
+    }
+    return 0;
 }
 
 const fem_element_ops fem_element_sliding_cable_ops = {
     .name = "sliding_cable",
     .chain = 1,
     .uses_section = 1,
+    .keys = sliding_keys,
+    .parse = sliding_parse,
+    .check = sliding_check,
     .chain_response = sliding_response,
     .strain_energy = sliding_energy,
 };

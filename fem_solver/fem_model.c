@@ -215,6 +215,14 @@ static int build_members(fem_model *m, nc_error *err)
                                         m->sets[m->element_set[first]].name, a);
             }
     }
+    for (int b = 0; b < nb; b++) {
+        const int first = m->member_first[b], set = m->element_set[first];
+        const fem_element_ops *ops = fem_element_type(m->set_types[set].type);
+        if (!ops->check) continue;
+        fem_element_ctx c = {m, &m->sets[set], m->set_types[set].param, b, first,
+                             m->member_first[b + 1] - first, NULL, NULL};
+        if (ops->check(&c, err)) return -1;
+    }
     return 0;
 }
 

@@ -100,6 +100,9 @@ def parse_args(argv):
     r.add_argument("--edge-rope-diameter", type=float, default=0.016, help="edge ropes (m)")
     r.add_argument("--edge-pretension", type=float, default=5.0e3, help="edge rope pretension (N)")
     r.add_argument("--rope-modulus", type=float, default=STEEL_E, help="E of every rope (Pa)")
+    r.add_argument("--shackle-gap", type=float, default=0.05,
+                   help="sliding ropes: the closest two neighbouring shackles (or a shackle and a "
+                        "post top or anchor) come along the rope (m; 0: no contact)")
     b = p.add_argument_group("brakes")
     b.add_argument("--brake-length", type=float, default=1.0, help="brake length (m)")
     b.add_argument("--brake-elastic-stiffness", type=float, default=5.0e6, help="k_e (N/m)")
@@ -135,6 +138,9 @@ def parse_args(argv):
                  "ring_wire_diameter", "ring_bending_force"):
         if not getattr(args, name) > 0:
             p.error("--%s: expected a number > 0, got %r" % (name.replace("_", "-"), getattr(args, name)))
+    if not 0 <= args.shackle_gap < 0.5 * args.mesh_size:
+        p.error("--shackle-gap: expected 0 <= gap < half the mesh size (%g m), got %r"
+                % (0.5 * args.mesh_size, args.shackle_gap))
     if args.modules < 1:
         p.error("--modules: expected an integer >= 1, got %d" % args.modules)
     if not -45.0 < args.tilt_deg < 45.0:
@@ -271,9 +277,12 @@ def build(args):
 
     # element sets
     E = args.rope_modulus
-    rope = lambda name, d, pre, typ: {
-        "name": name, "type": typ, "youngs_modulus_pa": E, "diameter_m": d,
-        "density_kg_m3": STEEL_RHO, "pretension_n": pre, "breaking_load_n": breaking_load(d)}
+    def rope(name, d, pre, typ):
+        r = {"name": name, "type": typ, "youngs_modulus_pa": E, "diameter_m": d,
+             "density_kg_m3": STEEL_RHO, "pretension_n": pre, "breaking_load_n": breaking_load(d)}
+        if typ == "sliding_cable" and args.shackle_gap > 0:
+            r["shackle_gap_m"] = args.shackle_gap
+        return r
     sets = []
     if args.net == "wire_rope":
         d = args.net_rope_diameter
@@ -419,6 +428,8 @@ def summary(args, fem, info):
             par = "d %g mm, E %.3g Pa, pretension %.4g kN, breaking load %.0f kN" % (
                 1e3 * st["diameter_m"], st["youngs_modulus_pa"], st["pretension_n"] / 1e3,
                 st["breaking_load_n"] / 1e3)
+            if "shackle_gap_m" in st:
+                par += ", shackle gap %g m" % st["shackle_gap_m"]
         lines.append("| %s | %s | %d | %.4g | %.4g | %s |" % (
             name, st["type"], info["counts"][name], info["lengths"][name], info["masses"][name], par))
     lines += ["", "Total mass %.1f kg (weight %.4g kN)." % (total, total * G / 1e3), "",
@@ -436,6 +447,10 @@ def summary(args, fem, info):
               "Structures 50, 2013); activation forces 30-40 kN, stroke 1 m are project estimates "
               "to be fitted to a manufacturer's force-stroke curve;",
               "- posts: an HEA 160 section (A 38.8 cm^2, 30.5 kg/m), hinged at the base;",
+              "- shackles: two neighbours on a sliding rope (or a shackle and a post top or anchor) "
+              "stop %g m apart (--shackle-gap; the default 5 cm is about the size of a shackle for "
+              "these ropes, a project estimate), with the contact stiffness EA / gap (fem_solver's "
+              "default);" % args.shackle_gap,
               "- ring net (`--net ring`): rings of diameter = mesh size with --ring-windings "
               "windings of --ring-wire-diameter wire; membrane elongation D (pi/2 - 1) and stiffness "
               "of the two strands are derived from that geometry, the bending-phase force is an "

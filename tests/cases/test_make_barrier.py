@@ -67,6 +67,15 @@ check(counts.get("lateral_rope") == 2 and counts.get("brake_support") == 4, "2 l
 check(types == {"net": "cable", "top_rope": "sliding_cable", "bottom_rope": "sliding_cable",
                 "edge_rope": "sliding_cable", "upslope_rope": "brake", "lateral_rope": "cable",
                 "post": "post", "brake_support": "brake"}, "element types per set: %s" % types)
+gaps = {st["name"]: st.get("shackle_gap_m") for st in fem["element_sets"]}
+check(all((gaps[n] == 0.05) == (types[n] == "sliding_cable") for n in gaps),
+      "shackle contact (gap 0.05 m) on the sliding ropes only: %s" % gaps)
+_, fem_nogap, _ = make("barrier3_nogap", "--modules", "1", "--shackle-gap", "0")
+check(not any("shackle_gap_m" in st for st in fem_nogap["element_sets"]), "--shackle-gap 0: no contact written")
+bad = subprocess.run(["/usr/bin/python3", script, "--output", os.path.join(tmp, "bad.json"),
+                      "--mesh-size", "0.3", "--shackle-gap", "0.2"], capture_output=True, text=True)
+check(bad.returncode == 2 and "--shackle-gap" in bad.stderr and "half the mesh size" in bad.stderr,
+      "a shackle gap of 0.2 m on 0.3 m meshes refused: %s" % bad.stderr.strip().splitlines()[-1:])
 ns = fem["node_sets"]
 check(len(ns["anchors"]) == 4 + (M + 1) + 2 and len(ns["post_bases"]) == M + 1 and len(ns["post_tops"]) == M + 1,
       "node sets: %d anchors, %d post bases and tops" % (len(ns["anchors"]), M + 1))

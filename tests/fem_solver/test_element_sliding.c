@@ -7,7 +7,13 @@
  * shackle's position. The pulleys' reactions are N times the sum of the unit vectors to their
  * neighbours. The element tangent and the assembled tangent of a rope through two free
  * shackles (non-neighbour nodes, coupled by the dense material part) match central
- * differences. */
+ * differences.
+ * Shackle contact (shackle_gap_m): the chain's force and tangent with segments below the gap,
+ * taut and slack, against central differences of the force and of the strain energy; a
+ * shackle driven along a straight rope into its anchor stops at the gap: undamped, its
+ * largest penetration is the energy balance's (the load's work over the run-up equals the
+ * contact's energy); damped, it comes to rest at g - P / k_c with the default stiffness
+ * k_c = EA / g and the anchor takes the load; the set's keys are checked. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -199,7 +205,36 @@ static void test_two_shackles(void **state)
     }
 }
 
-/* chain tangent against central differences of the chain force, every entry */
+/* chain force and tangent against central differences of the force (every entry of the
+ * tangent, which is symmetric) and of the strain energy (f = dE/du) */
+static void check_chain(const fem_element_ops *ops, fem_element_ctx *c, double *u, int expect_slack)
+{
+    double f[15], K[225], fp[15], fm[15], ax[4];
+    assert_int_equal(ops->chain_response(c, f, K, ax), expect_slack);
+    double kmax = 0, fmax_n = 0;
+    for (int i = 0; i < 225; i++) kmax = fmax(kmax, fabs(K[i]));
+    for (int i = 0; i < 15; i++) fmax_n = fmax(fmax_n, fabs(f[i]));
+    assert_true(fmax_n > 0.0);
+    for (int j = 0; j < 15; j++) {
+        double h = 1e-7;
+        u[j] += h;
+        ops->chain_response(c, fp, NULL, ax);
+        double ep = ops->strain_energy(c);
+        u[j] -= 2 * h;
+        ops->chain_response(c, fm, NULL, ax);
+        double em = ops->strain_energy(c);
+        u[j] += h;
+        assert_near(f[j], (ep - em) / (2 * h), 1e-6 * fmax_n);
+        for (int i = 0; i < 15; i++) {
+            assert_near(K[15 * i + j], (fp[i] - fm[i]) / (2 * h), 1e-6 * kmax);
+            assert_near(K[15 * i + j], K[15 * j + i], 1e-9 * kmax);
+        }
+    }
+}
+
+/* The rope alone; a slack rope carries nothing. Then shackle contact: segments 2.08, 2.26,
+ * 2.16, 2.03 m at rest, a gap of 2.2 m (set here, past the input check that a loaded model
+ * would fail) puts three of them in contact; taut, then slack with the contact still pushing. */
 static void test_tangent(void **state)
 {
     (void)state;
@@ -208,30 +243,125 @@ static void test_tangent(void **state)
     if (fem_input_load(fem_test_write("shackles2.json", two_shackles_json), &m, &err))
         fail_msg("%s", err.message);
     const fem_element_ops *ops = fem_element_type(m.set_types[0].type);
-    double u[15];
+    double u[15], f[15], K[225], ax[4], plain[15];
     for (int i = 0; i < 15; i++) u[i] = 0.01 * sin(1.7 * i + 0.3);
     fem_element_ctx c = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 4, u, NULL};
-    double f[15], K[225], fp[15], fm[15], ax[4];
-    assert_int_equal(ops->chain_response(&c, f, K, ax), 0);
-    double kmax = 0;
-    for (int i = 0; i < 225; i++) kmax = fmax(kmax, fabs(K[i]));
-    for (int j = 0; j < 15; j++) {
-        double h = 1e-7;
-        u[j] += h;
-        ops->chain_response(&c, fp, NULL, ax);
-        u[j] -= 2 * h;
-        ops->chain_response(&c, fm, NULL, ax);
-        u[j] += h;
-        for (int i = 0; i < 15; i++) {
-            assert_near(K[15 * i + j], (fp[i] - fm[i]) / (2 * h), 1e-6 * kmax);
-            assert_near(K[15 * i + j], K[15 * j + i], 1e-9 * kmax);   /* symmetric */
-        }
-    }
-    /* slack: a shortened rope carries nothing */
+    check_chain(ops, &c, u, 0);
+    ops->chain_response(&c, plain, NULL, ax);
+    m.set_types[0].param[0] = 2.2;
+    check_chain(ops, &c, u, 0);
+    ops->chain_response(&c, f, NULL, ax);
+    double change = 0;
+    for (int i = 0; i < 15; i++) change = fmax(change, fabs(f[i] - plain[i]));
+    print_message("contact changes the chain force by up to %.3e N\n", change);
+    assert_true(change > 1e4);   /* k_c = EA / g = 5.7e6 N/m, about 0.1 m deep */
+    for (int i = 0; i < 15; i++) u[i] = -0.05 * m.X[i] + 0.01 * sin(1.1 * i);
+    check_chain(ops, &c, u, 1);
+    /* without contact a shortened rope carries nothing */
+    m.set_types[0].param[0] = 0.0;
     for (int i = 0; i < 15; i++) u[i] = -0.2 * m.X[i];
     assert_int_equal(ops->chain_response(&c, f, K, ax), 1);
     assert_near(ax[0], 0.0, 0.0);
+    for (int i = 0; i < 15; i++) assert_near(f[i], 0.0, 0.0);
     fem_model_free(&m);
+}
+
+/* A straight 16 mm rope (pretension 10 kN) from anchor A (0,0,0) to anchor B (10,0,0) through
+ * a free shackle S at (1,0,0), loaded with P = 5 kN towards A; gap g = 0.5 m, k_c = EA / g =
+ * 2.52e7 N/m. Along the rope S has no stiffness until it meets the contact. */
+#define SHACKLE_P_N 5000.0
+#define SHACKLE_GAP_M 0.5
+
+static void run_shackle(double tau, double t_end, double *min_len, double *end_len, fem_model *m,
+                        fem_analysis *s)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"nodes\": [[0, 0, 0], [1, 0, 0], [10, 0, 0]],\n"
+             " \"elements\": [[0, 1], [1, 2]],\n"
+             " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
+             "   \"area_m2\": 1.26e-4, \"pretension_n\": 10000, \"density_kg_m3\": 7850,\n"
+             "   \"shackle_gap_m\": %g}],\n"
+             " \"supports\": [{\"nodes\": [0, 2], \"dofs\": \"xyz\"}],\n"
+             " \"point_loads\": [{\"nodes\": [1], \"force_n\": [%g, 0, 0]}],\n"
+             " \"gravity_m_s2\": [0, 0, 0], \"rayleigh\": {\"tau_per_s\": %g},\n"
+             " \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 1e-4, \"end_time_s\": 1}}\n",
+             SHACKLE_GAP_M, -SHACKLE_P_N, tau);
+    nc_error err;
+    if (fem_input_load(fem_test_write("shackle_anchor.json", text), m, &err)) fail_msg("%s", err.message);
+    assert_int_equal(fem_analysis_init(s, m, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(s, &err), 0);
+    *min_len = 1.0;
+    int steps = (int)(t_end / 1e-4 + 0.5);
+    for (int k = 0; k < steps; k++) {
+        if (fem_analysis_step(s, 1e-4, &err)) fail_msg("step %d: %s", k, err.message);
+        double x = m->X[3] + s->cur.u[3];
+        *min_len = fmin(*min_len, x);
+        assert_true(x > 0.0);   /* never past the anchor */
+    }
+    *end_len = m->X[3] + s->cur.u[3];
+}
+
+static void test_shackle_stops_at_anchor(void **state)
+{
+    (void)state;
+    const double EA = 1e11 * 1.26e-4, kc = EA / SHACKLE_GAP_M, P = SHACKLE_P_N;
+    /* undamped: P (1 - g + delta) = k_c delta^2 / 2 at the deepest point */
+    const double delta = (P + sqrt(P * P + 2.0 * kc * P * (1.0 - SHACKLE_GAP_M))) / kc;
+    fem_model m;
+    fem_analysis s;
+    double min_len, end_len;
+    run_shackle(0.0, 0.03, &min_len, &end_len, &m, &s);
+    double deepest = SHACKLE_GAP_M - min_len;
+    print_message("undamped: deepest %.5f m into the gap (energy balance %.5f m), rope force "
+                  "%.1f N\n", deepest, delta, s.axial[0]);
+    assert_near_rel(deepest, delta, 0.03);
+    assert_near_rel(s.axial[0], 1e4, 1e-6);   /* a straight rope: its length is unchanged */
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+    /* damped to rest: k_c (g - l) = P */
+    run_shackle(200.0, 0.3, &min_len, &end_len, &m, &s);
+    double f[9];
+    fem_analysis_node_balance(&s, 1.0, f);
+    double kinetic, strain;
+    fem_analysis_energy(&s, &kinetic, &strain);
+    const double rest = SHACKLE_GAP_M - P / kc;
+    print_message("damped: at rest %.7f m from the anchor (closed form %.7f m), anchor reaction "
+                  "%.2f N, contact energy %.4f J (closed form %.4f J)\n", end_len, rest, f[0],
+                  strain, 0.5 * P * P / kc);
+    assert_near(end_len, rest, 1e-3 * (P / kc));
+    assert_near_rel(-f[0], P, 1e-3);
+    assert_near_rel(strain, 0.5 * P * P / kc, 1e-2);
+    assert_below(kinetic, 1e-6 * strain);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
+static void expect_load_error(const char *set_keys, const char *message)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"nodes\": [[0, 0, 0], [1, 0, 0], [10, 0, 0]],\n"
+             " \"elements\": [[0, 1], [1, 2]],\n"
+             " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
+             "   \"area_m2\": 1.26e-4%s}],\n"
+             " \"supports\": [{\"nodes\": [0, 2], \"dofs\": \"xyz\"}],\n"
+             " \"analysis\": {\"type\": \"static\"}}\n", set_keys);
+    fem_model m;
+    nc_error err;
+    assert_int_equal(fem_input_load(fem_test_write("shackle_bad.json", text), &m, &err), -1);
+    print_message("%s\n", err.message);
+    assert_non_null(strstr(err.message, message));
+}
+
+static void test_contact_input(void **state)
+{
+    (void)state;
+    expect_load_error(", \"shackle_stiffness_n_per_m\": 1e8", "shackle_stiffness_n_per_m: given without shackle_gap_m");
+    expect_load_error(", \"shackle_gap_m\": -0.1", "shackle_gap_m");
+    expect_load_error(", \"shackle_gap_m\": 1.5",
+                      "elements[0] (nodes 0-1 of sliding_cable set \"rope\") is 1 m long at rest, "
+                      "shorter than the set's shackle_gap_m 1.5 m");
 }
 
 int main(void)
@@ -240,6 +370,8 @@ int main(void)
         cmocka_unit_test(test_pulley_chain),
         cmocka_unit_test(test_two_shackles),
         cmocka_unit_test(test_tangent),
+        cmocka_unit_test(test_shackle_stops_at_anchor),
+        cmocka_unit_test(test_contact_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
