@@ -158,21 +158,28 @@ static int sliding_parse(const struct cJSON *o, const char *w, FILE *warnings, d
                          nc_error *err)
 {
     (void)warnings;
+    const int stiffness_given = cJSON_GetObjectItemCaseSensitive(o, "shackle_stiffness_n_per_m") != NULL;
     if (nc_json_number_range_opt(o, w, "shackle_gap_m", 0.0, 0.0, INFINITY, &p[SLIDING_GAP], err) ||
-        nc_json_number_range_opt(o, w, "shackle_stiffness_n_per_m", 0.0, 0.0, INFINITY,
-                                 &p[SLIDING_CONTACT_K], err))
+        (stiffness_given &&
+         nc_json_positive(o, w, "shackle_stiffness_n_per_m", &p[SLIDING_CONTACT_K], err)))
         return -1;
-    if (p[SLIDING_CONTACT_K] > 0.0 && !(p[SLIDING_GAP] > 0.0))
+    if (stiffness_given && !(p[SLIDING_GAP] > 0.0))
         return nc_error_set(err, 1, "%s.shackle_stiffness_n_per_m: given without shackle_gap_m "
                                     "(the contact acts below the gap; give both)", w);
     return 0;
 }
 
-/* A segment shorter than the gap at rest would push its nodes apart from the start. */
+/* A segment shorter than the gap at rest would push its nodes apart from the start; the
+ * contact's stiffness must be a usable number (EA / g overflows for a tiny gap). */
 static int sliding_check(const fem_element_ctx *c, nc_error *err)
 {
     const fem_model *m = c->m;
     const double gap = c->param[SLIDING_GAP];
+    if (gap > 0.0 && !(isfinite(contact_stiffness(c)) && contact_stiffness(c) > 0.0))
+        return nc_error_set(err, 1, "%s: sliding_cable set \"%s\": the shackle contact's stiffness "
+                                    "(%g N/m) is not a positive finite number (give "
+                                    "shackle_stiffness_n_per_m, or a larger shackle_gap_m)",
+                            m->source, c->set->name, contact_stiffness(c));
     for (int s = 0; s < c->count; s++) {
         const int e = c->first + s;
         if (m->L0[e] < gap)

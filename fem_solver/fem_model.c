@@ -219,8 +219,8 @@ static int build_members(fem_model *m, nc_error *err)
         const int first = m->member_first[b], set = m->element_set[first];
         const fem_element_ops *ops = fem_element_type(m->set_types[set].type);
         if (!ops->check) continue;
-        fem_element_ctx c = {m, &m->sets[set], m->set_types[set].param, b, first,
-                             m->member_first[b + 1] - first, NULL, NULL};
+        fem_element_ctx c = {.m = m, .set = &m->sets[set], .param = m->set_types[set].param,
+                             .member = b, .first = first, .count = m->member_first[b + 1] - first};
         if (ops->check(&c, err)) return -1;
     }
     return 0;

@@ -1,5 +1,5 @@
-/* test_element_sliding — the sliding cable (fem_element_sliding.c): one 16 mm steel rope
- * (EA = 1.26e7 N, pretension 10 kN) from an anchor over a fixed pulley, through a free
+/* test_element_sliding — the sliding cable (fem_element_sliding.c): one steel rope of 1.26 cm²
+ * metallic area (EA = 1.26e7 N, pretension 10 kN) from an anchor over a fixed pulley, through a free
  * shackle carrying 20 kN, over a second pulley to a second anchor. Frictionless: one force N
  * in every segment, the shackle settles where both rope halves make the same angle with the
  * horizontal, 2 N sin(theta) = W, and N = EA (L - L0)/L0 + N_pre on the total length; the
@@ -13,7 +13,8 @@
  * shackle driven along a straight rope into its anchor stops at the gap: undamped, its
  * largest penetration is the energy balance's (the load's work over the run-up equals the
  * contact's energy); damped, it comes to rest at g - P / k_c with the default stiffness
- * k_c = EA / g and the anchor takes the load; the set's keys are checked. */
+ * k_c = EA / g and with one given, and the anchor takes the load; the assembled step tangent
+ * with the contact closed; the set's keys are checked. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -144,18 +145,21 @@ static const char *const two_shackles_json =
  * non-neighbour blocks included) against central differences of the step residual; again
  * with stiffness-proportional damping (kappa 1e-3 s, c_c C_K with C_K = kappa K_T at the start
  * of the step, the rope's dense blocks included), whose tangent must differ from the first
- * by more than 5 % of its largest entry, so the damping's blocks are checked too. */
+ * by more than 5 % of its largest entry, so the damping's blocks are checked too; and again
+ * with shackle contact closed on three segments (gap 2.2 m, set past the input check),
+ * differing from the second by more than 5 % as well. */
 static void test_two_shackles(void **state)
 {
     (void)state;
-    double K_plain[36];
-    for (int pass = 0; pass < 2; pass++) {
+    double K_before[36];
+    for (int pass = 0; pass < 3; pass++) {
         fem_model m;
         nc_error err;
         if (fem_input_load(fem_test_write("shackles.json", two_shackles_json), &m, &err))
             fail_msg("%s", err.message);
         m.settings.type = FEM_DYNAMIC;
         m.kappa_s = pass ? 1e-3 : 0.0;
+        if (pass == 2) m.set_types[0].param[0] = 2.2;
         fem_analysis s;
         assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
         assert_int_equal(s.n_chain_pairs, 6);
@@ -189,17 +193,17 @@ static void test_two_shackles(void **state)
                 assert_near(K[6 * p + q], -(rp[s.dof_of_eq[p]] - rm[s.dof_of_eq[p]]) / (2 * h), 1e-7 * kmax);
         }
         /* the shackles (nodes 1 and 3) are coupled: the rope's force depends on both */
-        double coupling = 0, damping = 0;
+        double coupling = 0, change = 0;
         for (int p = 0; p < 3; p++)
             for (int q = 3; q < 6; q++) coupling = fmax(coupling, fabs(K[6 * p + q]));
         if (pass)
-            for (int i = 0; i < 36; i++) damping = fmax(damping, fabs(K[i] - K_plain[i]));
-        else
-            memcpy(K_plain, K, sizeof K);
-        print_message("kappa %g s: largest shackle-shackle entry %.3e N/m of %.3e N/m, damping's "
-                      "largest entry %.3e N/m\n", m.kappa_s, coupling, kmax, damping);
+            for (int i = 0; i < 36; i++) change = fmax(change, fabs(K[i] - K_before[i]));
+        memcpy(K_before, K, sizeof K);
+        print_message("kappa %g s, gap %g m: largest shackle-shackle entry %.3e N/m of %.3e N/m, "
+                      "largest change from the pass before %.3e N/m\n", m.kappa_s,
+                      m.set_types[0].param[0], coupling, kmax, change);
         assert_true(coupling > 1e-2 * kmax);
-        if (pass) assert_true(damping > 5e-2 * kmax);
+        if (pass) assert_true(change > 5e-2 * kmax);
         fem_analysis_free(&s);
         fem_model_free(&m);
     }
@@ -266,29 +270,41 @@ static void test_tangent(void **state)
     fem_model_free(&m);
 }
 
-/* A straight 16 mm rope (pretension 10 kN) from anchor A (0,0,0) to anchor B (10,0,0) through
- * a free shackle S at (1,0,0), loaded with P = 5 kN towards A; gap g = 0.5 m, k_c = EA / g =
- * 2.52e7 N/m. Along the rope S has no stiffness until it meets the contact. */
+/* A straight steel rope (A = 1.26 cm², EA = 1.26e7 N, pretension 10 kN) from anchor A (0,0,0)
+ * to anchor B (10,0,0) through a free shackle S at (1,0,0), loaded with P = 5 kN towards A;
+ * gap g = 0.5 m, k_c = EA / g = 2.52e7 N/m by default. Along the rope S has no stiffness until
+ * it meets the contact. set_keys: the set's shackle keys; rest: the model's keys after it. */
 #define SHACKLE_P_N 5000.0
 #define SHACKLE_GAP_M 0.5
 
-static void run_shackle(double tau, double t_end, double *min_len, double *end_len, fem_model *m,
-                        fem_analysis *s)
+static const char *straight_rope_json(const char *set_keys, const char *rest)
 {
-    char text[1024];
+    static char text[1024];
     snprintf(text, sizeof text,
              "{\"nodes\": [[0, 0, 0], [1, 0, 0], [10, 0, 0]],\n"
              " \"elements\": [[0, 1], [1, 2]],\n"
              " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
-             "   \"area_m2\": 1.26e-4, \"pretension_n\": 10000, \"density_kg_m3\": 7850,\n"
-             "   \"shackle_gap_m\": %g}],\n"
-             " \"supports\": [{\"nodes\": [0, 2], \"dofs\": \"xyz\"}],\n"
+             "   \"area_m2\": 1.26e-4, \"pretension_n\": 10000, \"density_kg_m3\": 7850%s}],\n"
+             " \"supports\": [{\"nodes\": [0, 2], \"dofs\": \"xyz\"}],\n%s}\n", set_keys, rest);
+    return text;
+}
+
+/* runs the shackle of straight_rope_json with damping tau (1/s) and contact stiffness kc (0:
+ * the default) to t_end; the closest it came to A and where it ended */
+static void run_shackle(double tau, double kc, double t_end, double *min_len, double *end_len,
+                        fem_model *m, fem_analysis *s)
+{
+    char keys[128], rest[512];
+    snprintf(keys, sizeof keys, ", \"shackle_gap_m\": %g", SHACKLE_GAP_M);
+    if (kc > 0) snprintf(keys + strlen(keys), sizeof keys - strlen(keys), ", \"shackle_stiffness_n_per_m\": %g", kc);
+    snprintf(rest, sizeof rest,
              " \"point_loads\": [{\"nodes\": [1], \"force_n\": [%g, 0, 0]}],\n"
              " \"gravity_m_s2\": [0, 0, 0], \"rayleigh\": {\"tau_per_s\": %g},\n"
-             " \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 1e-4, \"end_time_s\": 1}}\n",
-             SHACKLE_GAP_M, -SHACKLE_P_N, tau);
+             " \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 1e-4, \"end_time_s\": 1}",
+             -SHACKLE_P_N, tau);
     nc_error err;
-    if (fem_input_load(fem_test_write("shackle_anchor.json", text), m, &err)) fail_msg("%s", err.message);
+    if (fem_input_load(fem_test_write("shackle_anchor.json", straight_rope_json(keys, rest)), m, &err))
+        fail_msg("%s", err.message);
     assert_int_equal(fem_analysis_init(s, m, &err), 0);
     assert_int_equal(fem_analysis_initial_acceleration(s, &err), 0);
     *min_len = 1.0;
@@ -305,51 +321,51 @@ static void run_shackle(double tau, double t_end, double *min_len, double *end_l
 static void test_shackle_stops_at_anchor(void **state)
 {
     (void)state;
-    const double EA = 1e11 * 1.26e-4, kc = EA / SHACKLE_GAP_M, P = SHACKLE_P_N;
+    const double EA = 1e11 * 1.26e-4, P = SHACKLE_P_N;
+    double kc = EA / SHACKLE_GAP_M;
     /* undamped: P (1 - g + delta) = k_c delta^2 / 2 at the deepest point */
     const double delta = (P + sqrt(P * P + 2.0 * kc * P * (1.0 - SHACKLE_GAP_M))) / kc;
     fem_model m;
     fem_analysis s;
     double min_len, end_len;
-    run_shackle(0.0, 0.03, &min_len, &end_len, &m, &s);
+    run_shackle(0.0, 0.0, 0.03, &min_len, &end_len, &m, &s);
     double deepest = SHACKLE_GAP_M - min_len;
     print_message("undamped: deepest %.5f m into the gap (energy balance %.5f m), rope force "
                   "%.1f N\n", deepest, delta, s.axial[0]);
-    assert_near_rel(deepest, delta, 0.03);
+    /* the steps sample the motion, so they may miss the deepest point but not pass it */
+    assert_true(deepest <= delta * (1.0 + 1e-3));
+    assert_true(deepest >= delta * (1.0 - 0.03));
     assert_near_rel(s.axial[0], 1e4, 1e-6);   /* a straight rope: its length is unchanged */
     fem_analysis_free(&s);
     fem_model_free(&m);
-    /* damped to rest: k_c (g - l) = P */
-    run_shackle(200.0, 0.3, &min_len, &end_len, &m, &s);
-    double f[9];
-    fem_analysis_node_balance(&s, 1.0, f);
-    double kinetic, strain;
-    fem_analysis_energy(&s, &kinetic, &strain);
-    const double rest = SHACKLE_GAP_M - P / kc;
-    print_message("damped: at rest %.7f m from the anchor (closed form %.7f m), anchor reaction "
-                  "%.2f N, contact energy %.4f J (closed form %.4f J)\n", end_len, rest, f[0],
-                  strain, 0.5 * P * P / kc);
-    assert_near(end_len, rest, 1e-3 * (P / kc));
-    assert_near_rel(-f[0], P, 1e-3);
-    assert_near_rel(strain, 0.5 * P * P / kc, 1e-2);
-    assert_below(kinetic, 1e-6 * strain);
-    fem_analysis_free(&s);
-    fem_model_free(&m);
+    /* damped to rest: k_c (g - l) = P, with the default stiffness and with one given */
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass) kc = 4e6;
+        run_shackle(200.0, pass ? kc : 0.0, 0.3, &min_len, &end_len, &m, &s);
+        double f[9];
+        fem_analysis_node_balance(&s, 1.0, f);
+        double kinetic, strain;
+        fem_analysis_energy(&s, &kinetic, &strain);
+        const double rest = SHACKLE_GAP_M - P / kc;
+        print_message("damped, k_c %.3g N/m: at rest %.7f m from the anchor (closed form %.7f m), "
+                      "anchor reaction %.2f N, contact energy %.4f J (closed form %.4f J)\n", kc,
+                      end_len, rest, f[0], strain, 0.5 * P * P / kc);
+        assert_near(end_len, rest, 1e-3 * (P / kc));
+        assert_near_rel(-f[0], P, 1e-3);
+        assert_near_rel(strain, 0.5 * P * P / kc, 1e-2);
+        assert_below(kinetic, 1e-6 * strain);
+        fem_analysis_free(&s);
+        fem_model_free(&m);
+    }
 }
 
 static void expect_load_error(const char *set_keys, const char *message)
 {
-    char text[1024];
-    snprintf(text, sizeof text,
-             "{\"nodes\": [[0, 0, 0], [1, 0, 0], [10, 0, 0]],\n"
-             " \"elements\": [[0, 1], [1, 2]],\n"
-             " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,\n"
-             "   \"area_m2\": 1.26e-4%s}],\n"
-             " \"supports\": [{\"nodes\": [0, 2], \"dofs\": \"xyz\"}],\n"
-             " \"analysis\": {\"type\": \"static\"}}\n", set_keys);
     fem_model m;
     nc_error err;
-    assert_int_equal(fem_input_load(fem_test_write("shackle_bad.json", text), &m, &err), -1);
+    const char *json = straight_rope_json(set_keys, " \"analysis\": {\"type\": \"static\"}");
+    assert_int_equal(fem_input_load(fem_test_write("shackle_bad.json", json), &m, &err), -1);
+    fem_model_free(&m);   /* what was read before the error */
     print_message("%s\n", err.message);
     assert_non_null(strstr(err.message, message));
 }
@@ -358,7 +374,9 @@ static void test_contact_input(void **state)
 {
     (void)state;
     expect_load_error(", \"shackle_stiffness_n_per_m\": 1e8", "shackle_stiffness_n_per_m: given without shackle_gap_m");
-    expect_load_error(", \"shackle_gap_m\": -0.1", "shackle_gap_m");
+    expect_load_error(", \"shackle_gap_m\": 0.1, \"shackle_stiffness_n_per_m\": 0", "shackle_stiffness_n_per_m: expected a number > 0");
+    expect_load_error(", \"shackle_gap_m\": -0.1", "shackle_gap_m: expected a number >= 0, got -0.1");
+    expect_load_error(", \"shackle_gap_m\": 1e-305", "the shackle contact's stiffness (inf N/m) is not a positive finite number");
     expect_load_error(", \"shackle_gap_m\": 1.5",
                       "elements[0] (nodes 0-1 of sliding_cable set \"rope\") is 1 m long at rest, "
                       "shorter than the set's shackle_gap_m 1.5 m");
