@@ -175,11 +175,12 @@ static int sliding_check(const fem_element_ctx *c, nc_error *err)
 {
     const fem_model *m = c->m;
     const double gap = c->param[SLIDING_GAP];
-    if (gap > 0.0 && !(isfinite(contact_stiffness(c)) && contact_stiffness(c) > 0.0))
+    const double kc = gap > 0.0 ? contact_stiffness(c) : 1.0;
+    if (!(isfinite(kc) && kc > 0.0))
         return nc_error_set(err, 1, "%s: sliding_cable set \"%s\": the shackle contact's stiffness "
                                     "(%g N/m) is not a positive finite number (give "
                                     "shackle_stiffness_n_per_m, or a larger shackle_gap_m)",
-                            m->source, c->set->name, contact_stiffness(c));
+                            m->source, c->set->name, kc);
     for (int s = 0; s < c->count; s++) {
         const int e = c->first + s;
         if (m->L0[e] < gap)

@@ -23,7 +23,9 @@ Geometry (x along the barrier, y downslope = the impact direction, z up):
 - lateral ropes: from each end post top to a lateral anchor at (x_end -/+ 0.75 height, 0, 0)
   (in the barrier's plane, so they hold the end post along the barrier without pulling it
   upslope), a cable; and the edge ropes: a `sliding_cable` from each end post top down
-  through the net's end column to the post base.
+  through the net's end column to the post base;
+- on every sliding rope two neighbouring nodes stop --shackle-gap apart (fem_solver's shackle
+  contact, `shackle_gap_m`).
 
 Named node sets: anchors (all), anchor_top_rope, anchor_bottom_rope, anchor_upslope,
 anchor_lateral, post_bases, post_tops, net (all net nodes), net_centre (the node nearest the
