@@ -59,7 +59,8 @@ typedef struct fem_element_ops {
     double (*pair_response)(const fem_element_ctx *c, double f_l[3], double Kb[9], int *slack);
     /* Chain types (n = count + 1 nodes, in chain order): internal force f[3n] and tangent
      * K[3n x 3n] (row-major; K may be NULL), the axial force of each segment in axial[count];
-     * returns 1 when slack. */
+     * returns 1 when the member carries no axial force (slack; a sliding rope's shackle
+     * contact may still push). */
     int (*chain_response)(const fem_element_ctx *c, double *f, double *K, double *axial);
     double (*strain_energy)(const fem_element_ctx *c);
     /* History at the converged state u from the committed c->hist into hist_new. */
