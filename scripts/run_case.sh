@@ -3,7 +3,8 @@
 # `run_case.sh --help` prints the usage below; README.md and coupler/README.md
 # ("scripts/run_case.sh") say more.
 #
-# Supervision: the three programs are polled every 0.1 s. The first one that fails is named as
+# Supervision: the three programs are polled every 0.1 s, and the coupler's exit is noticed at
+# once (it holds the write end of a pipe whose read end run_case.sh waits on). The first one that fails is named as
 # failed, the others as stopped: a solver that exits before the coupler told it to stop (also
 # before the handshake), a coupler whose progress file (--progress-file, its heartbeat) is
 # older than the stall limit, or the coupler's own error naming a participant. Everything
@@ -132,7 +133,8 @@ rm -f "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
 
 # ---- --set overrides, applied to the copies with Python's json module ----------------------
 if [ ${#sets[@]} -gt 0 ]; then
-  "$python" - "$out" "${sets[@]}" <<'PY' || exit 2
+  # -I -S: no site packages to import (half of the interpreter's start-up)
+  "$python" -I -S - "$out" "${sets[@]}" <<'PY' || exit 2
 import json, sys
 out, sets = sys.argv[1], sys.argv[2:]
 docs = {}
@@ -220,7 +222,7 @@ stop_all() {   # SIGTERM to every running program at once, SIGKILL after the gra
   [ -n "$list" ] || return 0
   for p in $list; do kill -TERM "${pid[$p]}" 2>/dev/null; kill -CONT "${pid[$p]}" 2>/dev/null; done
   now_ms; local until=$((NOW_MS + grace_ms))
-  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ]; do sleep 0.05; reap; now_ms; done
+  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ]; do sleep 0.01; reap; now_ms; done
   for p in $(running); do kill -KILL "${pid[$p]}" 2>/dev/null; done
   for p in $(running); do wait "${pid[$p]}"; rc[$p]=$?; done
 }
@@ -228,7 +230,7 @@ wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS 
   now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
   reap
   while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
-    sleep 0.05; reap; now_ms
+    sleep 0.01; reap; now_ms
   done
 }
 on_signal() { interrupted=$1; }
@@ -341,17 +343,34 @@ while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
     done
     report
   fi
-  sleep 0.05
+  sleep 0.01
 done
 
 # ---- the coupler, and what the user sees ----------------------------------------------------
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
-"${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
-  --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
-  >coupler.log 2>&1 &
-pid[coupler]=$!
+# The coupler alone holds the write end of the pipe coupler.alive: a read of it returns at once
+# when the coupler has ended, instead of at the next poll. Both ends are opened here (the
+# FIFO held open read-write meanwhile, so that no open waits for the other end), the name
+# removed, the coupler inherits the write end and this shell closes its own.
+alive_fd=""
+rm -f coupler.alive
+if mkfifo coupler.alive 2>/dev/null &&
+   exec {hold_fd}<>coupler.alive {alive_w}>coupler.alive {alive_fd}<coupler.alive {hold_fd}>&-; then
+  rm -f coupler.alive
+  "${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
+    --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
+    >coupler.log 2>&1 {alive_fd}<&- &
+  pid[coupler]=$!
+  exec {alive_w}>&-
+else   # no FIFO here (a file system without them): polled only
+  rm -f coupler.alive; alive_fd=""
+  "${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
+    --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
+    >coupler.log 2>&1 &
+  pid[coupler]=$!
+fi
 now_ms; cpl_started_ms=$NOW_MS
 
 live=0
@@ -360,10 +379,10 @@ if [ $quiet -eq 0 ]; then
     # a terminal: the coupler's messages as they come, and its live status line under them
     live=1
     columns=$(tput cols 2>/dev/null || echo 80)
-    exec 3< <(exec tail -n +1 -s 0.2 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null)
+    exec 3< <(exec tail -n +1 -s 0.05 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null)
     show_pid=$!
   else
-    tail -n +1 -s 0.2 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null &
+    tail -n +1 -s 0.05 -f coupler.log --pid="${pid[coupler]}" 2>/dev/null &
     show_pid=$!
   fi
 fi
@@ -390,8 +409,17 @@ read_log() {   # TIMEOUT: the log lines that arrived; 1 at the end of the log
     return 1
   done
 }
+pause() {   # 0.1 s, or less once the coupler has ended
+  if [ -n "$alive_fd" ]; then
+    local byte
+    read -r -t 0.1 -u "$alive_fd" byte
+    [ $? -gt 128 ] && return 0
+    exec {alive_fd}<&-; alive_fd=""   # the coupler has ended (it never writes)
+  fi
+  sleep 0.01
+}
 show() {   # new log lines, then the status line (a terminal); else just a pause
-  if [ $live -eq 0 ] || [ -n "$log_ended" ]; then sleep 0.1; return 0; fi
+  if [ $live -eq 0 ] || [ -n "$log_ended" ]; then pause; return 0; fi
   read_log 0.1 || log_ended=1
   if [ -n "$cpl_status" ] && { [ "$status_shown" -eq 0 ] || [ "$cpl_status" != "$shown_status" ]; }; then
     printf '\r%s\033[K' "${cpl_status:0:$((columns - 1))}"
@@ -486,9 +514,9 @@ reap
 for p in fem dem; do
   [ -n "${rc[$p]:-}" ] && [ "${rc[$p]:-}" -ne 0 ] && fail_first "$p" "$(how "$p")"
 done
-if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.2 s of the coupler)
+if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.05 s of the coupler)
   [ -n "$log_ended" ] || read_log 1
 elif [ -n "$show_pid" ]; then
-  for i in $(seq 20); do kill -0 "$show_pid" 2>/dev/null || break; sleep 0.1; done
+  for i in $(seq 200); do kill -0 "$show_pid" 2>/dev/null || break; sleep 0.01; done
 fi
 report

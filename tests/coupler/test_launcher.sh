@@ -62,10 +62,11 @@ group_members() {   # pid and command of every process in run_case.sh's process 
   # (ps -g selects sessions, not process groups: filter on the pgid column)
   ps -eo pid=,pgid=,args= | awk -v g="$rpid" '$2 == g {$2 = ""; print}'
 }
-no_leftovers() {   # no process of the run may survive run_case.sh
+no_leftovers() {   # no process of the run may survive run_case.sh, nor its pipe's name
   local left
   left=$(group_members)
   [ -z "$left" ] || fail "processes left after run_case.sh: $left"
+  [ ! -e "$out/coupler.alive" ] || fail "run_case.sh left $out/coupler.alive behind"
   rpid=""
 }
 h5_ok() {
