@@ -4,8 +4,9 @@
 # ("scripts/run_case.sh") say more.
 #
 # Supervision: the three programs are polled every 0.1 s, and the coupler's exit is noticed at
-# once (it holds the write end of a pipe whose read end run_case.sh waits on). The first one that fails is named as
-# failed, the others as stopped: a solver that exits before the coupler told it to stop (also
+# once (it holds the write end of a pipe whose read end run_case.sh waits on). The first one
+# that fails is named as failed, the others as stopped: a solver that exits before the
+# coupler told it to stop (also
 # before the handshake), a coupler whose progress file (--progress-file, its heartbeat) is
 # older than the stall limit, or the coupler's own error naming a participant. Everything
 # still running is then stopped at once: SIGTERM (and SIGCONT, for a stopped process) to all,
@@ -354,21 +355,20 @@ resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 # when the coupler has ended, instead of at the next poll. Both ends are opened here (the
 # FIFO held open read-write meanwhile, so that no open waits for the other end), the name
 # removed, the coupler inherits the write end and this shell closes its own.
+# shellcheck disable=SC2206   # the empty arguments vanish
+coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)"
+             --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg)
 alive_fd=""
 rm -f coupler.alive
 if mkfifo coupler.alive 2>/dev/null &&
    exec {hold_fd}<>coupler.alive {alive_w}>coupler.alive {alive_fd}<coupler.alive {hold_fd}>&-; then
   rm -f coupler.alive
-  "${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
-    --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
-    >coupler.log 2>&1 {alive_fd}<&- &
+  "${coupler_cmd[@]}" >coupler.log 2>&1 {alive_fd}<&- &
   pid[coupler]=$!
   exec {alive_w}>&-
 else   # no FIFO here (a file system without them): polled only
   rm -f coupler.alive; alive_fd=""
-  "${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)" \
-    --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg \
-    >coupler.log 2>&1 &
+  "${coupler_cmd[@]}" >coupler.log 2>&1 &
   pid[coupler]=$!
 fi
 now_ms; cpl_started_ms=$NOW_MS
