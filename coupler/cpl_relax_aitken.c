@@ -12,6 +12,10 @@
  * affine map. This breaks the period-3 cycle of eq. (34) on on/off contact: two iterates
  * without contact make the map locally constant, eq. (34) gives α = 1, i.e. the contact-free
  * answer, which is the deep contact of the first iterate again (docs/notes/damped_contact.md).
+ * The same restart is taken when the next input would repeat one of the step's last
+ * AITKEN_RECENT inputs (within 1e-3 of the step to it): on a contact law with a kink the map
+ * is locally constant on one side, eq. (34) gives α = 1 there whether or not the residual
+ * grew, and the iteration would evaluate a point whose answer it already knows.
  *
  * Keys: first_iteration_cap, alpha_min, alpha_max, restart_growth. Counter: "restarts".
  */
@@ -23,6 +27,8 @@
 #include <string.h>
 
 #include "nc_json.h"
+
+#define AITKEN_RECENT 4   /* inputs of the step remembered for the repeat test */
 
 typedef struct aitken_settings {
     double first_cap;        /* cap of |α| in the first iteration of a step */
@@ -48,6 +54,9 @@ typedef struct aitken_state {
     double best_norm2;           /* ‖r_best‖² */
     int have_best;
     long n_restarts;             /* backtracks so far (diagnostics, tests) */
+    double *recent;              /* [AITKEN_RECENT][n] the step's last inputs (safeguard on) */
+    int n_recent;                /* how many of them are set */
+    int next_recent;             /* the slot the next input goes to */
 } aitken_state;
 
 static const char *const aitken_keys[] = {"first_iteration_cap", "alpha_min", "alpha_max",
@@ -122,6 +131,7 @@ static void aitken_free(void *state)
     free(a->x_best);
     free(a->r_best);
     free(a->alpha_best);
+    free(a->recent);
     free(a);
 }
 
@@ -147,7 +157,8 @@ static int aitken_create(void **state, const cpl_relax_settings *s, size_t n, si
     a->x_best = calloc(n + 1, sizeof *a->x_best);
     a->r_best = calloc(n + 1, sizeof *a->r_best);
     a->alpha_best = calloc(n_blocks, sizeof *a->alpha_best);
-    if (!a->alpha || !a->r_prev || !a->x_best || !a->r_best || !a->alpha_best) {
+    a->recent = calloc(AITKEN_RECENT * n + 1, sizeof *a->recent);
+    if (!a->alpha || !a->r_prev || !a->x_best || !a->r_best || !a->alpha_best || !a->recent) {
         aitken_free(a);
         return nc_error_set(err, 1, "aitken: out of memory for %zu unknowns", n);
     }
@@ -160,11 +171,52 @@ static void aitken_begin_step(void *state)
     aitken_state *a = state;
     a->have_prev = 0;
     a->have_best = 0;
+    a->n_recent = 0;
+    a->next_recent = 0;
 }
 
 static double clip(double x, double lo, double hi)
 {
     return x < lo ? lo : (x > hi ? hi : x);
+}
+
+/* The safeguard's restart: back to the best iterate with half its last α. */
+static double restart_from_best(aitken_state *a, double *x_next)
+{
+    for (size_t b = 0; b < a->n_blocks; b++) {
+        const size_t o = b * a->block, m = a->block;
+        double alpha = clip(0.5 * a->alpha_best[b], a->alpha_min, a->alpha_max);
+        for (size_t i = 0; i < m; i++) {
+            a->r_prev[o + i] = a->r_best[o + i];
+            x_next[o + i] = a->x_best[o + i] + alpha * a->r_best[o + i];
+        }
+        a->alpha[b] = a->alpha_best[b] = alpha;
+    }
+    a->n_restarts++;
+    return a->alpha[0];
+}
+
+/* Whether x_next lies within 1e-3 of the step x_in → x_next from one of the remembered
+ * inputs (x_in itself is not one of them yet). */
+static int repeats_recent(const aitken_state *a, const double *x_in, const double *x_next)
+{
+    double step2 = 0.0;
+    for (size_t i = 0; i < a->n; i++) step2 += (x_next[i] - x_in[i]) * (x_next[i] - x_in[i]);
+    if (!(step2 > 0.0)) return 0;
+    for (int j = 0; j < a->n_recent; j++) {
+        const double *x = a->recent + (size_t)j * a->n;
+        double d2 = 0.0;
+        for (size_t i = 0; i < a->n; i++) d2 += (x_next[i] - x[i]) * (x_next[i] - x[i]);
+        if (d2 <= 1e-6 * step2) return 1;
+    }
+    return 0;
+}
+
+static void remember_input(aitken_state *a, const double *x_in)
+{
+    memcpy(a->recent + (size_t)a->next_recent * a->n, x_in, a->n * sizeof *x_in);
+    a->next_recent = (a->next_recent + 1) % AITKEN_RECENT;
+    if (a->n_recent < AITKEN_RECENT) a->n_recent++;
 }
 
 static double aitken_update(void *state, const double *x_in, const double *x_out,
@@ -173,22 +225,15 @@ static double aitken_update(void *state, const double *x_in, const double *x_out
     aitken_state *a = state;
     double norm2 = 0.0;
     for (size_t i = 0; i < a->n; i++) norm2 += (x_out[i] - x_in[i]) * (x_out[i] - x_in[i]);
-    if (a->restart_growth > 0.0 && a->have_best && a->have_prev &&
+    const int safeguard = a->restart_growth > 0.0;
+    if (safeguard && a->have_best && a->have_prev &&
         !(norm2 <= a->restart_growth * a->restart_growth * a->best_norm2)) {
         /* the residual grew: back to the best iterate with half its last α */
-        for (size_t b = 0; b < a->n_blocks; b++) {
-            const size_t o = b * a->block, m = a->block;
-            double alpha = clip(0.5 * a->alpha_best[b], a->alpha_min, a->alpha_max);
-            for (size_t i = 0; i < m; i++) {
-                a->r_prev[o + i] = a->r_best[o + i];
-                x_next[o + i] = a->x_best[o + i] + alpha * a->r_best[o + i];
-            }
-            a->alpha[b] = a->alpha_best[b] = alpha;
-        }
-        a->n_restarts++;
-        return a->alpha[0];
+        remember_input(a, x_in);
+        return restart_from_best(a, x_next);
     }
-    const int new_best = a->restart_growth > 0.0 && (!a->have_best || norm2 < a->best_norm2);
+    const int new_best = safeguard && (!a->have_best || norm2 < a->best_norm2);
+    if (safeguard) remember_input(a, x_in);   /* before x_next (may alias x_in) */
     if (new_best) {
         memcpy(a->x_best, x_in, a->n * sizeof *x_in); /* before x_next (may alias x_in) */
         for (size_t i = 0; i < a->n; i++) a->r_best[i] = x_out[i] - x_in[i];
@@ -231,6 +276,12 @@ static double aitken_update(void *state, const double *x_in, const double *x_out
     }
     a->have_prev = 1;
     a->have_alpha = 1;
+    /* x_next against the step's last inputs (x_in among them never matches: its distance
+     * is the step itself); x_in is the newest slot, kept intact although x_next aliases it */
+    const double *x_now = a->recent + (size_t)((a->next_recent + AITKEN_RECENT - 1) %
+                                                AITKEN_RECENT) * a->n;
+    if (safeguard && a->have_best && repeats_recent(a, x_now, x_next))
+        return restart_from_best(a, x_next);
     return a->alpha[0];
 }
 

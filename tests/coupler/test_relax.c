@@ -212,6 +212,37 @@ static void test_aitken_restart_breaks_onoff_cycle(void **state)
     assert_true(restarts > 0);
 }
 
+/* A kink in the contact law (the steel net at restitution 0.1, Δt 1.6e-5 s): on one side the
+ * structure's answer does not depend on the input (x < 0.8: always 1), on the other it does.
+ * The iterates 0 → 1 → 0.556 → 0.714 see the answer 1 twice in a row, so eq. (34) gives
+ * α = 1 and sends the iteration to 1 again, an input already tried whose answer is known: a
+ * cycle of period 3 in which the residual never grows 4-fold (1, 0.8, 0.44, 0.29), so the
+ * growth test does not see it. The repeat test restarts from the best iterate (0.714, the
+ * last) with half its α instead; off (restart_growth 0, the paper's Aitken) the cycle
+ * stays. */
+static void test_aitken_restart_on_repeated_input(void **state)
+{
+    (void)state;
+    const double in[4] = {0.0, 1.0, 5.0 / 9.0, 5.0 / 7.0}, out[4] = {1.0, 0.2, 1.0, 1.0};
+    for (int on = 0; on < 2; on++) {
+        cpl_relax *r = make_aitken(1.0, 1.0, 1e-6, 2.0, on ? 4.0 : 0.0, 1, 1);
+        double next = 0.0;
+        cpl_relax_begin_step(r);
+        for (int k = 0; k < 4; k++) {
+            if (k > 0) assert_near(next, in[k], 1e-12);   /* the sequence above */
+            update(r, &in[k], &out[k], &next);
+        }
+        if (on) {
+            assert_near(next, 5.0 / 7.0 + 0.5 * (1.0 - 5.0 / 7.0), 1e-12);
+            assert_int_equal((long)counter(r, "restarts"), 1);
+        } else {
+            assert_near(next, 1.0, 1e-12);                  /* back to the second input */
+            assert_int_equal((long)counter(r, "restarts"), 0);
+        }
+        cpl_relax_free(r);
+    }
+}
+
 /* The safeguard never fires on a contracting affine map (residual decreasing), so the exact
  * secant of (34) is untouched: same result as without it. */
 static void test_aitken_restart_inactive_when_converging(void **state)
@@ -373,6 +404,7 @@ int main(void)
         cmocka_unit_test(test_aitken_clipping_and_zero_denominator),
         cmocka_unit_test(test_aitken_restart_breaks_onoff_cycle),
         cmocka_unit_test(test_aitken_restart_inactive_when_converging),
+        cmocka_unit_test(test_aitken_restart_on_repeated_input),
         cmocka_unit_test(test_iqn_linear_in_n_plus_1_updates),
         cmocka_unit_test(test_iqn_filter_drops_dependent_columns),
         cmocka_unit_test(test_iqn_reuse_previous_steps),
