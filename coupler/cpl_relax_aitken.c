@@ -197,7 +197,7 @@ static double restart_from_best(aitken_state *a, double *x_next)
 }
 
 /* Whether x_next lies within 1e-3 of the step x_in → x_next from one of the remembered
- * inputs (x_in itself is not one of them yet). */
+ * inputs (x_in, remembered too, is a whole step away). */
 static int repeats_recent(const aitken_state *a, const double *x_in, const double *x_next)
 {
     double step2 = 0.0;
