@@ -87,8 +87,7 @@ static int create_files(dem_output *o, const dem_sim *s, nc_error *err)
     return nc_h5_flush(h, err);
 }
 
-/* Appends formatted text to a growing buffer (the XDMF grids of all output steps so far, so
- * that each step is formatted once and the file is rewritten with one fwrite). */
+/* Appends formatted text to a growing buffer (the XDMF grids of the steps being added). */
 static int text_append(dem_text *t, nc_error *err, const char *format, ...)
     __attribute__((format(printf, 3, 4)));
 static int text_append(dem_text *t, nc_error *err, const char *format, ...)
@@ -180,18 +179,18 @@ static int format_step(dem_output *o, const dem_sim *s, long k, double time_s, l
     return 0;
 }
 
-static int write_xdmf(const dem_output *o, const char *name, const char *grid,
-                      const dem_text *text, nc_error *err)
+static const char XDMF_TAIL[] = "    </Grid>\n  </Domain>\n</Xdmf>\n";
+
+/* Adds the grids formatted in text to name (created with them when x holds no file yet). */
+static int add_xdmf(dem_output *o, nc_xdmf_file *x, const char *name, const char *grid,
+                    dem_text *text, nc_error *err)
 {
-    char path[1100], tmp[1120];
+    if (x->open) return nc_xdmf_append(x, text->data, text->len, err);
+    char path[1100], head[300];
     snprintf(path, sizeof path, "%s/%s", o->dir, name);
-    FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
-    if (!f) return -1;
-    fprintf(f, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
-               "    <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", grid);
-    fwrite(text->data, 1, text->len, f);
-    fputs("    </Grid>\n  </Domain>\n</Xdmf>\n", f);
-    return nc_file_replace_commit(f, tmp, path, err);
+    snprintf(head, sizeof head, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
+             "    <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", grid);
+    return nc_xdmf_create(x, path, head, text->data, text->len, XDMF_TAIL, err);
 }
 
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err)
@@ -249,9 +248,12 @@ int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, n
         return -1;
     o->n_out++;
     if (nc_h5_flush(&o->h5, err)) return -1;
+    o->xdmf_particles.len = 0;
+    o->xdmf_net.len = 0;
     if (format_step(o, s, k, s->time_s, net_row, err)) return -1;
-    if (n > 0 && write_xdmf(o, "particles.xdmf", "particles", &o->xdmf_particles, err)) return -1;
-    if (net_row >= 0 && write_xdmf(o, "dem_net.xdmf", "net", &o->xdmf_net, err)) return -1;
+    if (n > 0 && add_xdmf(o, &o->particles_xdmf, "particles.xdmf", "particles", &o->xdmf_particles, err))
+        return -1;
+    if (net_row >= 0 && add_xdmf(o, &o->net_xdmf, "dem_net.xdmf", "net", &o->xdmf_net, err)) return -1;
     return 0;
 }
 
@@ -304,14 +306,17 @@ static int reopen_files(dem_output *o, const dem_sim *s, nc_error *err)
     }
     o->xdmf_particles.len = 0;
     o->xdmf_net.len = 0;
+    nc_xdmf_close(&o->particles_xdmf);   /* written anew below, with the kept steps */
+    nc_xdmf_close(&o->net_xdmf);
     long first_net = o->n_out - o->net_rows;
     int rc = 0;
     for (long k = 0; k < o->n_out && rc == 0; k++)
         rc = format_step(o, s, k, times[k], o->net_written && k >= first_net ? k - first_net : -1, err);
     free(times);
     if (rc || nc_h5_flush(h, err)) return -1;
-    if (n > 0 && write_xdmf(o, "particles.xdmf", "particles", &o->xdmf_particles, err)) return -1;
-    if (o->net_rows > 0) return write_xdmf(o, "dem_net.xdmf", "net", &o->xdmf_net, err);
+    if (n > 0 && add_xdmf(o, &o->particles_xdmf, "particles.xdmf", "particles", &o->xdmf_particles, err))
+        return -1;
+    if (o->net_rows > 0) return add_xdmf(o, &o->net_xdmf, "dem_net.xdmf", "net", &o->xdmf_net, err);
     char old[1100]; /* a later run's net grids (the net was not written at the checkpoint) */
     snprintf(old, sizeof old, "%s/dem_net.xdmf", o->dir);
     remove(old);
@@ -324,6 +329,8 @@ static void close_files(dem_output *o)
                            &o->cl_pos, &o->cl_quat, &o->net_pos, &o->net_force};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     nc_h5_close(&o->h5);
+    nc_xdmf_close(&o->particles_xdmf);
+    nc_xdmf_close(&o->net_xdmf);
 }
 
 int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err)

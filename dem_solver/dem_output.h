@@ -30,6 +30,7 @@
 
 #include "dem_sim.h"
 #include "nc_h5.h"
+#include "nc_xdmf.h"
 
 typedef struct dem_text {
     char *data;
@@ -47,7 +48,9 @@ typedef struct dem_output {
     int net_written;       /* /net/edges written */
     size_t net_nodes, net_edges;
     double *scratch;       /* max(4 per body, 3 per sphere) */
-    dem_text xdmf_particles, xdmf_net; /* formatted grids of every output step so far */
+    dem_text xdmf_particles, xdmf_net; /* the grids being added (one step, or on resume all
+                                          * the checkpoint's steps) */
+    nc_xdmf_file particles_xdmf, net_xdmf;
 } dem_output;
 
 /* Prepares writing into the folder dir (which must exist and be writable); creates no file. */

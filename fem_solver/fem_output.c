@@ -2,7 +2,6 @@
 #include "fem_output.h"
 
 #include "nc_file.h"
-#include "nc_clock.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -121,7 +120,7 @@ int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
     return 0;
 }
 
-static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
+static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *err);
 
 static void close_series(fem_output *o)
 {
@@ -137,6 +136,7 @@ static void discard(fem_output *o)
 {
     close_series(o);
     nc_h5_close(&o->h5);
+    nc_xdmf_close(&o->xdmf);
     free(o->times);
     free(o->buf);
     free(o->force);
@@ -227,9 +227,8 @@ int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_err
     }
     /* the XDMF index lists exactly the rows kept */
     o->model = m;
-    o->last_xdmf_s = nc_clock_now_s();
-    o->xdmf_current = 1;
-    return write_xdmf(o, m, err);
+    nc_xdmf_close(&o->xdmf);
+    return write_xdmf(o, m, 0, err);
 }
 
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
@@ -290,32 +289,46 @@ static void attribute(FILE *f, const char *name, const char *kind, const char *c
                "    </Attribute>\n", name, kind, center, item);
 }
 
-static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
+/* The grid of output step i (time t). */
+static void format_grid(FILE *f, const fem_model *m, int i, double t)
 {
-    char path[700], tmp[710], item[600];
-    snprintf(path, sizeof path, "%s/fem.xdmf", o->dir);
-    FILE *f = nc_file_replace_open(path, tmp, sizeof tmp, err);
-    if (!f) return -1;
-    int e = m->n_elements, k = o->n_out;
+    char item[600];
+    int e = m->n_elements;
     hsize_t n3[2] = {(hsize_t)m->n_nodes, 3}, e1[1] = {(hsize_t)e};
-    fprintf(f, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-               "  <Grid Name=\"net\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-    for (int i = 0; i < k; i++) {
-        fprintf(f, "   <Grid Name=\"step%d\" GridType=\"Uniform\">\n    <Time Value=\"%.17g\"/>\n", i, o->times[i]);
-        fprintf(f, "    <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"%d\">\n"
-                   "     <DataItem Dimensions=\"%d 2\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">fem.h5:/mesh/elements</DataItem>\n"
-                   "    </Topology>\n", e, e);
-        /* current coordinates, so the net deforms without a Warp filter */
-        nc_xdmf_row_item(item, sizeof item, "fem.h5", "/output/position", i, 2, n3, NC_H5_F64);
-        fprintf(f, "    <Geometry GeometryType=\"XYZ\">\n     %s\n    </Geometry>\n", item);
-        attribute(f, "displacement", "Vector", "Node", "/output/displacement", i, 2, n3);
-        attribute(f, "velocity", "Vector", "Node", "/output/velocity", i, 2, n3);
-        attribute(f, "axial_force", "Scalar", "Cell", "/output/axial_force", i, 1, e1);
-        attribute(f, "strain", "Scalar", "Cell", "/output/strain", i, 1, e1);
-        fprintf(f, "   </Grid>\n");
-    }
-    fprintf(f, "  </Grid>\n </Domain>\n</Xdmf>\n");
-    return nc_file_replace_commit(f, tmp, path, err);
+    fprintf(f, "   <Grid Name=\"step%d\" GridType=\"Uniform\">\n    <Time Value=\"%.17g\"/>\n", i, t);
+    fprintf(f, "    <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"%d\">\n"
+               "     <DataItem Dimensions=\"%d 2\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">fem.h5:/mesh/elements</DataItem>\n"
+               "    </Topology>\n", e, e);
+    /* current coordinates, so the net deforms without a Warp filter */
+    nc_xdmf_row_item(item, sizeof item, "fem.h5", "/output/position", i, 2, n3, NC_H5_F64);
+    fprintf(f, "    <Geometry GeometryType=\"XYZ\">\n     %s\n    </Geometry>\n", item);
+    attribute(f, "displacement", "Vector", "Node", "/output/displacement", i, 2, n3);
+    attribute(f, "velocity", "Vector", "Node", "/output/velocity", i, 2, n3);
+    attribute(f, "axial_force", "Scalar", "Cell", "/output/axial_force", i, 1, e1);
+    attribute(f, "strain", "Scalar", "Cell", "/output/strain", i, 1, e1);
+    fprintf(f, "   </Grid>\n");
+}
+
+/* Adds the grids of output steps first .. n_out-1 to fem.xdmf; written anew with all of them
+ * when it is not open yet (the first output step, or a resumed run's kept rows). */
+static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *err)
+{
+    static const char head[] = "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+                               "  <Grid Name=\"net\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    static const char tail[] = "  </Grid>\n </Domain>\n</Xdmf>\n";
+    char path[700], *text = NULL;
+    size_t len = 0;
+    snprintf(path, sizeof path, "%s/fem.xdmf", o->dir);
+    if (!o->xdmf.open) first = 0;
+    FILE *f = open_memstream(&text, &len);
+    if (!f) return nc_error_set(err, 1, "%s: out of memory", path);
+    for (int i = first; i < o->n_out; i++) format_grid(f, m, i, o->times[i]);
+    int bad = fclose(f) != 0 || !text;
+    int rc = bad ? nc_error_set(err, 1, "%s: out of memory", path)
+             : o->xdmf.open ? nc_xdmf_append(&o->xdmf, text, len, err)
+                            : nc_xdmf_create(&o->xdmf, path, head, text, len, tail, err);
+    free(text);
+    return rc;
 }
 
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
@@ -350,18 +363,8 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;
     o->times[o->n_out++] = time_s;
     if (nc_h5_flush(&o->h5, err)) return -1;
-    /* The XDMF file grows with the number of output steps; rewriting it after each of
-     * thousands of steps would cost O(k^2) bytes, so beyond 200 steps it is rewritten at
-     * most every 2 s of wall time (and always on close). */
     o->model = m;
-    double now = nc_clock_now_s();
-    if (o->n_out <= 200 || now - o->last_xdmf_s > 2.0) {
-        o->last_xdmf_s = now;
-        o->xdmf_current = 1;
-        return write_xdmf(o, m, err);
-    }
-    o->xdmf_current = 0;
-    return 0;
+    return write_xdmf(o, m, o->n_out - 1, err);
 }
 
 int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set)
@@ -457,7 +460,6 @@ void fem_output_close(fem_output *o)
     if (!o) return;
     if (o->open) {
         nc_error ignored;
-        if (!o->xdmf_current && o->model) write_xdmf(o, o->model, &ignored);
         if (o->max_u_node >= 0 && o->disp.dataset > 0) {
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_magnitude", o->max_u_m, &ignored);
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);
@@ -468,6 +470,7 @@ void fem_output_close(fem_output *o)
         nc_h5_flush(&o->h5, &ignored);
         nc_h5_close(&o->h5);
     }
+    nc_xdmf_close(&o->xdmf);
     free(o->times);
     free(o->buf);
     free(o->force);

@@ -26,8 +26,8 @@
  *   with a breaking load given, the root attribute overloaded_elements (their total) and,
  *   when it is > 0, the root string attribute overload (the warnings, one line per set).
  * The file is flushed after every output step and fem.xdmf (XDMF 3, read by ParaView's
- * default reader) is rewritten via a temporary file and rename (at most every 2 s beyond
- * 200 output steps) so both stay readable if the run stops.
+ * default reader) grows by that step's grid in place (nc_xdmf.h), so both stay readable if
+ * the run stops.
  * A run resumed from a checkpoint reopens the files (fem_output_reopen): the series are cut
  * back to the rows they held at the checkpoint, fem.xdmf is rewritten for those rows, and
  * later output is appended.
@@ -37,6 +37,7 @@
 
 #include "fem_analysis.h"
 #include "nc_h5.h"
+#include "nc_xdmf.h"
 
 /* One element set's largest axial force and breaking-load exceedance (fem_output_overload). */
 typedef struct fem_set_overload {
@@ -64,8 +65,7 @@ typedef struct fem_output {
     int n_support;
     int *support_nodes;
     int open;
-    int xdmf_current;  /* the XDMF file lists every output step written */
-    double last_xdmf_s;
+    nc_xdmf_file xdmf; /* fem.xdmf, open from the first output step */
     const fem_model *model;
     double max_u_m, max_u_time_s;   /* run maximum of |u| over the monitored steps */
     int max_u_node;                 /* -1 before the first step */

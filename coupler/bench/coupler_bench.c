@@ -210,8 +210,8 @@ int main(int argc, char **argv)
     if (cpl_read_endpoint_file(ef, 30, fem_ep, sizeof fem_ep, NULL, &err)) goto out;
     snprintf(ef, sizeof ef, "%s/dem.endpoint", dir);
     if (cpl_read_endpoint_file(ef, 30, dem_ep, sizeof dem_ep, NULL, &err)) goto out;
-    if (cpl_remote_open(&fem, CPL_REMOTE_FEM, fem_ep, 30, 120, &err) ||
-        cpl_remote_open(&dem, CPL_REMOTE_DEM, dem_ep, 30, 120, &err) ||
+    if (cpl_remote_open(&fem, CPL_REMOTE_FEM, fem_ep, 30, 60, &err) ||
+        cpl_remote_open(&dem, CPL_REMOTE_DEM, dem_ep, 30, 60, &err) ||
         cpl_remote_interface_fem(&fem, &mesh, &u0, &v0, &err) ||
         cpl_remote_interface_dem(&dem, &mesh, &err))
         goto out;
