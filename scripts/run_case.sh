@@ -12,7 +12,17 @@
 # still running is then stopped at once: SIGTERM (and SIGCONT, for a stopped process) to all,
 # SIGKILL after the grace time.
 set -u
-root=$(cd "$(dirname "$0")/.." && pwd)
+# Every fork costs a few ms (about 4 on a small virtual machine, and the supervision loop runs
+# beside the solvers on the same cores): folders are made absolute, files read and pauses
+# taken with builtins, and external programs run only where there is no builtin.
+abs_dir() {   # DIR -> REPLY: its absolute path (no subshell); 1 if it cannot be entered
+  local here=$PWD
+  builtin cd -- "$1" 2>/dev/null || return 1
+  REPLY=$PWD
+  builtin cd -- "$here" || return 1
+}
+case $0 in */*) abs_dir "${0%/*}/.." ;; *) abs_dir .. ;; esac
+root=$REPLY
 bin=${NC_BIN:-$root/bin}
 python=/usr/bin/python3
 # The three processes take turns on the same cores: OpenMP threads that spin while waiting
@@ -119,66 +129,32 @@ positive='^[0-9]+([.][0-9]+)?$'
 for f in fem.json dem.json coupler.json; do
   [ -f "$case_dir/$f" ] || die "$case_dir/$f: missing (a case folder holds fem.json, dem.json, coupler.json)"
 done
-[ -x "$bin/coupler" ] || die "$bin/coupler not found (build with make, or set NC_BIN)"
-bin=$(cd "$bin" && pwd)
+for program in coupler netcouple-set; do
+  [ -x "$bin/$program" ] || die "$bin/$program not found (build with make, or set NC_BIN)"
+done
+abs_dir "$bin"; bin=$REPLY
 [ "$fem_program" = "$root/bin/fem_solver" ] && fem_program="$bin/fem_solver"
 [ "$dem_program" = "$root/bin/dem_solver" ] && dem_program="$bin/dem_solver"
-[ -n "$out" ] || out="runs/$(basename "$(cd "$case_dir" && pwd)")-$(date +%Y%m%d-%H%M%S)"
-mkdir -p "$out" || die "$out: cannot create the output folder"
-out=$(cd "$out" && pwd)
-case_abs=$(cd "$case_dir" && pwd)
+abs_dir "$case_dir" || die "$case_dir: cannot enter the case folder"
+case_abs=$REPLY
+[ -n "$out" ] || printf -v out 'runs/%s-%(%Y%m%d-%H%M%S)T' "${case_abs##*/}" -1
+[ -d "$out" ] || mkdir -p "$out" || die "$out: cannot create the output folder"
+abs_dir "$out" || die "$out: cannot enter the output folder"
+out=$REPLY
 if [ -z "$resume_dir" ] && [ "$case_abs" != "$out" ]; then
   cp -R "$case_abs"/. "$out"/ || die "cannot copy $case_dir into $out"
 fi
-rm -f "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
+remove_files() {   # FILE...: rm -f, run only when one of them exists
+  local f
+  for f in "$@"; do
+    if [ -e "$f" ] || [ -L "$f" ]; then rm -f -- "$@"; return; fi
+  done
+}
+remove_files "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
 
-# ---- --set overrides, applied to the copies with Python's json module ----------------------
+# ---- --set overrides, applied to the copies (coupler/set/netcouple_set.c) ---------------
 if [ ${#sets[@]} -gt 0 ]; then
-  # -I -S: no site packages to import (half of the interpreter's start-up)
-  "$python" -I -S - "$out" "${sets[@]}" <<'PY' || exit 2
-import json, sys
-out, sets = sys.argv[1], sys.argv[2:]
-docs = {}
-for s in sets:
-    if "=" not in s or "." not in s.split("=", 1)[0]:
-        sys.exit("run_case: --set %r: expected FILE.KEY=VALUE, e.g. coupler.dt=0.001" % s)
-    lhs, raw = s.split("=", 1)
-    name, *keys = lhs.split(".")
-    if name not in ("fem", "dem", "coupler"):
-        sys.exit("run_case: --set %r: FILE must be fem, dem or coupler" % s)
-    path = "%s/%s.json" % (out, name)
-    if name not in docs:
-        try:
-            with open(path) as f:
-                docs[name] = json.load(f)
-        except (OSError, ValueError) as e:
-            sys.exit("run_case: %s: %s" % (path, e))
-    try:
-        value = json.loads(raw)
-    except ValueError:
-        value = raw
-    node = docs[name]
-    for i, key in enumerate(keys):
-        last = i == len(keys) - 1
-        if isinstance(node, list):
-            if not key.isdigit() or int(key) >= len(node):
-                sys.exit("run_case: --set %r: '%s' is not an index of a list of %d items"
-                         % (s, key, len(node)))
-            key = int(key)
-        elif not isinstance(node, dict):
-            sys.exit("run_case: --set %r: '%s' is inside a %s, not an object or list"
-                     % (s, key, type(node).__name__))
-        if last:
-            node[key] = value
-        else:
-            if isinstance(node, dict) and key not in node:
-                node[key] = {}
-            node = node[key]
-for name, doc in docs.items():
-    with open("%s/%s.json" % (out, name), "w") as f:
-        json.dump(doc, f, indent=2)
-        f.write("\n")
-PY
+  "$bin/netcouple-set" "$out" "${sets[@]}" || exit 2
 fi
 
 # ---- supervision helpers ----------------------------------------------------------------
@@ -189,8 +165,20 @@ failed=""; failed_why=""   # the first program that failed, and how
 interrupted=""             # INT or TERM once the user stopped run_case.sh
 
 now_ms() { local t=$EPOCHREALTIME; NOW_MS=$(( ${t%[.,]*} * 1000 + 10#${t#*[.,]} / 1000 )); }
-ms() { local x=$1; [[ $x == *.* ]] || x="$x."; local f=${x#*.}000; echo $(( ${x%.*} * 1000 + 10#${f:0:3} )); }
-grace_ms=$(ms "$grace"); stall_ms=$(ms "$stall_limit")
+ms() {   # VAR SECONDS: VAR = SECONDS in milliseconds
+  local x=$2; [[ $x == *.* ]] || x="$x."; local f=${x#*.}000
+  printf -v "$1" '%d' $(( ${x%.*} * 1000 + 10#${f:0:3} ))
+}
+ms grace_ms "$grace"; ms stall_ms "$stall_limit"
+# the heartbeat's age is looked at (a `stat`) every tenth of the stall limit, at most every 1 s
+beat_every_ms=$((stall_ms / 10)); [ $beat_every_ms -le 1000 ] || beat_every_ms=1000
+# nap SECONDS: a pause without a process, a read with a timeout on a FIFO that never has data
+# (nap_fd, held open read-write by this shell from the start of the programs); sleep without it
+nap_fd=""
+nap() {
+  if [ -n "$nap_fd" ]; then read -r -t "$1" -u "$nap_fd" _; else sleep "$1"; fi
+  return 0
+}
 
 reap() {   # collects the exit status of every program that has ended
   local p
@@ -199,6 +187,13 @@ reap() {   # collects the exit status of every program that has ended
       wait "${pid[$p]}"; rc[$p]=$?
     fi
   done
+}
+any_running() {   # status 0 while one of the programs runs
+  local p
+  for p in "${programs[@]}"; do
+    [ -n "${pid[$p]:-}" ] && [ -z "${rc[$p]:-}" ] && return 0
+  done
+  return 1
 }
 running() {   # names of the programs still running
   local p out=""
@@ -219,19 +214,19 @@ fail_first() {   # P WHY: P is the first program that failed (later calls change
 }
 stop_all() {   # SIGTERM to every running program at once, SIGKILL after the grace time
   local p list
-  reap; list=$(running)
-  [ -n "$list" ] || return 0
+  reap; any_running || return 0
+  list=$(running)
   for p in $list; do kill -TERM "${pid[$p]}" 2>/dev/null; kill -CONT "${pid[$p]}" 2>/dev/null; done
   now_ms; local until=$((NOW_MS + grace_ms))
-  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ]; do sleep 0.01; reap; now_ms; done
+  while any_running && [ "$NOW_MS" -lt "$until" ]; do nap 0.01; reap; now_ms; done
   for p in $(running); do kill -KILL "${pid[$p]}" 2>/dev/null; done
   for p in $(running); do wait "${pid[$p]}"; rc[$p]=$?; done
 }
 wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS milliseconds
   now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
   reap
-  while [ -n "$(running)" ] && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
-    sleep 0.01; reap; now_ms
+  while any_running && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
+    nap 0.01; reap; now_ms
   done
 }
 on_signal() { interrupted=$1; }
@@ -286,16 +281,16 @@ report() {
 }
 
 # commands run inside $out: make relative paths in them absolute first
-absolute_words() {
+absolute_words() {   # VAR: the words of $VAR, those naming existing files made absolute
   local word result=""
-  for word in $1; do
-    if [ "${word#/}" = "$word" ] && [ -e "$word" ]; then word="$(pwd)/$word"; fi
+  for word in ${!1}; do
+    if [ "${word#/}" = "$word" ] && [ -e "$word" ]; then word="$PWD/$word"; fi
     result="$result $word"
   done
-  echo "${result# }"
+  printf -v "$1" '%s' "${result# }"
 }
-fem_program=$(absolute_words "$fem_program")
-dem_program=$(absolute_words "$dem_program")
+absolute_words fem_program
+absolute_words dem_program
 cd "$out" || die "$out: cannot enter"
 # the programs of a run, for --resume (which starts the same ones unless told otherwise)
 if [ -n "$resume_dir" ]; then
@@ -309,7 +304,7 @@ if [ -n "$resume_dir" ]; then
   for p in fem dem coupler; do [ -f "$p.log" ] && mv "$p.log" "$p.log.$n"; done
 fi
 printf 'fem %s\ndem %s\n' "$fem_program" "$dem_program" > run_case.programs
-rm -f coupler.progress coupler.progress.tmp
+remove_files coupler.progress coupler.progress.tmp
 status_shown=0; show_pid=""
 
 # ---- start the solvers and wait for their endpoints -------------------------------------
@@ -318,16 +313,38 @@ status_shown=0; show_pid=""
 # that never comes until its idle timeout.
 guard=()
 setpriv --pdeathsig TERM true 2>/dev/null && guard=(setpriv --pdeathsig TERM)
+# Two FIFOs, made with one mkfifo and their names removed with one rm once open:
+# - run_case.nap, held open read-write by this shell: it never has data (nap);
+# - coupler.alive: the coupler alone will hold its write end, so a read of it returns at once
+#   when the coupler has ended, instead of at the next poll. Both ends are opened now (the
+#   FIFO held open read-write meanwhile, so that no open waits for the other end).
+# The solvers get none of these; the coupler gets only the write end of coupler.alive.
+alive_fd=""; alive_w=""
+remove_files coupler.alive run_case.nap
+if mkfifo coupler.alive run_case.nap 2>/dev/null &&
+   exec {nap_fd}<>run_case.nap {hold_fd}<>coupler.alive {alive_w}>coupler.alive \
+        {alive_fd}<coupler.alive {hold_fd}>&-; then
+  remove_files coupler.alive run_case.nap
+else   # no FIFO here (a file system without them): polled, and pauses with sleep
+  nap_fd=""; alive_fd=""; alive_w=""
+  remove_files coupler.alive run_case.nap
+fi
+exec_closing() {   # "FD ..." CMD...: execs CMD with this shell's file descriptors FD closed
+  local fd
+  for fd in $1; do eval "exec $fd>&-"; done
+  shift
+  exec "$@"
+}
 # shellcheck disable=SC2086   # the program may be a command with arguments
-"${guard[@]}" $fem_program fem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint \
-  >fem.log 2>&1 &
+exec_closing "$nap_fd $alive_fd $alive_w" "${guard[@]}" $fem_program fem.json \
+  --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint >fem.log 2>&1 &
 pid[fem]=$!
 # shellcheck disable=SC2086
-"${guard[@]}" $dem_program dem.json --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint \
-  >dem.log 2>&1 &
+exec_closing "$nap_fd $alive_fd $alive_w" "${guard[@]}" $dem_program dem.json \
+  --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint >dem.log 2>&1 &
 pid[dem]=$!
 
-now_ms; endpoint_until=$((NOW_MS + $(ms "$endpoint_wait")))
+now_ms; ms endpoint_wait_ms "$endpoint_wait"; endpoint_until=$((NOW_MS + endpoint_wait_ms))
 while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   reap
   for p in fem dem; do
@@ -344,33 +361,22 @@ while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
     done
     report
   fi
-  sleep 0.01
+  nap 0.01
 done
 
 # ---- the coupler, and what the user sees ----------------------------------------------------
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
-# The coupler alone holds the write end of the pipe coupler.alive: a read of it returns at once
-# when the coupler has ended, instead of at the next poll. Both ends are opened here (the
-# FIFO held open read-write meanwhile, so that no open waits for the other end), the name
-# removed, the coupler inherits the write end and this shell closes its own.
+fem_endpoint=""; dem_endpoint=""
+read -r fem_endpoint <fem.endpoint; read -r dem_endpoint <dem.endpoint
 # shellcheck disable=SC2206   # the empty arguments vanish
-coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$(cat fem.endpoint)"
-             --dem-endpoint "$(cat dem.endpoint)" --progress-file coupler.progress $quiet_arg $resume_arg)
-alive_fd=""
-rm -f coupler.alive
-if mkfifo coupler.alive 2>/dev/null &&
-   exec {hold_fd}<>coupler.alive {alive_w}>coupler.alive {alive_fd}<coupler.alive {hold_fd}>&-; then
-  rm -f coupler.alive
-  "${coupler_cmd[@]}" >coupler.log 2>&1 {alive_fd}<&- &
-  pid[coupler]=$!
-  exec {alive_w}>&-
-else   # no FIFO here (a file system without them): polled only
-  rm -f coupler.alive; alive_fd=""
-  "${coupler_cmd[@]}" >coupler.log 2>&1 &
-  pid[coupler]=$!
-fi
+coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$fem_endpoint"
+             --dem-endpoint "$dem_endpoint" --progress-file coupler.progress $quiet_arg $resume_arg)
+# the coupler inherits the write end of coupler.alive, and this shell closes its own
+exec_closing "$nap_fd $alive_fd" "${coupler_cmd[@]}" >coupler.log 2>&1 &
+pid[coupler]=$!
+[ -z "$alive_w" ] || exec {alive_w}>&-
 now_ms; cpl_started_ms=$NOW_MS
 
 live=0
@@ -416,7 +422,7 @@ pause() {   # 0.1 s, or less once the coupler has ended
     [ $? -gt 128 ] && return 0
     exec {alive_fd}<&-; alive_fd=""   # the coupler has ended (it never writes)
   fi
-  sleep 0.01
+  nap 0.01
 }
 show() {   # new log lines, then the status line (a terminal); else just a pause
   if [ $live -eq 0 ] || [ -n "$log_ended" ]; then pause; return 0; fi
@@ -430,6 +436,7 @@ log_ended=""
 
 # ---- supervision while the coupler runs ---------------------------------------------------
 declare -A noticed_ms=()
+beat_checked_ms=0; beat_ms=$cpl_started_ms
 while :; do
   reap
   [ -n "${rc[coupler]:-}" ] && break
@@ -440,7 +447,7 @@ while :; do
     for _ in 1 2 3 4 5 6; do
       reap; read_progress
       [ -n "${rc[coupler]:-}" ] || [ "$cpl_state" = stopping ] || [ "$cpl_state" = finishing ] && break
-      sleep 0.05
+      nap 0.05
     done
     if [ -z "${rc[coupler]:-}" ] && [ "$cpl_state" != stopping ] && [ "$cpl_state" != finishing ]; then
       kill -TERM "${pid[coupler]}" 2>/dev/null
@@ -469,13 +476,16 @@ while :; do
     fi
   done
   # the heartbeat: the progress file is rewritten every step and every second of a wait
-  beat_ms=$cpl_started_ms
-  if [ -f coupler.progress ]; then
-    mtime=$(stat -c %.3Y coupler.progress 2>/dev/null)
-    # (a Ctrl-C to the whole job may also have hit stat)
-    [[ $mtime =~ ^[0-9]+([.][0-9]+)?$ ]] && beat_ms=$(ms "$mtime")
+  if [ "$NOW_MS" -ge "$beat_checked_ms" ]; then
+    beat_checked_ms=$((NOW_MS + beat_every_ms))
+    beat_ms=$cpl_started_ms
+    if [ -f coupler.progress ]; then
+      mtime=$(stat -c %.3Y coupler.progress 2>/dev/null)
+      # (a Ctrl-C to the whole job may also have hit stat)
+      [[ $mtime =~ ^[0-9]+([.][0-9]+)?$ ]] && ms beat_ms "$mtime"
+    fi
+    [ "$beat_ms" -lt "$cpl_started_ms" ] && beat_ms=$cpl_started_ms
   fi
-  [ "$beat_ms" -lt "$cpl_started_ms" ] && beat_ms=$cpl_started_ms
   if [ -z "$interrupted" ] && [ $((NOW_MS - beat_ms)) -gt "$stall_ms" ]; then
     fail_first coupler "stalled: no heartbeat (coupler.progress) for $(( (NOW_MS - beat_ms) / 1000 )) s, limit $stall_limit s"
     report
@@ -517,6 +527,6 @@ done
 if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.05 s of the coupler)
   [ -n "$log_ended" ] || read_log 1
 elif [ -n "$show_pid" ]; then
-  for i in $(seq 200); do kill -0 "$show_pid" 2>/dev/null || break; sleep 0.01; done
+  for ((i = 0; i < 200; i++)); do kill -0 "$show_pid" 2>/dev/null || break; nap 0.01; done
 fi
 report
