@@ -53,6 +53,32 @@ void dem_thread_work_free(dem_thread_work *w)
     memset(w, 0, sizeof *w);
 }
 
+/* Finds the contacts of the spheres of buffer b's range into that buffer; 1 when out of memory. */
+static int detect_range(dem_sim *s, int b, const dem_detector *const *active, int n_active,
+                        double dt)
+{
+    /* thread-local copies: the loop below then reloads nothing after a detector call */
+    dem_detect_fn *detect[N_DETECTORS];
+    int nd = n_active, overflow[N_DETECTORS] = {0}, ok = 1;
+    for (int k = 0; k < nd; k++) detect[k] = active[k]->detect;
+    dem_emit_ctx out = {&s->work.buffers[b], &s->work.spills[b], 0};
+    out.out->n = 0;
+    out.spill->n = 0;
+    size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
+    /* only this range writes the sums of its unshared spheres */
+    memset(s->model.sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+    memset(s->model.sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
+    for (size_t i = lo; i < hi && ok; i++) {
+        out.first = out.out->n;
+        s->contact.first[i] = (int32_t)out.first; /* + the buffer's offset, below */
+        for (int k = 0; k < nd && ok; k++) ok = detect[k](s, &out, i, dt, &overflow[k]) == 0;
+    }
+    s->work.overflow[b] = 0;
+    for (int k = nd - 1; k >= 0; k--)
+        if (overflow[k]) s->work.overflow[b] = 1 + k;
+    return !ok;
+}
+
 int dem_contact_pass(dem_sim *s, double dt, nc_error *err)
 {
     size_t n = s->model.sph.n;
@@ -75,28 +101,11 @@ int dem_contact_pass(dem_sim *s, double dt, nc_error *err)
     int nb = s->work.n_buffers;
     int failed = 0;
     /* Fixed contiguous ranges per buffer: the concatenation order never changes. */
-#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
-    for (int b = 0; b < nb; b++) {
-        /* thread-local copies: the loop below then reloads nothing after a detector call */
-        dem_detect_fn *detect[N_DETECTORS];
-        int nd = n_active, overflow[N_DETECTORS] = {0}, ok = 1;
-        for (int k = 0; k < nd; k++) detect[k] = active[k]->detect;
-        dem_emit_ctx out = {&s->work.buffers[b], &s->work.spills[b], 0};
-        out.out->n = 0;
-        out.spill->n = 0;
-        size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
-        /* only this range writes the sums of its unshared spheres */
-        memset(s->model.sph.force + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
-        memset(s->model.sph.torque + 3 * lo, 0, 3 * (hi - lo) * sizeof(double));
-        for (size_t i = lo; i < hi && ok; i++) {
-            out.first = out.out->n;
-            s->contact.first[i] = (int32_t)out.first; /* + the buffer's offset, below */
-            for (int k = 0; k < nd && ok; k++) ok = detect[k](s, &out, i, dt, &overflow[k]) == 0;
-        }
-        if (!ok) failed = 1;
-        s->work.overflow[b] = 0;
-        for (int k = nd - 1; k >= 0; k--)
-            if (overflow[k]) s->work.overflow[b] = 1 + k;
+    if (n >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed)
+        for (int b = 0; b < nb; b++) failed |= detect_range(s, b, active, n_active, dt);
+    } else {
+        for (int b = 0; b < nb; b++) failed |= detect_range(s, b, active, n_active, dt);
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory growing the contact list");
     size_t total = 0;
@@ -117,8 +126,14 @@ int dem_contact_pass(dem_sim *s, double dt, nc_error *err)
         size_t at[DEM_MAX_BUFFERS + 1];
         at[0] = 0;
         for (int b = 0; b < nb; b++) at[b + 1] = at[b] + s->work.buffers[b].n;
-#pragma omp parallel for schedule(static, 1) num_threads(nb) if (total >= DEM_PARALLEL_MIN)
-        for (int b = 0; b < nb; b++) dem_contacts_copy_range(&s->contact.list, at[b], &s->work.buffers[b], 0, s->work.buffers[b].n);
+        if (total >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static, 1) num_threads(nb)
+            for (int b = 0; b < nb; b++)
+                dem_contacts_copy_range(&s->contact.list, at[b], &s->work.buffers[b], 0, s->work.buffers[b].n);
+        } else {
+            for (int b = 0; b < nb; b++)
+                dem_contacts_copy_range(&s->contact.list, at[b], &s->work.buffers[b], 0, s->work.buffers[b].n);
+        }
         s->contact.list.n = total;
     }
 

@@ -169,26 +169,33 @@ int dem_sim_restore(dem_sim *s, nc_error *err)
     return 0;
 }
 
+/* The smaller of gap and sphere i's clearance to the net edges near it. */
+static double sphere_net_gap(const dem_sim *s, const dem_net *net, long i, double gap)
+{
+    const double *p = s->model.sph.pos + 3 * i;
+    const int32_t *items;
+    size_t count = dem_item_grid_query(net->grid, p, &items);
+    for (size_t c = 0; c < count; c++) {
+        const int32_t *e = net->edges + 2 * (size_t)items[c];
+        double q[3], t;
+        double d2 = dem_closest_on_segment(p, net->cur + 3 * (size_t)e[0],
+                                           net->cur + 3 * (size_t)e[1], q, &t);
+        double g = sqrt(d2) - s->model.sph.radius[i] - net->cable_radius_m;
+        if (g < gap) gap = g;
+    }
+    return gap;
+}
+
 void dem_sim_net_gap(const dem_sim *s, dem_coupled_info *info)
 {
     const dem_net *net = &s->model.net;
     double gap = 1e30;
     long n = (long)s->model.sph.n;
-    if (net->active) {
-#pragma omp parallel for schedule(static) reduction(min : gap) num_threads(s->work.n_buffers) if (n >= DEM_PARALLEL_MIN)
-        for (long i = 0; i < n; i++) {
-            const double *p = s->model.sph.pos + 3 * i;
-            const int32_t *items;
-            size_t count = dem_item_grid_query(net->grid, p, &items);
-            for (size_t c = 0; c < count; c++) {
-                const int32_t *e = net->edges + 2 * (size_t)items[c];
-                double q[3], t;
-                double d2 = dem_closest_on_segment(p, net->cur + 3 * (size_t)e[0],
-                                                   net->cur + 3 * (size_t)e[1], q, &t);
-                double g = sqrt(d2) - s->model.sph.radius[i] - net->cable_radius_m;
-                if (g < gap) gap = g;
-            }
-        }
+    if (net->active && n >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static) reduction(min : gap) num_threads(s->work.n_buffers)
+        for (long i = 0; i < n; i++) gap = sphere_net_gap(s, net, i, gap);
+    } else if (net->active) {
+        for (long i = 0; i < n; i++) gap = sphere_net_gap(s, net, i, gap);
     }
     info->min_gap_m = gap;
     info->near_interface = gap < net->near_distance_m;

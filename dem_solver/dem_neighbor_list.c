@@ -74,6 +74,37 @@ static int32_t neighbours_of(const dem_sim *s, size_t i, double skin, int32_t *o
     return count;
 }
 
+/* The neighbours of the spheres of buffer b's range into its part; 1 when out of memory. */
+static int neighbours_of_range(dem_sim *s, int b)
+{
+    struct dem_nbr_part *part = &s->nlist.part[b];
+    size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
+    size_t used = 0;
+    for (size_t i = lo; i < hi; i++) {
+        size_t room = part->cap - used;
+        int32_t count = neighbours_of(s, i, s->nlist.skin_m, part->a ? part->a + used : NULL, room);
+        if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
+            size_t cap = 2 * (used + (size_t)count) + 1024;
+            int32_t *a = realloc(part->a, cap * sizeof *a);
+            if (!a) return 1;
+            part->a = a;
+            part->cap = cap;
+            if ((size_t)count > room) neighbours_of(s, i, s->nlist.skin_m, part->a + used, (size_t)count);
+        }
+        s->nlist.first[i + 1] = count;
+        used += (size_t)count;
+    }
+    return 0;
+}
+
+/* Part b's neighbours into their place in the list. */
+static void copy_part(dem_sim *s, int b)
+{
+    size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
+    size_t from = (size_t)s->nlist.first[lo], count = (size_t)s->nlist.first[hi] - from;
+    if (count) memcpy(s->nlist.nbr + from, s->nlist.part[b].a, count * sizeof(int32_t));
+}
+
 int dem_neighbor_list_update(dem_sim *s, nc_error *err)
 {
     size_t n = s->model.sph.n;
@@ -83,28 +114,11 @@ int dem_neighbor_list_update(dem_sim *s, nc_error *err)
     if (!s->nlist.rebuild) return 0;
     if (dem_cell_grid_build(&s->nlist.grid, n, s->model.sph.pos, 2.0 * s->model.r_max + s->nlist.skin_m, err)) return -1;
     int failed = 0;
-#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed) if (n >= DEM_PARALLEL_MIN)
-    for (int b = 0; b < nb; b++) {
-        struct dem_nbr_part *part = &s->nlist.part[b];
-        size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
-        size_t used = 0;
-        for (size_t i = lo; i < hi && !failed; i++) {
-            size_t room = part->cap - used;
-            int32_t count = neighbours_of(s, i, s->nlist.skin_m, part->a ? part->a + used : NULL, room);
-            if ((size_t)count > room || part->cap - used - (size_t)count < 64) {
-                size_t cap = 2 * (used + (size_t)count) + 1024;
-                int32_t *a = realloc(part->a, cap * sizeof *a);
-                if (!a) {
-                    failed = 1;
-                    break;
-                }
-                part->a = a;
-                part->cap = cap;
-                if ((size_t)count > room) neighbours_of(s, i, s->nlist.skin_m, part->a + used, (size_t)count);
-            }
-            s->nlist.first[i + 1] = count;
-            used += (size_t)count;
-        }
+    if (n >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static, 1) num_threads(nb) reduction(| : failed)
+        for (int b = 0; b < nb; b++) failed |= neighbours_of_range(s, b);
+    } else {
+        for (int b = 0; b < nb; b++) failed |= neighbours_of_range(s, b);
     }
     if (failed) return nc_error_set(err, 1, "dem: out of memory for the neighbour list");
     s->nlist.first[0] = 0;
@@ -125,11 +139,11 @@ int dem_neighbor_list_update(dem_sim *s, nc_error *err)
             s->nlist.nbr = p;
             s->nlist.cap = cap;
         }
-#pragma omp parallel for schedule(static, 1) num_threads(nb) if (total >= DEM_PARALLEL_MIN)
-        for (int b = 0; b < nb; b++) {
-            size_t lo = s->work.range_first[b], hi = s->work.range_first[b + 1];
-            size_t from = (size_t)s->nlist.first[lo], count = (size_t)s->nlist.first[hi] - from;
-            if (count) memcpy(s->nlist.nbr + from, s->nlist.part[b].a, count * sizeof(int32_t));
+        if (total >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static, 1) num_threads(nb)
+            for (int b = 0; b < nb; b++) copy_part(s, b);
+        } else {
+            for (int b = 0; b < nb; b++) copy_part(s, b);
         }
     }
     /* new ranges for the contact passes, balanced by the expected work of each sphere: its
@@ -173,8 +187,12 @@ int dem_neighbor_list_close_pairs(dem_sim *s, double gap, long *count, nc_error 
     if (n < 2) return 0;
     if (dem_cell_grid_build(&s->nlist.grid, n, s->model.sph.pos, 2.0 * s->model.r_max + gap, err)) return -1;
     long nl = (long)n, total = 0;
-#pragma omp parallel for schedule(static) reduction(+ : total) num_threads(s->work.n_buffers) if (nl >= DEM_PARALLEL_MIN)
-    for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL, 0);
+    if (nl >= DEM_PARALLEL_MIN) {
+#pragma omp parallel for schedule(static) reduction(+ : total) num_threads(s->work.n_buffers)
+        for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL, 0);
+    } else {
+        for (long i = 0; i < nl; i++) total += neighbours_of(s, (size_t)i, gap, NULL, 0);
+    }
     *count = total;
     s->nlist.rebuild = 1; /* the grid now has another cell size */
     return 0;
