@@ -58,6 +58,16 @@ static void assert_file_is(const char *grids)
     free(text);
 }
 
+/* Appends grid to x, whose file listed the grids `before`, and checks that it lists both. */
+static void append_after(nc_xdmf_file *x, const char *before, const char *grid)
+{
+    nc_error err;
+    assert_int_equal(nc_xdmf_append(x, grid, strlen(grid), &err), 0);
+    char all[4096];
+    snprintf(all, sizeof all, "%s%s", before, grid);
+    assert_file_is(all);
+}
+
 static void test_grows_in_place(void **state)
 {
     (void)state;
@@ -77,10 +87,7 @@ static void test_grows_in_place(void **state)
     const char *kept = "   <Grid Name=\"step0\"/>\n   <Grid Name=\"step1\"/>\n";
     assert_int_equal(nc_xdmf_create(&x, path, HEAD, kept, strlen(kept), TAIL, &err), 0);
     assert_file_is(kept);
-    assert_int_equal(nc_xdmf_append(&x, "   <Grid Name=\"step2\"/>\n", 24, &err), 0);
-    char all[512];
-    snprintf(all, sizeof all, "%s%s", kept, "   <Grid Name=\"step2\"/>\n");
-    assert_file_is(all);
+    append_after(&x, kept, "   <Grid Name=\"step2\"/>\n");
     nc_xdmf_close(&x);
     nc_xdmf_close(&x);   /* twice is harmless */
     assert_int_not_equal(nc_xdmf_append(&x, "x", 1, &err), 0);
@@ -110,10 +117,7 @@ static void test_failed_append_keeps_the_file(void **state)
     assert_non_null(strstr(err.message, "still lists the steps before it"));
     assert_file_is(first);
     /* with room again, the next step is added after the ones before */
-    assert_int_equal(nc_xdmf_append(&x, "   <Grid Name=\"step1\"/>\n", 24, &err), 0);
-    char both[256];
-    snprintf(both, sizeof both, "%s%s", first, "   <Grid Name=\"step1\"/>\n");
-    assert_file_is(both);
+    append_after(&x, first, "   <Grid Name=\"step1\"/>\n");
     nc_xdmf_close(&x);
 }
 
