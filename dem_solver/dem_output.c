@@ -1,8 +1,6 @@
 /* dem_output — HDF5 results and the XDMF index that lets ParaView show the particles. */
 #include "dem_output.h"
 
-#include "nc_file.h"
-
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>

@@ -1,8 +1,6 @@
 /* fem_output — HDF5 results and the XDMF index ParaView opens (layout in fem_output.h). */
 #include "fem_output.h"
 
-#include "nc_file.h"
-
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
