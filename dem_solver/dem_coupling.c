@@ -191,10 +191,12 @@ void dem_sim_net_gap(const dem_sim *s, dem_coupled_info *info)
     const dem_net *net = &s->model.net;
     double gap = 1e30;
     long n = (long)s->model.sph.n;
-    if (net->active && n >= DEM_PARALLEL_MIN) {
+    if (!net->active) {
+        /* no net wall: no gap */
+    } else if (n >= DEM_PARALLEL_MIN) {
 #pragma omp parallel for schedule(static) reduction(min : gap) num_threads(s->work.n_buffers)
         for (long i = 0; i < n; i++) gap = sphere_net_gap(s, net, i, gap);
-    } else if (net->active) {
+    } else {
         for (long i = 0; i < n; i++) gap = sphere_net_gap(s, net, i, gap);
     }
     info->min_gap_m = gap;

@@ -15,8 +15,8 @@
  * particles.xdmf holds the spheres (Polyvertex, attributes radius, id, velocity,
  * angular_velocity), dem_net.xdmf the net wall (Polyline, contact_force); both are XDMF 3
  * temporal collections read by ParaView's default reader. The file is flushed after every
- * output step and the XDMF files are rewritten (temp file + rename), so all stay valid if
- * the run is stopped.
+ * output step and the XDMF files grow in place by that step's grids (nc_xdmf.h), so all stay
+ * valid if the run is stopped.
  *
  * dem_output_open() only prepares the writer: dem.h5 is created (truncating) by the first
  * dem_output_write(), so a coupled participant touches no result file before its first

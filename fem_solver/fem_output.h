@@ -91,7 +91,7 @@ int fem_output_reserve_peaks(fem_output *o, const fem_model *m, nc_error *err);
  * and, from s->axial (current: fem_analysis_update_axial), each set's largest axial force
  * and the elements above their set's breaking_load_n. */
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
-/* Appends one full output step, flushes, rewrites the XDMF file. */
+/* Appends one full output step, flushes, adds the step's grid to the XDMF file. */
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
 /* Support reactions of the current state into r [3 n_support] (N), load factor lambda. */
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r);

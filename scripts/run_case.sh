@@ -132,7 +132,8 @@ done
 for program in coupler netcouple-set; do
   [ -x "$bin/$program" ] || die "$bin/$program not found (build with make, or set NC_BIN)"
 done
-abs_dir "$bin"; bin=$REPLY
+abs_dir "$bin" || die "$bin: cannot enter the programs' folder"
+bin=$REPLY
 [ "$fem_program" = "$root/bin/fem_solver" ] && fem_program="$bin/fem_solver"
 [ "$dem_program" = "$root/bin/dem_solver" ] && dem_program="$bin/dem_solver"
 abs_dir "$case_dir" || die "$case_dir: cannot enter the case folder"
