@@ -160,16 +160,80 @@ static void add_member_force(const fem_model *m, int b, const double *mf, double
         for (int i = 0; i < 3; i++) f[3 * chain_node(m, first, count, j) + i] += mf[3 * j + i];
 }
 
+/* 1: member b is a chain whose nodes that are not neighbours are coupled only by a rank-one
+ * term, kept out of the matrix (fem_element.h chain_rank_one) */
+static int split_rank_one(const fem_model *m, int b)
+{
+    return element_ops(m, m->member_first[b])->chain_rank_one != NULL;
+}
+
 /* Pseudo-elements of the pattern for the node pairs of a chain member that are not
- * neighbours (its tangent is dense), in member order, rows i, columns j > i + 1. */
+ * neighbours (its tangent is dense), in member order, rows i, columns j > i + 1; none for a
+ * member whose rank-one term stays out of the matrix. */
 static int chain_pair_count(const fem_model *m)
 {
     int n = 0;
     for (int b = 0; b < m->n_members; b++) {
         int c = m->member_first[b + 1] - m->member_first[b] + 1;   /* nodes */
-        if (c > 2) n += (c - 1) * (c - 2) / 2;
+        if (c > 2 && !split_rank_one(m, b)) n += (c - 1) * (c - 2) / 2;
     }
     return n;
+}
+
+/* The rank-one members' equation lists and term storage (fem_analysis.h). */
+static int rank_one_alloc(fem_analysis *s)
+{
+    const fem_model *m = s->m;
+    s->lr_of_member = malloc(((size_t)m->n_members + 1) * sizeof *s->lr_of_member);
+    s->lr_at = malloc(((size_t)m->n_members + 1) * sizeof *s->lr_at);
+    if (!s->lr_of_member || !s->lr_at) return -1;
+    size_t at = 0;
+    s->lr_members = 0;
+    for (int b = 0; b < m->n_members; b++) {
+        s->lr_of_member[b] = -1;
+        if (!split_rank_one(m, b)) continue;
+        s->lr_of_member[b] = s->lr_members;
+        s->lr_at[s->lr_members++] = at;
+        at += 3 * (size_t)(m->member_first[b + 1] - m->member_first[b] + 1);
+    }
+    s->lr_at[s->lr_members] = at;
+    const size_t r = (size_t)s->lr_members + 1;
+    s->lr_eq = malloc((at + 1) * sizeof *s->lr_eq);
+    s->lr_g = calloc(at + 1, sizeof(double));
+    s->lr_gc = calloc(at + 1, sizeof(double));
+    s->lr_k = calloc(r, sizeof(double));
+    s->lr_c = calloc(r, sizeof(double));
+    s->lr_c_frozen = calloc(r, sizeof(double));
+    if (!s->lr_eq || !s->lr_g || !s->lr_gc || !s->lr_k || !s->lr_c || !s->lr_c_frozen) return -1;
+    for (int b = 0; b < m->n_members; b++) {
+        const int r_b = s->lr_of_member[b];
+        if (r_b < 0) continue;
+        const int first = m->member_first[b], count = m->member_first[b + 1] - first;
+        for (int j = 0; j <= count; j++)
+            for (int c = 0; c < 3; c++)
+                s->lr_eq[s->lr_at[r_b] + 3 * (size_t)j + c] = s->eq[3 * chain_node(m, first, count, j) + c];
+    }
+    return 0;
+}
+
+/* y += the rank-one terms of the tangent times x (both over the free equations) */
+static void rank_one_apply(const fem_analysis *s, const double *x, double *y)
+{
+    for (int r = 0; r < s->lr_members; r++) {
+        const int *eq = s->lr_eq + s->lr_at[r];
+        const int n = (int)(s->lr_at[r + 1] - s->lr_at[r]);
+        const double coef[2] = {s->lr_k[r], s->lr_c[r]};
+        const double *vec[2] = {s->lr_g + s->lr_at[r], s->lr_gc + s->lr_at[r]};
+        for (int t = 0; t < 2; t++) {
+            if (coef[t] == 0.0) continue;
+            double gx = 0.0;
+            for (int a = 0; a < n; a++)
+                if (eq[a] >= 0) gx += vec[t][a] * x[eq[a]];
+            gx *= coef[t];
+            for (int a = 0; a < n; a++)
+                if (eq[a] >= 0) y[eq[a]] += gx * vec[t][a];
+        }
+    }
 }
 
 /* The matrix pattern: the elements' couplings and the extra node pairs (each a 2-node
@@ -193,6 +257,7 @@ static int build_pattern(fem_analysis *s, nc_error *err)
     size_t q = 0;
     for (int mb = 0; mb < m->n_members; mb++) {
         int first = m->member_first[mb], count = m->member_first[mb + 1] - first;
+        if (split_rank_one(m, mb)) continue;
         for (int i = 0; i <= count; i++)
             for (int j = i + 2; j <= count; j++) {
                 chain[2 * q] = chain_node(m, first, count, i);
@@ -334,6 +399,8 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
         }
     }
     free(elem_eq);
+    if (rank_one_alloc(s))
+        return nc_error_set(err, 1, "%s: out of memory for the sliding ropes' rank-one terms", m->source);
     if (build_pattern(s, err)) return nc_error_prefix(err, "%s", m->source);
     /* model loads at full scale: point loads + self-weight (half of rho A L g per node, which
      * is also the consistent load of a linear element) */
@@ -363,6 +430,8 @@ void fem_analysis_free(fem_analysis *s)
     free(s->cg_r); free(s->cg_z); free(s->cg_p); free(s->cg_q); free(s->axial);
     free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
     free(s->chain_f); free(s->chain_v); free(s->chain_K);
+    free(s->lr_of_member); free(s->lr_at); free(s->lr_eq); free(s->lr_g); free(s->lr_gc);
+    free(s->lr_k); free(s->lr_c); free(s->lr_c_frozen);
     free(s->damping_K); free(s->damping_at); free(s->damping_start); free(s->damping_end);
     memset(s, 0, sizeof *s);
 }
@@ -419,6 +488,20 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
     double *f = s->chain_f, *K = s->chain_K;
     const double *C = s->damping_K ? s->damping_K + s->damping_at[c->member] : NULL;
     int slack = ops->chain_response(c, f, matrix ? K : NULL, s->axial + c->first);
+    /* a rank-one member: K and C less their rank-one terms go into the matrix (neighbour
+     * blocks only), the terms themselves to lr_* */
+    const int r1 = s->lr_of_member[c->member];
+    const double *g = NULL, *gc = NULL;
+    double k1 = 0.0, c1 = 0.0;
+    if (matrix && r1 >= 0) {
+        double *gw = s->lr_g + s->lr_at[r1];
+        k1 = ops->chain_rank_one(c, gw);
+        g = gw;
+        gc = s->lr_gc + s->lr_at[r1];
+        c1 = C ? s->lr_c_frozen[r1] : 0.0;
+        s->lr_k[r1] = c_k * k1;
+        s->lr_c[r1] = C ? c_c * c1 : 0.0;
+    }
     if (C && v) {
         member_damping_force(s, c->member, v, s->chain_v);
         for (int a = 0; a < dim; a++) f[a] += s->chain_v[a];
@@ -454,15 +537,20 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
     if (matrix)
         for (int i = 0; i < n; i++)
             for (int j = 0; j < n; j++) {
+                if (r1 >= 0 && (i > j + 1 || j > i + 1)) continue;   /* only rank-one there */
                 double B[9];
                 for (int a = 0; a < 3; a++)
-                    for (int b = 0; b < 3; b++) B[3 * a + b] = K[(3 * i + a) * dim + 3 * j + b];
+                    for (int b = 0; b < 3; b++)
+                        B[3 * a + b] = K[(3 * i + a) * dim + 3 * j + b] -
+                                       (g ? k1 * g[3 * i + a] * g[3 * j + b] : 0.0);
                 int ra, cb;
                 const int *sl = chain_block_slots(s, c->first, c->count, q0, i, j, &ra, &cb);
                 scatter_block(s->K.x, sl, ra, cb, B, c_k);
                 if (C && c_c != 0.0) {
                     for (int a = 0; a < 3; a++)
-                        for (int b = 0; b < 3; b++) B[3 * a + b] = C[(3 * i + a) * dim + 3 * j + b];
+                        for (int b = 0; b < 3; b++)
+                            B[3 * a + b] = C[(3 * i + a) * dim + 3 * j + b] -
+                                           (gc ? c1 * gc[3 * i + a] * gc[3 * j + b] : 0.0);
                     scatter_block(s->K.x, sl, ra, cb, B, c_c);
                 }
             }
@@ -516,7 +604,7 @@ static double assemble(fem_analysis *s, double lambda, const step_weights *sw, c
         member_ctx(m, mb, u, hist, &ctx);
         if (ops->chain) {
             slack_count += assemble_chain(s, &ctx, ops, q0, c_m, c_k, c_c, w, v, matrix, fd, &scale2);
-            if (ctx.count > 1) q0 += ctx.count * (ctx.count - 1) / 2;
+            if (ctx.count > 1 && s->lr_of_member[mb] < 0) q0 += ctx.count * (ctx.count - 1) / 2;
             continue;
         }
         const int k = 3 * m->conn[2 * e], l = 3 * m->conn[2 * e + 1];
@@ -686,8 +774,10 @@ static int pcg_solve(fem_analysis *s, nc_error *err)
 }
 
 /* The Newton step with an unsymmetric tangent (an interface linearisation with a skew
- * part, fem_gmres.h): GMRES on the matrix plus the skew part, preconditioned by the
- * factorisation of the matrix (refactorised first with `refactor`; else the kept one).
+ * part, fem_gmres.h) or with rank-one terms kept out of the matrix (sliding ropes): GMRES on
+ * the matrix plus the skew part and those terms, preconditioned by the factorisation of the
+ * matrix (refactorised first with `refactor`; else the kept one); each term costs GMRES at
+ * most one iteration more, and keeps a dense block over the rope out of the factor.
  * Returns 0, 1 when GMRES did not reach tol within max_it (du holds its last iterate), -1 on
  * error. */
 #define FEM_GMRES_TOL 1e-12  /* relative residual of a step with a fresh factorisation */
@@ -696,7 +786,8 @@ static int pcg_solve(fem_analysis *s, nc_error *err)
 #define FEM_GMRES_CHEAP 15   /* more GMRES iterations than this with a kept factorisation:
                                 refactorise next time. A fresh one already leaves GMRES the
                                 skew part's rank (7-9 on the three-module barrier), and there
-                                a factorisation costs about 60 iterations: at 6, as for CG,
+                                a factorisation cost about 60 iterations (10 since the sliding
+                                ropes' rank-one terms left the matrix): at 6, as for CG,
                                 nearly every Newton step refactorised */
 
 static int apply_tangent(void *ctx, const double *x, double *y, nc_error *err)
@@ -704,7 +795,8 @@ static int apply_tangent(void *ctx, const double *x, double *y, nc_error *err)
     (void)err;
     fem_analysis *s = ctx;
     fem_sparse_matvec(&s->K, x, y);
-    fem_ijac_skew_apply(&s->lin, s->skew_lk, s->skew_lc, x, y);
+    if (s->lin.active) fem_ijac_skew_apply(&s->lin, s->skew_lk, s->skew_lc, x, y);
+    rank_one_apply(s, x, y);
     return 0;
 }
 
@@ -851,9 +943,10 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
             mode = !s->K.use_lu ? 2 : s->factor_lin == s->lin_serial ? 1 : 0;
         else mode = 0;
         int cg_slow = 0;
-        if (s->lin.active && s->lin.has_skew) {
-            /* an unsymmetric tangent: GMRES around the symmetric factorisation, an inexact
-             * step with a kept factor as CG would make, else to FEM_GMRES_TOL */
+        if ((s->lin.active && s->lin.has_skew) || s->lr_members > 0) {
+            /* an unsymmetric tangent, or rank-one terms outside the matrix: GMRES around the
+             * factorisation of the matrix, an inexact step with a kept factor as CG would
+             * make, else to FEM_GMRES_TOL */
             s->skew_lk = sw.l_k;
             s->skew_lc = sw.l_c;
             if (mode == 2) {
@@ -1013,6 +1106,8 @@ static void freeze_damping(fem_analysis *s, const double *u, const double *hist,
         if (ops->chain) ops->chain_response(&ctx, f, C, s->chain_v);   /* chain_v: axial, unused */
         else ops->pair_response(&ctx, f, C, &slack);
         for (size_t i = 0; i < n_c; i++) C[i] *= kappa;
+        const int r = s->lr_of_member[b];
+        if (r >= 0) s->lr_c_frozen[r] = kappa * ops->chain_rank_one(&ctx, s->lr_gc + s->lr_at[r]);
         add_member_force(m, b, f, fd);
     }
 }
@@ -1185,6 +1280,12 @@ int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end
     state_copy(&s->cur, &s->start, s->ndof);
     fem_analysis_update_axial(s);
     return 0;
+}
+
+void fem_analysis_tangent_apply(const fem_analysis *s, const double *x, double *y)
+{
+    fem_sparse_matvec(&s->K, x, y);
+    rank_one_apply(s, x, y);
 }
 
 int fem_analysis_set_linearisation(fem_analysis *s, const double *u_ref, const double *v_ref,

@@ -78,6 +78,16 @@ typedef struct fem_analysis {
     double *mass_x, *mass_y; /* [ndof] mass-matrix product work vectors */
     double *a_unshifted;   /* [ndof] start-of-step acceleration before the load shift */
     int n_chain_pairs;     /* pattern pseudo-elements of chain members' non-neighbour nodes */
+    /* The rank-one terms of chain members' tangents (fem_element.h chain_rank_one), kept out
+     * of the factorised matrix: rank-one member r (lr_of_member[b] = r, else -1) has the
+     * equations lr_eq[lr_at[r] .. lr_at[r + 1]) of its chain nodes (-1: supported), the
+     * stiffness term lr_k[r] g g^T (g in lr_g, the tangent weight c_k included) and the
+     * damping term lr_c[r] g_c g_c^T (g_c in lr_gc, frozen with C_K: lr_c_frozen[r] = kappa k,
+     * times c_c), both of the last assembly with a matrix. */
+    int lr_members;
+    int *lr_of_member, *lr_eq;
+    size_t *lr_at;
+    double *lr_g, *lr_gc, *lr_k, *lr_c, *lr_c_frozen;
     double *chain_f, *chain_v, *chain_K; /* chain member work arrays (3n, 3n, 3n x 3n) */
     /* stiffness-proportional damping C_K = kappa K_T(u_n), frozen over each step (kappa != 0
      * only): per member from damping_K + damping_at[b] (3x3 for a pair element, 3n x 3n for a
@@ -161,6 +171,10 @@ void fem_analysis_clear_linearisation(fem_analysis *s);
  * free equations) in s->K's values. The state is left as it was. */
 int fem_analysis_step_residual(fem_analysis *s, double dt_s, const double *u_end, double *r,
                                nc_error *err);
+/* y [neq] = the tangent of the last assembly times x [neq] on the free equations: the
+ * matrix's values plus the rank-one terms kept out of it (sliding ropes); without the skew
+ * part of an interface linearisation, which the matrix holds only symmetrically. */
+void fem_analysis_tangent_apply(const fem_analysis *s, const double *x, double *y);
 
 /* Recomputes s->axial and stats.slack_elements at the current state. */
 void fem_analysis_update_axial(fem_analysis *s);

@@ -9,7 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CK_FORMAT 2   /* layout version of the file (2: the per-set peak forces) */
+#define CK_FORMAT 3   /* layout version of the file (2: the per-set peak forces; 3: a sliding
+                         rope's rank-one term no longer in the matrix and its factors) */
 
 /* ---- the table ---------------------------------------------------------------------- */
 

@@ -62,6 +62,14 @@ typedef struct fem_element_ops {
      * returns 1 when the member carries no axial force (slack; a sliding rope's shackle
      * contact may still push). */
     int (*chain_response)(const fem_element_ctx *c, double *f, double *K, double *axial);
+    /* Chain types whose tangent couples nodes beyond their neighbours only through one
+     * rank-one term: K = K_near + k g g^T, K_near coupling each node with itself and its
+     * neighbours in the chain. Returns k (N/m; 0 when the term is absent, e.g. slack) and
+     * g[3n]. The solver keeps k g g^T out of the factorised matrix (a dense block over the
+     * whole member would fill the factor) and adds it in its Krylov iterations
+     * (fem_analysis.c). NULL: the member's tangent may couple any two of its nodes, and they
+     * all get a place in the matrix. */
+    double (*chain_rank_one)(const fem_element_ctx *c, double *g);
     double (*strain_energy)(const fem_element_ctx *c);
     /* History at the converged state u from the committed c->hist into hist_new. */
     void (*commit)(const fem_element_ctx *c, double *hist_new);

@@ -88,30 +88,36 @@ static double rope_force(const fem_element_ctx *c, double *L, double *L0)
     return m->EA[e0] * (len - ref) / ref + m->AS[e0];
 }
 
+/* g_j = e_j-1 - e_j of every chain node into g[3n] */
+static void rope_direction(const fem_element_ctx *c, double *g)
+{
+    memset(g, 0, 3 * (size_t)(c->count + 1) * sizeof *g);
+    for (int s = 0; s < c->count; s++) {
+        double d[3], len = segment(c, s, d);
+        for (int i = 0; i < 3; i++) {
+            g[3 * s + i] -= d[i] / len;         /* node s: -e_s */
+            g[3 * (s + 1) + i] += d[i] / len;   /* node s+1: +e_s */
+        }
+    }
+}
+
 /* the rope's force N g_j and tangent (see the top of this file) into zeroed f and K */
 static void rope_response(const fem_element_ctx *c, double N, double L0, double *f, double *K)
 {
     const int ns = c->count, dim = 3 * (ns + 1);
     const double k_ax = c->m->EA[c->first] / L0;
-    /* g_j = e_j-1 - e_j accumulated in f (scaled by N at the end) */
-    for (int s = 0; s < ns; s++) {
+    rope_direction(c, f);   /* g, scaled by N at the end */
+    /* geometric part N P_s on the blocks (s, s), (s+1, s+1), -N P_s on (s, s+1) */
+    for (int s = 0; s < ns && K; s++) {
         double d[3], len = segment(c, s, d), l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        for (int i = 0; i < 3; i++) {
-            double ei = d[i] / len;
-            f[3 * s + i] -= ei;           /* node s: -e_s */
-            f[3 * (s + 1) + i] += ei;     /* node s+1: +e_s */
-        }
-        if (K) {
-            /* geometric part N P_s on the blocks (s, s), (s+1, s+1), -N P_s on (s, s+1) */
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++) {
-                    double P = ((i == j) - d[i] * d[j] / l2) * N / len;
-                    K[(3 * s + i) * dim + 3 * s + j] += P;
-                    K[(3 * (s + 1) + i) * dim + 3 * (s + 1) + j] += P;
-                    K[(3 * s + i) * dim + 3 * (s + 1) + j] -= P;
-                    K[(3 * (s + 1) + i) * dim + 3 * s + j] -= P;
-                }
-        }
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double P = ((i == j) - d[i] * d[j] / l2) * N / len;
+                K[(3 * s + i) * dim + 3 * s + j] += P;
+                K[(3 * (s + 1) + i) * dim + 3 * (s + 1) + j] += P;
+                K[(3 * s + i) * dim + 3 * (s + 1) + j] -= P;
+                K[(3 * (s + 1) + i) * dim + 3 * s + j] -= P;
+            }
     }
     if (K)
         for (int a = 0; a < dim; a++)
@@ -132,6 +138,16 @@ static int sliding_response(const fem_element_ctx *c, double *f, double *K, doub
     if (!slack) rope_response(c, N, L0, f, K);
     add_contact(c, f, K);
     return slack;
+}
+
+/* the material part (EA / L0) g g^T of the tangent, the only one coupling nodes that are
+ * not neighbours */
+static double sliding_rank_one(const fem_element_ctx *c, double *g)
+{
+    double L, L0;
+    if (rope_force(c, &L, &L0) < 0.0) return 0.0;   /* slack */
+    rope_direction(c, g);
+    return c->m->EA[c->first] / L0;
 }
 
 static double sliding_energy(const fem_element_ctx *c)
@@ -200,5 +216,6 @@ const fem_element_ops fem_element_sliding_cable_ops = {
     .parse = sliding_parse,
     .check = sliding_check,
     .chain_response = sliding_response,
+    .chain_rank_one = sliding_rank_one,
     .strain_energy = sliding_energy,
 };

@@ -153,7 +153,8 @@ int main(int argc, char **argv)
             "fem_solver: %s: %d nodes, %d elements, %ld steps, %ld Newton iterations, "
             "%ld output steps, t = %g, max |u| = %.6g m%s%s, %.3f s (assembly %.3f s, "
             "%ld factorisations %.3f s%s, %ld LU fallbacks, %ld solves ended at the rounding floor, "
-            "%ld Newton steps through GMRES with an unsymmetric interface linearisation "
+            "%ld Newton steps through GMRES (an unsymmetric interface linearisation, or "
+            "sliding ropes' rank-one terms) "
             "(%ld GMRES iterations, %ld short of its tolerance), "
             "%d steps retried with the semi-definite interface linearisation, "
             "%d repeated solves restarted from the start of the step)\n",
