@@ -132,7 +132,28 @@ static void member_damping_force(const fem_analysis *s, int b, const double *v, 
         }
         return;
     }
-    const int dim = 3 * (count + 1);
+    const int dim = 3 * (count + 1), r = s->lr_of_member ? s->lr_of_member[b] : -1;
+    if (r >= 0) {
+        /* nodes that are not neighbours are coupled only by the frozen rank-one term
+         * c g g^T: the neighbours' blocks less that term, plus the term, in O(n) */
+        const double c = s->lr_c_frozen[r], *g = s->lr_gc + s->lr_at[r];
+        double gv = 0.0;
+        for (int q = 0; q <= count; q++) {
+            const int node = 3 * chain_node(m, first, count, q);
+            for (int d = 0; d < 3; d++) gv += g[3 * q + d] * v[node + d];
+        }
+        for (int a = 0; a < dim; a++) {
+            const int i = a / 3;
+            double cv = c * gv * g[a];
+            for (int q = i > 0 ? i - 1 : 0; q <= i + 1 && q <= count; q++) {
+                const int node = 3 * chain_node(m, first, count, q);
+                for (int d = 0; d < 3; d++)
+                    cv += (C[a * dim + 3 * q + d] - c * g[a] * g[3 * q + d]) * v[node + d];
+            }
+            out[a] = cv;
+        }
+        return;
+    }
     for (int a = 0; a < dim; a++) {
         double cv = 0.0;
         for (int q = 0; q <= count; q++) {
