@@ -6,4 +6,4 @@ $(BUILD)/bench/fem_bench: $(BUILD)/fem_solver/bench/fem_bench.o $(LINK_fem_solve
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 bench-fem: $(BUILD)/bench/fem_bench
-	$<
+	$< cases/barrier_mel/fem.json
