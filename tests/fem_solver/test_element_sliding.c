@@ -6,8 +6,9 @@
  * closed form (a scalar equation in N, solved here by bisection) gives N, theta and the
  * shackle's position. The pulleys' reactions are N times the sum of the unit vectors to their
  * neighbours. The element tangent and the assembled tangent of a rope through two free
- * shackles (non-neighbour nodes, coupled by the dense material part) match central
- * differences.
+ * shackles (non-neighbour nodes, coupled by the dense material part, which the solver keeps
+ * out of its matrix as a rank-one term) match central differences; a static rope end held
+ * along the rope by the rope alone converges to equilibrium.
  * Shackle contact (shackle_gap_m): the chain's force and tangent with segments below the gap,
  * taut and slack, against central differences of the force and of the strain energy; a
  * shackle driven along a straight rope into its anchor stops at the gap: undamped, its
@@ -132,6 +133,51 @@ static void test_pulley_chain(void **state)
 }
 
 /* anchor, shackle, pulley, shackle, anchor: two free nodes that are not neighbours */
+/* A rope end held along the rope by nothing but the rope: anchor 0, node 1 hung from a tie,
+ * end node 2 tied only perpendicular to its segment (one tie across the segment in its
+ * vertical plane, one along y) and pulled along the segment. The factorised matrix has no
+ * stiffness there in that direction (the rope's rank-one term stays out of it, and the
+ * unloaded ties carry no geometric stiffness at first): Newton must still converge, to
+ * equilibrium at every free node (1e-6 of the load), with the rope carrying the pull. */
+static const char *const rope_end_json =
+    "{\"nodes\": [[0, 0, 0], [2, 0, -0.5], [4, 0, 0], [2, 0, -2.5], [3.514928749927, 0, 1.940285000291],"
+    " [4, 2, 0]],\n"
+    " \"elements\": [[0, 1], [1, 2], {\"nodes\": [1, 3], \"set\": \"ties\"},"
+    " {\"nodes\": [2, 4], \"set\": \"ties\"}, {\"nodes\": [2, 5], \"set\": \"ties\"}],\n"
+    " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,"
+    " \"area_m2\": 1.26e-4, \"pretension_n\": 1000, \"density_kg_m3\": 7850},\n"
+    "  {\"name\": \"ties\", \"behaviour\": \"truss\", \"youngs_modulus_pa\": 1e11, \"area_m2\": 1.26e-4,"
+    " \"density_kg_m3\": 7850}],\n"
+    " \"supports\": [{\"nodes\": [0, 3, 4, 5], \"dofs\": \"xyz\"}],\n"
+    " \"point_loads\": [{\"nodes\": [2], \"force_n\": [4850.712500727, 0, 1212.678125182]}],\n"
+    " \"gravity_m_s2\": [0, 0, 0], \"analysis\": {\"type\": \"static\"}}\n";
+
+static void test_rope_end_held_by_rope(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    if (fem_input_load(fem_test_write("rope_end.json", rope_end_json), &m, &err))
+        fail_msg("%s", err.message);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    assert_int_equal(s.lr_members, 1);
+    if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
+    double f[18], worst = 0;
+    fem_analysis_node_balance(&s, 1.0, f);
+    for (int d = 3; d < 9; d++) worst = fmax(worst, fabs(f[d]));   /* nodes 1 and 2 */
+    print_message("rope end held by the rope: %d Newton iterations, end node moved %.6e m, "
+                  "rope force %.3f N, largest force imbalance %.3e N\n", s.stats.iterations,
+                  sqrt(s.cur.u[6] * s.cur.u[6] + s.cur.u[7] * s.cur.u[7] + s.cur.u[8] * s.cur.u[8]),
+                  s.axial[0], worst);
+    assert_true(worst < 1e-6 * 5000.0);
+    /* the pull goes into the rope: the ties across it take a share only through their
+     * rotation (1.5 mm over 2 m) */
+    assert_near_rel(s.axial[0], 5000.0, 1e-5);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
 static const char *const two_shackles_json =
     "{\"nodes\": [[0, 0, 0], [2, 0.3, -0.5], [4, 0, 0.5], [6, -0.2, -0.3], [8, 0, 0]],\n"
     " \"elements\": [[0, 1], [1, 2], [2, 3], [3, 4]],\n"
@@ -391,6 +437,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pulley_chain),
         cmocka_unit_test(test_two_shackles),
+        cmocka_unit_test(test_rope_end_held_by_rope),
         cmocka_unit_test(test_tangent),
         cmocka_unit_test(test_shackle_stops_at_anchor),
         cmocka_unit_test(test_contact_input),
