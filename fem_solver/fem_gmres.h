@@ -10,7 +10,10 @@
  * interface_jacobian.md "The skew part"). With the symmetric factor as preconditioner M, the
  * preconditioned operator A M⁻¹ = I + W M⁻¹ differs from the identity by the skew part W of
  * the few contact dofs, so GMRES reaches the exact Newton step in a handful of iterations
- * (at most rank(W) + 1), each one product with A and one solve with the factor.
+ * (at most rank(W) + 1), each one product with A and one solve with the factor. The same
+ * holds for the sliding ropes' rank-one terms k g gᵀ, which the solver keeps out of the
+ * factorised matrix (a dense block over each rope would fill the factor): W then also holds
+ * them, one iteration each.
  *
  * Contract: solves A x = b for x (x starts from 0), with A and M⁻¹ given as callbacks on
  * vectors of length n. Converged when ‖b − A x‖ ≤ tol ‖b‖ (the Arnoldi residual, which equals
