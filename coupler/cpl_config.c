@@ -153,7 +153,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
 {
     static const char *const keys[] = {
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
-        "relative_tolerance", "max_iterations", "on_max_iterations", "relaxation",
+        "relative_tolerance", "work_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
         "verify_restore", "contact_backtracking", "timeouts", "output", "checkpoint", "comment", NULL};
@@ -178,6 +178,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                                  &s->tol_abs, err) ||
         nc_json_number_range_opt(root, where, "relative_tolerance", s->tol_rel, 0.0, 1.0,
                                  &s->tol_rel, err) ||
+        nc_json_number_range_opt(root, where, "work_tolerance", s->work_tol, 0.0, 1.0,
+                                 &s->work_tol, err) ||
         nc_json_int_opt(root, where, "max_iterations", max_it, 1, 100000, &max_it, err) ||
         nc_json_choice_opt(root, where, "on_max_iterations", policies, policy, &policy, err) ||
         nc_json_choice_opt(root, where, "relaxed_quantity", quantities, quantity, &quantity,

@@ -134,6 +134,7 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
         nc_h5_attr_string(&h->h5, "/", "relaxed_quantity",
                           s->relaxed == CPL_RELAXED_FORCE ? "force" : "displacement_velocity", err) ||
         nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||
+        nc_h5_attr_double(&h->h5, "/", "work_tolerance", s->work_tol, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
         nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||

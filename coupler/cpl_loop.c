@@ -53,6 +53,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->dt_s = 1e-3;
     s->tol_abs = 1e-6;
     s->tol_rel = 0.0;
+    s->work_tol = 0.0;
     s->max_iterations = 50;
     s->on_max_iterations = CPL_MAXIT_ACCEPT;
     s->relaxed = CPL_RELAXED_DISPLACEMENT_VELOCITY;
@@ -128,6 +129,9 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (s->tol_rel < 0.0)
         return nc_error_set(err, 1, "%s: relative_tolerance must be >= 0, got %g", where,
                             s->tol_rel);
+    if (!(s->work_tol >= 0.0 && s->work_tol <= 1.0))
+        return nc_error_set(err, 1, "%s: work_tolerance must be in [0, 1], got %g", where,
+                            s->work_tol);
     if (s->max_iterations < 1)
         return nc_error_set(err, 1, "%s: max_iterations must be >= 1, got %d", where,
                             s->max_iterations);
@@ -648,16 +652,30 @@ static double tolerance_ratio(const cpl_loop *L, double residual, double value_n
     return residual / fmax(L->s.tol_abs, L->s.tol_rel * value_norm);
 }
 
-/* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27).
- * *ratio: the larger field's tolerance_ratio. */
+/* The work test (work_tolerance): the interface work mismatch the step would take on if
+ * this iterate were accepted, |sum F . (u_out - u_in)| for the force F the DEM returned at
+ * u_in (the coupler's balance, README "Energy balance"), over work_tol x the input energy:
+ * <= 1 passes. INFINITY while off or before any energy is known. */
+static double work_ratio(const cpl_loop *L)
+{
+    if (!(L->s.work_tol > 0.0) || !(L->energy.input_j > 0.0)) return INFINITY;
+    double w = 0.0;
+    for (size_t i = 0; i < L->n3; i++) w += L->f_dem[i] * (L->u_out[i] - L->u_in[i]);
+    return fabs(w) / (L->s.work_tol * L->energy.input_j);
+}
+
+/* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27),
+ * or r_u and the work test (work_tolerance). *ratio: r_u's tolerance_ratio or that of the
+ * second test passed more nearly (r_u̇'s or the work test's), whichever is larger. */
 static double residual_uv(cpl_loop *L, int *converged, double *ratio)
 {
     const double nu = cpl_scaled_norm(L->u_out, L->n3), nv = cpl_scaled_norm(L->v_out, L->n3);
     double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
     double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
+    const double work = work_ratio(L);
     *converged = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel) &&
-                 cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel);
-    *ratio = fmax(tolerance_ratio(L, ru, nu), tolerance_ratio(L, rv, nv));
+                 (cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel) || work <= 1.0);
+    *ratio = fmax(tolerance_ratio(L, ru, nu), fmin(tolerance_ratio(L, rv, nv), work));
     return fmax(ru, rv);
 }
 

@@ -536,8 +536,12 @@ static int print_status(app *a, int *energy_ok)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
                 "residual is not iterated away (it is recorded in /steps/residual)\n");
     if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
-        fprintf(o, "coupler: %severy step converged to the tolerance %.3g\n",
-                *energy_ok ? "results are reliable: " : "", s->tol_abs);
+        char work[160] = "";
+        if (s->work_tol > 0.0 && s->relaxed == CPL_RELAXED_DISPLACEMENT_VELOCITY)
+            snprintf(work, sizeof work, " (velocities, or the step's interface work mismatch "
+                     "within work_tolerance %.3g of the input energy)", s->work_tol);
+        fprintf(o, "coupler: %severy step converged to the tolerance %.3g%s\n",
+                *energy_ok ? "results are reliable: " : "", s->tol_abs, work);
     } else if (s->scheme == CPL_SCHEME_STRONG) {
         /* both verdicts when both apply, the unconverged steps last */
         if (!*energy_ok) print_energy_verdict(a);

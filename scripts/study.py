@@ -1018,6 +1018,84 @@ def jacobian_figures(out, rows, refs):
     save(fig, os.path.join(out, "jacobian_iterations.png"))
 
 
+# ---- the work test: eq. (35) against work_tolerance 1e-6 (docs/notes/interface_jacobian.md) --
+
+WORK_TOLERANCE = "1e-6"
+WORK_VARIANTS = [("paper", "eq. (35)", ["coupler.work_tolerance=0"]),
+                 ("work", "work_tolerance " + WORK_TOLERANCE, ["coupler.work_tolerance=" + WORK_TOLERANCE])]
+
+
+def interface_mismatch_pct(run_dir):
+    """The run's summed interface work mismatch (coupling.h5 /energy/interface_created) as a
+    share of its input energy (%): positive = created at the interface, negative = lost."""
+    import h5py
+    with h5py.File(os.path.join(run_dir, "coupling.h5"), "r") as f:
+        inp = np.array(f["/energy/input"])
+        return float(np.array(f["/energy/interface_created"]).sum() / inp.max() * 100) if inp.max() > 0 else float("nan")
+
+
+def study_work(out, jobs, end_time):
+    """Jacobian + Aitken with eq. (35) against the work test (work_tolerance), 8 cases x COR x dt."""
+    rows = {}
+    for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
+        end = end_time or end
+        dt0 = case_dt_of(case)
+        variants = []
+        for cor in JACOBIAN_CORS:
+            for factor in ((1, 5) if five else (1,)):
+                for name, _, vsets in WORK_VARIANTS:
+                    variants.append(("%s_cor%s_dt%dx" % (name, cor, factor),
+                                     jacobian_sets(dt0, factor, end, cor, cor_keys,
+                                                   JACOBIAN_VARIANTS[2][2] + vsets, extra)))
+        print("  %s: %d runs to %g s, cap %d s" % (case, len(variants), end, cap))
+        for label, (run_dir, seconds, ok) in run_all(case, variants, os.path.join(out, case), jobs, None, cap).items():
+            r = jacobian_metrics(run_dir, seconds, node, comp)
+            if "error" not in r:
+                r["mismatch_pct"] = interface_mismatch_pct(run_dir)
+            rows[(case, label)] = r
+    lines = ["| case | COR | Δt | " + " | ".join(v[1] for v in WORK_VARIANTS) + " | peak: work against eq. (35) |",
+             "|---|---|---|" + "---|" * (len(WORK_VARIANTS) + 1)]
+    meets, reliable = ({v[0]: 0 for v in WORK_VARIANTS} for _ in range(2))
+    averages = {v[0]: [] for v in WORK_VARIANTS}
+    for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
+        for cor in JACOBIAN_CORS:
+            for factor in ((1, 5) if five else (1,)):
+                cells, runs = [], {}
+                for name, _, _ in WORK_VARIANTS:
+                    r = runs[name] = rows.get((case, "%s_cor%s_dt%dx" % (name, cor, factor)), {"error": "missing"})
+                    if "error" in r:
+                        cells.append("no results")
+                        continue
+                    ok = r["it_avg"] <= TARGET_AVG and r["it_max"] <= TARGET_MAX
+                    meets[name] += ok
+                    reliable[name] += jacobian_status(r) == "0" and r["unconverged"] == 0 and not r["energy_fired"]
+                    averages[name].append(r["it_avg"])
+                    cell = "%s %.2f/%d r%d mismatch %+.2f %%" % (jacobian_status(r), r["it_avg"], r["it_max"],
+                                                                 r["rejected"], r["mismatch_pct"])
+                    cells.append("**%s**" % cell if ok else cell)
+                p, w = runs["paper"], runs["work"]
+                peak = ("%+.2f %%" % ((w["peak"] - p["peak"]) / p["peak"] * 100)
+                        if "error" not in p and "error" not in w and p.get("peak", 0) > 0 else "-")
+                lines.append("| %s | %s | %s | %s | %s |" % (case, cor, "case" if factor == 1 else "5×",
+                                                             " | ".join(cells), peak))
+    lines.append("")
+    lines.append("Cell: exit status · iterations per contact step, average/largest (**bold**: ≤ %g and ≤ %d) · "
+                 "r rejected tries · the summed interface work mismatch, %% of the input energy (negative: lost)."
+                 % (TARGET_AVG, TARGET_MAX))
+    lines.append("")
+    for name, label, _ in WORK_VARIANTS:
+        n = len(averages[name])
+        lines.append("- %s: %d of %d runs reliable; %d of %d within ≤ %g on average and ≤ %d at most; "
+                     "%.2f iterations per contact step, the mean of the runs' averages"
+                     % (label, reliable[name], n, meets[name], n, TARGET_AVG, TARGET_MAX,
+                        float(np.mean(averages[name])) if n else float("nan")))
+    text = "\n".join(lines) + "\n"
+    print(text)
+    with open(os.path.join(out, "work_table.md"), "w") as f:
+        f.write(text)
+    print("  wrote", os.path.join(out, "work_table.md"))
+
+
 STUDIES = {
     "timestep": study_timestep,
     "relaxation": study_relaxation,
@@ -1029,6 +1107,7 @@ STUDIES = {
     "special": study_special,
     "jacobian": study_jacobian,
     "speed": study_speed,
+    "work": study_work,
 }
 
 

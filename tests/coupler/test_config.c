@@ -40,6 +40,7 @@ static void test_minimal_and_defaults(void **state)
     assert_near(c.loop.dt_s, 1e-3, 0.0);
     assert_near(c.loop.end_time_s, 0.5, 0.0);
     assert_near(c.loop.tol_abs, 1e-6, 0.0);
+    assert_near(c.loop.work_tol, 0.0, 0.0);   /* eq. (35) as the paper has it */
     assert_int_equal(c.loop.max_iterations, 50);
     assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "none");
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_ACCEPT);
@@ -62,7 +63,8 @@ static void test_full_file(void **state)
         "{\"fem\": {\"endpoint\": \"tcp://127.0.0.1:5555\"},"
         " \"dem\": {\"endpoint_file\": \"dem.endpoint\"},"
         " \"scheme\": \"strong\", \"dt\": 2e-3, \"end_time\": 1, \"start_time\": 0.5,"
-        " \"tolerance\": 1e-8, \"relative_tolerance\": 1e-4, \"max_iterations\": 12,"
+        " \"tolerance\": 1e-8, \"relative_tolerance\": 1e-4, \"work_tolerance\": 1e-6,"
+        " \"max_iterations\": 12,"
         " \"on_max_iterations\": \"stop\", \"relaxed_quantity\": \"force\","
         " \"predictor\": \"linear\", \"max_steps\": 7,"
         " \"relaxation\": {\"method\": \"iqn-ils\", \"alpha\": 0.1, \"filter\": 1e-3,"
@@ -82,6 +84,7 @@ static void test_full_file(void **state)
     assert_int_equal(c.loop.scheme, CPL_SCHEME_STRONG);
     assert_near(c.loop.start_time_s, 0.5, 0.0);
     assert_near(c.loop.tol_rel, 1e-4, 0.0);
+    assert_near(c.loop.work_tol, 1e-6, 0.0);
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_STOP);
     assert_int_equal(c.loop.relaxed, CPL_RELAXED_FORCE);
     assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);
@@ -146,6 +149,8 @@ static void test_bad_input_messages(void **state)
                  " \"accept_unconverged\": 1}", "accept_unconverged");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"energy_tolerance\": -0.01}", "energy_tolerance");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"work_tolerance\": 2}", "work_tolerance");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"accept_energy_growth\": \"yes\"}", "accept_energy_growth");
 }
