@@ -659,8 +659,8 @@ static double tolerance_ratio(const cpl_loop *L, double residual, double value_n
  * took the work of the force it solved with, F - K (u_out - u_in) - C (v_out - v_in) with the
  * interface Jacobian, over u_out - u. The difference:
  *   F . (u_out - u_in) - [K (u_out - u_in) + C (v_out - v_in)] . (u_out - u).
- * The second term matters: for a steel net's stiff contacts it is most of it (without it, the
- * MEL test's first 40 ms lost 2.6 kJ at the interface instead of 56 J). */
+ * The second term matters with stiff contacts: without it, the MEL test's first 40 ms lost
+ * 2.6 kJ at the interface instead of 56 J. */
 static double work_ratio(const cpl_loop *L)
 {
     if (!(L->s.work_tol > 0.0) || !(L->energy.input_j > 0.0)) return INFINITY;
