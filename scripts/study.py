@@ -714,6 +714,14 @@ def jacobian_sets(case_dt, factor, end, cor, cor_keys, variant_sets, extra):
             + ["%s=%s" % (k, cor) for k in cor_keys])
 
 
+def cor_dt_variants(dt0, end, cor_keys, five, extra, variants, base_sets=()):
+    """(label, --set list) of every variant at every COR and Δt (the case's, and 5x it when
+    `five`), labelled <variant>_cor<COR>_dt<factor>x; base_sets go before each variant's own."""
+    return [("%s_cor%s_dt%dx" % (name, cor, factor),
+             jacobian_sets(dt0, factor, end, cor, cor_keys, list(base_sets) + vsets, extra))
+            for cor in JACOBIAN_CORS for factor in ((1, 5) if five else (1,)) for name, _, vsets in variants]
+
+
 def case_dt_of(case):
     with open(os.path.join(ROOT, "cases", case, "coupler.json")) as f:
         return float(json.load(f)["dt"])
@@ -848,12 +856,7 @@ def study_jacobian(out, jobs, end_time):
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         end = end_time or end
         dt0 = case_dt_of(case)
-        variants = []
-        for cor in JACOBIAN_CORS:
-            for factor in ((1, 5) if five else (1,)):
-                for name, _, vsets in JACOBIAN_VARIANTS:
-                    variants.append(("%s_cor%s_dt%dx" % (name, cor, factor),
-                                     jacobian_sets(dt0, factor, end, cor, cor_keys, vsets, extra)))
+        variants = cor_dt_variants(dt0, end, cor_keys, five, extra, JACOBIAN_VARIANTS)
         case_out = os.path.join(out, case)
         print("  %s: %d runs to %g s, cap %d s" % (case, len(variants), end, cap))
         results = run_all(case, variants, case_out, jobs, None, cap)
@@ -1040,13 +1043,7 @@ def study_work(out, jobs, end_time):
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         end = end_time or end
         dt0 = case_dt_of(case)
-        variants = []
-        for cor in JACOBIAN_CORS:
-            for factor in ((1, 5) if five else (1,)):
-                for name, _, vsets in WORK_VARIANTS:
-                    variants.append(("%s_cor%s_dt%dx" % (name, cor, factor),
-                                     jacobian_sets(dt0, factor, end, cor, cor_keys,
-                                                   JACOBIAN_VARIANTS[2][2] + vsets, extra)))
+        variants = cor_dt_variants(dt0, end, cor_keys, five, extra, WORK_VARIANTS, JACOBIAN_VARIANTS[2][2])
         print("  %s: %d runs to %g s, cap %d s" % (case, len(variants), end, cap))
         for label, (run_dir, seconds, ok) in run_all(case, variants, os.path.join(out, case), jobs, None, cap).items():
             r = jacobian_metrics(run_dir, seconds, node, comp)
