@@ -116,8 +116,11 @@ typedef struct cpl_loop_settings {
     double tol_abs;                 /* ε of eq. (27) on the scaled residual norm */
     double tol_rel;                 /* optional relative tolerance (0 = off) */
     double work_tol;                /* displacement_velocity: r_u̇ may stay above tol_abs when
-                                       the iterate's interface work error |sum F . r_u| is at
-                                       most work_tol x the input energy (0 = off: eq. (35)) */
+                                       the interface work mismatch the iterate would leave in
+                                       the step (the DEM's force over its input motion against
+                                       the linearised force the structure solved with over its
+                                       answer; cpl_loop.c work_ratio) is at most work_tol x
+                                       the input energy (0 = off: eq. (35)) */
     int max_iterations;             /* per step (strong) */
     cpl_maxit_policy on_max_iterations;
     cpl_relaxed_quantity relaxed;

@@ -9,8 +9,10 @@
  *   K_jk = (EA / L0) g_j g_k^T + N dg_j/dx_k,   g_j = e_j-1 - e_j,
  * dg_j/dx_j = P_j-1 + P_j, dg_j/dx_j-1 = -P_j-1, dg_j/dx_j+1 = -P_j, P_i = (I - e_i e_i^T)/l_i:
  * a dense material part (the force depends on the whole length) and a tridiagonal geometric
- * part. Strain energy (N_+ = max(N, 0)): L0 (N_+(L)^2 - N_+(L0)^2) / (2 EA). The same law as
- * the sliding cable element of Kratos' CableNetApplication (one strain over the whole rope).
+ * part. The material part is of rank one: chain_rank_one returns it (k = EA / L0 and g), and
+ * the solver keeps it out of its factorised matrix (fem_element.h). Strain energy
+ * (N_+ = max(N, 0)): L0 (N_+(L)^2 - N_+(L0)^2) / (2 EA). The same law as the sliding cable
+ * element of Kratos' CableNetApplication (one strain over the whole rope).
  *
  * Shackle contact (shackle_gap_m = g > 0): consecutive nodes of the chain cannot come closer
  * than g (the shackles' size; a net node cannot slide past its neighbour or into an anchor).
