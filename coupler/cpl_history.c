@@ -264,6 +264,7 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
         nc_h5_attr_double(&h->h5, "/", "rejected_attempts", (double)t->rejected_attempts, NULL);
         nc_h5_attr_double(&h->h5, "/", "slow_rejections", (double)t->slow_rejections, NULL);
         nc_h5_attr_double(&h->h5, "/", "contact_backtracks", (double)t->backtracks, NULL);
+        nc_h5_attr_double(&h->h5, "/", "work_test_steps", (double)t->work_test_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "jacobian_dropped_steps",
                           (double)t->jacobian_dropped_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "reduced_steps", (double)t->reduced_steps, NULL);

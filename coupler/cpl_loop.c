@@ -12,6 +12,9 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
+#define CPL_FINGERPRINT_N 6   /* dt, scheme, relaxed quantity, tolerance, interface size,
+                                 work_tolerance */
+
 struct cpl_loop {
     cpl_loop_settings s;
     size_t n3;              /* interface dofs per field: 3 × nodes */
@@ -40,8 +43,8 @@ struct cpl_loop {
     long next_checkpoint;   /* the next checkpoint is at start + this × interval */
     int resume_pending;     /* loaded from a checkpoint: RESUME before the first step */
     char resume_name[64];
-    double fingerprint[5];  /* checkpoint: settings a resumed run must share (see
-                               cpl_loop_resumed) */
+    double fingerprint[CPL_FINGERPRINT_N];  /* checkpoint: settings a resumed run must
+                                               share (see cpl_loop_resumed) */
 };
 
 void cpl_loop_settings_default(cpl_loop_settings *s)
@@ -264,6 +267,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     fp[2] = (double)s->relaxed;
     fp[3] = s->tol_abs;
     fp[4] = (double)n3;
+    fp[5] = s->work_tol;
 }
 
 static void energy_report_entries(cpl_ckpt_table *t, const char *prefix, cpl_energy_report *r)
@@ -281,7 +285,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     const char *p = "loop";
     const size_t n3 = L->n3;
     fill_fingerprint(&L->s, n3, L->fingerprint);
-    cpl_ckpt_f64(t, p, "settings", L->fingerprint, 5);
+    cpl_ckpt_f64(t, p, "settings", L->fingerprint, CPL_FINGERPRINT_N);
     /* where the run is and the step control */
     cpl_ckpt_f64(t, p, "time", &L->time_s, 1);
     cpl_ckpt_long(t, p, "step", &L->step);
@@ -325,6 +329,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "rejected_attempts", &tm->rejected_attempts);
     cpl_ckpt_long(t, q, "slow_rejections", &tm->slow_rejections);
     cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
+    cpl_ckpt_long(t, q, "work_test_steps", &tm->work_test_steps);
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
     cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
@@ -366,11 +371,11 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
 
 int cpl_loop_resumed(cpl_loop *L, const char *name, const char *path, nc_error *err)
 {
-    double now[5];
+    double now[CPL_FINGERPRINT_N];
     fill_fingerprint(&L->s, L->n3, now);
-    const char *what[5] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
-                           "interface dofs"};
-    for (int i = 0; i < 5; i++)
+    const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
+                                           "interface dofs", "work_tolerance"};
+    for (int i = 0; i < CPL_FINGERPRINT_N; i++)
         if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) != 0)
             return nc_error_set(err, 1, "%s: the checkpoint was written with %s = %.17g, this "
                                 "run has %.17g: a run resumes with the settings it started "
@@ -685,16 +690,19 @@ static double work_ratio(const cpl_loop *L)
 }
 
 /* Residual of algorithm 2: max(r_u, r_u̇), eq. (35); convergence needs both fields, eq. (27),
- * or r_u and the work test (work_tolerance). *ratio: r_u's tolerance_ratio or that of the
- * second test passed more nearly (r_u̇'s or the work test's), whichever is larger. */
-static double residual_uv(cpl_loop *L, int *converged, double *ratio)
+ * or r_u and the work test (work_tolerance; *by_work_test: it decided). *ratio: r_u's
+ * tolerance_ratio or that of the second test passed more nearly (r_u̇'s or the work test's),
+ * whichever is larger. */
+static double residual_uv(cpl_loop *L, int *converged, int *by_work_test, double *ratio)
 {
     const double nu = cpl_scaled_norm(L->u_out, L->n3), nv = cpl_scaled_norm(L->v_out, L->n3);
     double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
     double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
     const double work = work_ratio(L);
-    *converged = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel) &&
-                 (cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel) || work <= 1.0);
+    const int u_ok = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel);
+    const int v_ok = cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel);
+    *converged = u_ok && (v_ok || work <= 1.0);
+    *by_work_test = *converged && !v_ok;
     *ratio = fmax(tolerance_ratio(L, ru, nu), fmin(tolerance_ratio(L, rv, nv), work));
     return fmax(ru, rv);
 }
@@ -729,6 +737,7 @@ typedef struct try_result {
     cpl_solve_info dem_info;
     cpl_solve_info fem_info;    /* of the last FEM solve (when fem_solved) */
     int jacobian_dropped;       /* most particles a linearisation of this try left out */
+    int by_work_test;           /* converged by the work test, not by r_u̇ */
 } try_result;
 
 /* A failed request that a smaller step may cure: the participant said so. c->err keeps the
@@ -790,6 +799,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     t->dem_info = (cpl_solve_info){1, INFINITY, 0.0, NAN, cpl_energy_report_none(), 0.0};
     t->fem_info = t->dem_info;
     t->jacobian_dropped = 0;
+    t->by_work_test = 0;
 
     const int lazy_fem = L->s.skip_fem_without_contact;
     if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
@@ -862,7 +872,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (solved < 0) return try_failed(c, t);
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
-            t->residual = residual_uv(L, &converged, &ratios[k % (CPL_SLOW_WINDOW + 1)]);
+            t->residual = residual_uv(L, &converged, &t->by_work_test,
+                                      &ratios[k % (CPL_SLOW_WINDOW + 1)]);
                                                                /* eqs. (28), (29), (35) */
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
             if (!strong || converged || k == max_it || slow) {
@@ -1030,6 +1041,7 @@ static int advance_step(run_ctx *c)
     if (!ends) L->timing.min_dt_s = fmin(L->timing.min_dt_s, dt);
     if (rejected) L->timing.reduced_steps++;
     if (t.jacobian_dropped > 0) L->timing.jacobian_dropped_steps++;
+    if (strong && converged && t.by_work_test) L->timing.work_test_steps++;
     cpl_energy_record energy;
     cpl_energy_step(&L->energy, call.step, L->time_s, t.fem_solved ? &t.fem_info.energy : NULL,
                     &t.dem_info.energy, &energy);

@@ -247,6 +247,8 @@ typedef struct cpl_timing {
     long slow_rejections;           /* ... of them early, as converging too slowly */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
     long backtracks;                /* DEM solves repeated by contact backtracking */
+    long work_test_steps;           /* accepted steps whose velocity residual was above the
+                                       tolerance: converged by the work test (work_tolerance) */
     long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's
                                        linearisation */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
@@ -305,8 +307,8 @@ void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);
 int cpl_loop_checkpoint_prepare(cpl_loop *loop, const char *path, nc_error *err);
 /* The state was loaded from the checkpoint `name` (file `path`, for messages): checks that
  * the run has the settings the checkpoint was written with (dt, scheme, relaxed quantity,
- * tolerance, interface size); cpl_loop_run then first sends RESUME (step, time, name) to
- * both participants and continues. */
+ * tolerance, interface size, work_tolerance); cpl_loop_run then first sends RESUME (step,
+ * time, name) to both participants and continues. */
 int cpl_loop_resumed(cpl_loop *loop, const char *name, const char *path, nc_error *err);
 /* Steps accepted so far (the index of the next step). */
 long cpl_loop_step(const cpl_loop *loop);

@@ -536,10 +536,11 @@ static int print_status(app *a, int *energy_ok)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
                 "residual is not iterated away (it is recorded in /steps/residual)\n");
     if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
-        char work[160] = "";
+        char work[200] = "";
         if (s->work_tol > 0.0 && s->relaxed == CPL_RELAXED_DISPLACEMENT_VELOCITY)
             snprintf(work, sizeof work, " (velocities, or the step's interface work mismatch "
-                     "within work_tolerance %.3g of the input energy)", s->work_tol);
+                     "within work_tolerance %.3g of the input energy: %ld of %ld steps by the "
+                     "latter)", s->work_tol, t->work_test_steps, t->steps);
         fprintf(o, "coupler: %severy step converged to the tolerance %.3g%s\n",
                 *energy_ok ? "results are reliable: " : "", s->tol_abs, work);
     } else if (s->scheme == CPL_SCHEME_STRONG) {

@@ -290,6 +290,19 @@ static void test_resume_other_model(void **state)
     assert_non_null(strstr(err.message, "dt"));
     cpl_ckpt_table_free(&tab2);
     cpl_loop_free(loop);
+    /* same dt, another convergence test (work_tolerance): refused too */
+    set.dt_s = 0.01;
+    set.work_tol = 1e-6;
+    assert_int_equal(cpl_loop_create(&loop, &set, TM_HARD.nodes, NULL, NULL, &err), 0);
+    cpl_ckpt_table tab3 = {0};
+    assert_int_equal(cpl_loop_checkpoint_prepare(loop, path, &err), 0);
+    cpl_loop_checkpoint_entries(loop, &tab3);
+    assert_int_equal(cpl_ckpt_load(&tab3, path, &err), 0);
+    assert_int_equal(cpl_loop_resumed(loop, u.last_name, path, &err), -1);
+    assert_non_null(strstr(err.message, "work_tolerance"));
+    assert_non_null(strstr(err.message, path));
+    cpl_ckpt_table_free(&tab3);
+    cpl_loop_free(loop);
     /* a file that is not there */
     assert_int_equal(cpl_ckpt_read_long("no_such_checkpoint.h5", "/loop/step", &u.steps, &err), -1);
     assert_non_null(strstr(err.message, "no_such_checkpoint.h5"));

@@ -23,8 +23,8 @@ for r in paper work; do
   grep -v '^$' "$NC_TMP/$r/coupler.log" | tail -n 1 | grep -q "^coupler: results are reliable" \
     || fail "$r: not reliable: $(tail -n 1 "$NC_TMP/$r/coupler.log")"
 done
-grep -q "within work_tolerance 1e-06 of the input energy" "$NC_TMP/work/coupler.log" \
-  || fail "work: the summary does not name the work test"
+grep -Eq "within work_tolerance 1e-06 of the input energy: [1-9][0-9]* of [0-9]+ steps by the latter" \
+  "$NC_TMP/work/coupler.log" || fail "work: the summary does not name the work test and count its steps"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
@@ -37,16 +37,20 @@ for name in ("paper", "work"):
         mismatch = float(f["/energy/interface_created"][:].sum())
         e_in = float(f["/energy/input"][:].max())
         work_tol = float(f.attrs["work_tolerance"])
+        by_work = int(f.attrs["work_test_steps"])
+        steps = len(it)
     with h5py.File("%s/%s/fem.h5" % (tmp, name), "r") as f:
         ids = list(f["/monitor/node_ids"][:])
         peak = float(np.abs(f["/monitor/displacement"][:, ids.index(220), 2]).max())
     r[name] = dict(avg=float(it[contact].mean()), mx=int(it[contact].max()), mismatch=mismatch,
-                   e_in=e_in, peak=peak, work_tol=work_tol)
+                   e_in=e_in, peak=peak, work_tol=work_tol, by_work=by_work, steps=steps)
     print("%-5s work_tolerance %g: %.2f iterations per contact step (at most %d), interface "
-          "mismatch %.1f J of %.0f J, peak deflection %.4f m"
-          % (name, work_tol, r[name]["avg"], r[name]["mx"], mismatch, e_in, peak))
+          "mismatch %.1f J of %.0f J, peak deflection %.4f m, %d of %d steps by the work test"
+          % (name, work_tol, r[name]["avg"], r[name]["mx"], mismatch, e_in, peak, by_work, steps))
 p, w = r["paper"], r["work"]
 assert p["work_tol"] == 0.0 and w["work_tol"] == 1e-6, "coupling.h5 work_tolerance attribute"
+assert p["by_work"] == 0, "work_test_steps counted with the work test off"
+assert 0 < w["by_work"] <= w["steps"], "work_test_steps outside (0, steps]"
 assert w["avg"] <= p["avg"] - 0.2, "the work test saved fewer than 0.2 iterations per contact step"
 assert abs(w["mismatch"] - p["mismatch"]) <= 0.001 * p["e_in"], "the work test changed the interface mismatch"
 assert abs(w["peak"] - p["peak"]) <= 0.01 * p["peak"], "peak deflections differ by more than 1 %"
