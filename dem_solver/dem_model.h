@@ -132,7 +132,8 @@ typedef struct dem_net {
                               1 the force of the last sub-step (wall at its end position) */
     int wall_at_middle;    /* 1: in each sub-step the wall is where it is at the middle of the
                               sub-step; 0: at its end */
-    double *box_lo, *box_hi; /* 3 per edge: scratch for the grid */
+    double *box_lo, *box_hi; /* 3 per edge: each edge's box over the step's motion, as in
+                                the grid (detection skips edges whose box is out of reach) */
     struct dem_item_grid *grid; /* the edges' boxes at their current position, or over the
                                    whole coupling step during its sub-steps (dem_coupling.c) */
 } dem_net;
