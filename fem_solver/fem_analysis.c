@@ -88,6 +88,7 @@ static void member_ctx(const fem_model *m, int b, const double *u, const double 
     c->param = m->set_types[m->element_set[c->first]].param;
     c->u = u;
     c->hist = hist ? hist + m->history_offset[b] : NULL;
+    c->near_blocks_only = 0;
 }
 
 /* model node of position j of a member's chain */
@@ -508,19 +509,19 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
     const int n = c->count + 1, dim = 3 * n;
     double *f = s->chain_f, *K = s->chain_K;
     const double *C = s->damping_K ? s->damping_K + s->damping_at[c->member] : NULL;
-    int slack = ops->chain_response(c, f, matrix ? K : NULL, s->axial + c->first);
     /* a rank-one member: K and C less their rank-one terms go into the matrix (neighbour
-     * blocks only), the terms themselves to lr_* */
+     * blocks only), the terms themselves to lr_*; the element fills only those blocks of K,
+     * without its term (a dense (3n)^2 fill and clear per evaluation otherwise) */
     const int r1 = s->lr_of_member[c->member];
-    const double *g = NULL, *gc = NULL;
-    double k1 = 0.0, c1 = 0.0;
+    fem_element_ctx near = *c;
+    near.near_blocks_only = matrix && r1 >= 0;
+    int slack = ops->chain_response(&near, f, matrix ? K : NULL, s->axial + c->first);
+    const double *gc = NULL;
+    double c1 = 0.0;
     if (matrix && r1 >= 0) {
-        double *gw = s->lr_g + s->lr_at[r1];
-        k1 = ops->chain_rank_one(c, gw);
-        g = gw;
+        s->lr_k[r1] = c_k * ops->chain_rank_one(c, s->lr_g + s->lr_at[r1]);
         gc = s->lr_gc + s->lr_at[r1];
         c1 = C ? s->lr_c_frozen[r1] : 0.0;
-        s->lr_k[r1] = c_k * k1;
         s->lr_c[r1] = C ? c_c * c1 : 0.0;
     }
     if (C && v) {
@@ -562,8 +563,7 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
                 double B[9];
                 for (int a = 0; a < 3; a++)
                     for (int b = 0; b < 3; b++)
-                        B[3 * a + b] = K[(3 * i + a) * dim + 3 * j + b] -
-                                       (g ? k1 * g[3 * i + a] * g[3 * j + b] : 0.0);
+                        B[3 * a + b] = K[(3 * i + a) * dim + 3 * j + b];
                 int ra, cb;
                 const int *sl = chain_block_slots(s, c->first, c->count, q0, i, j, &ra, &cb);
                 scatter_block(s->K.x, sl, ra, cb, B, c_k);

@@ -38,6 +38,10 @@ typedef struct fem_element_ctx {
     int first, count;        /* its segments: model elements first .. first + count - 1 */
     const double *u;         /* [3 n_nodes] displacement (m) */
     const double *hist;      /* this member's committed history (NULL when it has none) */
+    /* chain_response of a type with chain_rank_one, K wanted: the caller reads only the
+     * blocks of neighbouring chain nodes, and they are to hold K_near (the rank-one term left
+     * out); the other blocks may hold anything. 0: the whole K. */
+    int near_blocks_only;
 } fem_element_ctx;
 
 typedef struct fem_element_ops {

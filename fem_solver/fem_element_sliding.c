@@ -10,7 +10,8 @@
  * dg_j/dx_j = P_j-1 + P_j, dg_j/dx_j-1 = -P_j-1, dg_j/dx_j+1 = -P_j, P_i = (I - e_i e_i^T)/l_i:
  * a dense material part (the force depends on the whole length) and a tridiagonal geometric
  * part. The material part is of rank one: chain_rank_one returns it (k = EA / L0 and g), and
- * the solver keeps it out of its factorised matrix (fem_element.h). Strain energy
+ * the solver keeps it out of its factorised matrix (fem_element.h); with near_blocks_only the
+ * response forms only the neighbours' blocks, without it. Strain energy
  * (N_+ = max(N, 0)): L0 (N_+(L)^2 - N_+(L0)^2) / (2 EA). The same law as the sliding cable
  * element of Kratos' CableNetApplication (one strain over the whole rope).
  *
@@ -121,7 +122,7 @@ static void rope_response(const fem_element_ctx *c, double N, double L0, double 
                 K[(3 * (s + 1) + i) * dim + 3 * s + j] -= P;
             }
     }
-    if (K)
+    if (K && !c->near_blocks_only)
         for (int a = 0; a < dim; a++)
             for (int b = 0; b < dim; b++) K[a * dim + b] += k_ax * f[a] * f[b];
     for (int a = 0; a < dim; a++) f[a] *= N;
@@ -136,7 +137,14 @@ static int sliding_response(const fem_element_ctx *c, double *f, double *K, doub
     if (slack) N = 0.0;
     for (int s = 0; s < c->count; s++) axial[s] = N;
     memset(f, 0, (size_t)dim * sizeof *f);
-    if (K) memset(K, 0, (size_t)dim * (size_t)dim * sizeof *K);
+    if (K && c->near_blocks_only)   /* the blocks (j, j-1 .. j+1) of every node j */
+        for (int row = 0; row < dim; row++) {
+            const int j = row / 3, lo = 3 * (j > 0 ? j - 1 : 0);
+            const int hi = 3 * (j < c->count ? j + 2 : j + 1);
+            memset(K + (size_t)row * dim + lo, 0, (size_t)(hi - lo) * sizeof *K);
+        }
+    else if (K)
+        memset(K, 0, (size_t)dim * (size_t)dim * sizeof *K);
     if (!slack) rope_response(c, N, L0, f, K);
     add_contact(c, f, K);
     return slack;

@@ -132,7 +132,7 @@ static void test_tangent(void **state)
         u[3] = lengths[t] + 0.02;
         u[4] = 0.05;     /* oblique, so the geometric part counts */
         u[5] = -0.03;
-        fem_element_ctx c = {&m, &m.sets[1], m.set_types[1].param, 0, 0, 1, u, hist};
+        fem_element_ctx c = {&m, &m.sets[1], m.set_types[1].param, 0, 0, 1, u, hist, 0};
         double f[3], Kb[9], fp[3], fm[3], K2[9];
         int slack;
         ops->pair_response(&c, f, Kb, &slack);

@@ -88,7 +88,7 @@ static void test_tangent_and_compression(void **state)
     for (int t = 0; t < 2; t++) {
         double u[6] = {0, 0, 0, 0, 0, 0};
         for (int c = 0; c < 3; c++) u[3 + c] = stretch[t] * m.X[3 + c] / m.L0[0] + 0.01 * (c - 1);
-        fem_element_ctx ctx = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 1, u, NULL};
+        fem_element_ctx ctx = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 1, u, NULL, 0};
         double f[3], Kb[9], fp[3], fm[3], K2[9];
         int slack;
         ops->pair_response(&ctx, f, Kb, &slack);

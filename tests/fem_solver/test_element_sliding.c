@@ -286,6 +286,32 @@ static void check_chain(const fem_element_ops *ops, fem_element_ctx *c, double *
     }
 }
 
+/* near_blocks_only (fem_element.h): the same force, and in the blocks of neighbouring nodes
+ * the whole tangent less the rank-one term (to 1e-12 of its largest entry); returns k. */
+static double check_near_blocks(const fem_element_ops *ops, const fem_element_ctx *c)
+{
+    enum { N = 5, DIM = 3 * N };
+    assert_int_equal(c->count + 1, N);
+    double f[DIM], K[DIM * DIM], fn[DIM], Kn[DIM * DIM], g[DIM], ax[N - 1], big = 0.0;
+    ops->chain_response(c, f, K, ax);
+    const double k = ops->chain_rank_one(c, g);
+    fem_element_ctx near = *c;
+    near.near_blocks_only = 1;
+    for (int i = 0; i < DIM * DIM; i++) Kn[i] = NAN;   /* the other blocks: not read */
+    ops->chain_response(&near, fn, Kn, ax);
+    for (int i = 0; i < DIM * DIM; i++) big = fmax(big, fabs(K[i]));
+    for (int i = 0; i < DIM; i++) assert_true(fn[i] == f[i]);
+    for (int a = 0; a < DIM; a++)
+        for (int b = 0; b < DIM; b++) {
+            if (abs(a / 3 - b / 3) > 1) continue;
+            const double want = K[a * DIM + b] - k * g[a] * g[b];
+            if (fabs(Kn[a * DIM + b] - want) > 1e-12 * big)
+                fail_msg("near blocks: K[%d][%d] = %.17g, the whole tangent less k g g^T %.17g",
+                         a, b, Kn[a * DIM + b], want);
+        }
+    return k;
+}
+
 /* The rope alone; a slack rope carries nothing. Then shackle contact: segments 2.08, 2.26,
  * 2.16, 2.03 m at rest, a gap of 2.2 m (set here, past the input check that a loaded model
  * would fail) puts three of them in contact; taut, then slack with the contact still pushing. */
@@ -299,7 +325,7 @@ static void test_tangent(void **state)
     const fem_element_ops *ops = fem_element_type(m.set_types[0].type);
     double u[15], f[15], K[225], ax[4], plain[15];
     for (int i = 0; i < 15; i++) u[i] = 0.01 * sin(1.7 * i + 0.3);
-    fem_element_ctx c = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 4, u, NULL};
+    fem_element_ctx c = {&m, &m.sets[0], m.set_types[0].param, 0, 0, 4, u, NULL, 0};
     check_chain(ops, &c, u, 0);
     ops->chain_response(&c, plain, NULL, ax);
     m.set_types[0].param[0] = 2.2;
@@ -309,8 +335,10 @@ static void test_tangent(void **state)
     for (int i = 0; i < 15; i++) change = fmax(change, fabs(f[i] - plain[i]));
     print_message("contact changes the chain force by up to %.3e N\n", change);
     assert_true(change > 1e4);   /* k_c = EA / g = 5.7e6 N/m, about 0.1 m deep */
+    assert_true(check_near_blocks(ops, &c) > 0.0);   /* taut, in contact */
     for (int i = 0; i < 15; i++) u[i] = -0.05 * m.X[i] + 0.01 * sin(1.1 * i);
     check_chain(ops, &c, u, 1);
+    assert_true(check_near_blocks(ops, &c) == 0.0);  /* slack: no term, the contact's blocks */
     /* without contact a shortened rope carries nothing */
     m.set_types[0].param[0] = 0.0;
     for (int i = 0; i < 15; i++) u[i] = -0.2 * m.X[i];
