@@ -512,13 +512,20 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     double *end = malloc(3 * nn * sizeof *end);
     double *force = calloc(3 * nn, sizeof *force);
     double *impulse = calloc(3 * nn, sizeof *impulse);
+    /* the nodes a sub-step's contacts load (each at most twice per record) and the sub-step
+     * that last added a node to the impulse: the net has thousands of nodes, a sub-step's
+     * contacts load a few, and clearing and summing all of them per sub-step was most of
+     * the replay's time on the MEL test */
+    int32_t *touched = malloc((2 * jac->n_rec + 1) * sizeof *touched);
+    long *added_in = malloc((nn + 1) * sizeof *added_in);
+    size_t n_touched = 0;
     size_t *slot = malloc((jac->n_rec + 1) * sizeof *slot);
     block *blocks = NULL;
     dem_jac_state *state = malloc((jac->n_rec + 1) * sizeof *state);
     particle *pts = NULL;
     size_t npt = 0;
     int rc = 0;
-    if (!end || !force || !impulse || !slot || !state) {
+    if (!end || !force || !impulse || !touched || !added_in || !slot || !state) {
         rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
         goto done;
     }
@@ -535,9 +542,11 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
         goto done;
     }
     for (size_t k = 0; k < 3 * nn; k++) end[k] = net->ref[k] + disp_end[k];
+    for (size_t k = 0; k < nn; k++) added_in[k] = -1;
     size_t nbk = 0;
     for (long sub = 0; sub < jac->n_sub; sub++) {
-        memset(force, 0, 3 * nn * sizeof *force);
+        for (size_t x = 0; x < n_touched; x++) memset(force + 3 * (size_t)touched[x], 0, 3 * sizeof *force);
+        n_touched = 0;
         double wgt = jac->weight[sub];
         for (size_t x = jac->sub_first[sub]; x < jac->sub_first[sub + 1]; x++) {
             dem_jac_record *r = &jac->rec[x];
@@ -569,8 +578,11 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                     force[3 * (size_t)na + (size_t)d] -= (1.0 - t) * f[d];
                     force[3 * (size_t)nb + (size_t)d] -= t * f[d];
                 }
+                touched[n_touched++] = na;
+                touched[n_touched++] = nb;
             } else {
                 for (int d = 0; d < 3; d++) force[3 * (size_t)r->j + (size_t)d] -= f[d];
+                touched[n_touched++] = r->j;
             }
             if (!want_K || wgt == 0.0 || pt->overflow) continue;
             /* F_a = -(1-t) f, F_b = -t f; K = -weight dF; columns: the particle's nodes
@@ -593,7 +605,12 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                 }
             }
         }
-        for (size_t k = 0; k < 3 * nn; k++) impulse[k] += jac->h * force[k];
+        for (size_t x = 0; x < n_touched; x++) {   /* untouched nodes: force 0 */
+            const size_t node = (size_t)touched[x];
+            if (added_in[node] == sub) continue;
+            added_in[node] = sub;
+            for (int d = 0; d < 3; d++) impulse[3 * node + d] += jac->h * force[3 * node + d];
+        }
         /* the particles' response to the change of the net force (symplectic Euler of
          * dem_integrate.c, velocity first; free spheres only) */
         for (size_t x = 0; x < npt; x++) {
@@ -652,6 +669,6 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
         jac->n_blocks = m;
     }
 done:
-    free(end); free(force); free(impulse); free(slot); free(blocks); free(state); free(pts);
+    free(end); free(force); free(impulse); free(touched); free(added_in); free(slot); free(blocks); free(state); free(pts);
     return rc;
 }
