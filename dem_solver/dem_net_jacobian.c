@@ -545,7 +545,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     for (size_t k = 0; k < nn; k++) added_in[k] = -1;
     size_t nbk = 0;
     for (long sub = 0; sub < jac->n_sub; sub++) {
-        for (size_t x = 0; x < n_touched; x++) memset(force + 3 * (size_t)touched[x], 0, 3 * sizeof *force);
+        for (size_t x = 0; x < n_touched; x++)
+            memset(force + 3 * (size_t)touched[x], 0, 3 * sizeof *force);
         n_touched = 0;
         double wgt = jac->weight[sub];
         for (size_t x = jac->sub_first[sub]; x < jac->sub_first[sub + 1]; x++) {
@@ -669,6 +670,7 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
         jac->n_blocks = m;
     }
 done:
-    free(end); free(force); free(impulse); free(touched); free(added_in); free(slot); free(blocks); free(state); free(pts);
+    free(end); free(force); free(impulse); free(touched); free(added_in);
+    free(slot); free(blocks); free(state); free(pts);
     return rc;
 }
