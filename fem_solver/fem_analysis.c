@@ -18,9 +18,17 @@
  * kappa K / M dt >~ 1 on light nodes). F_ext is taken
  * at the end of the step for every method (model loads at the ramp value of t_{n+1};
  * coupling forces are constant over the step anyway). An interface linearisation adds
- * dF = -K (u - u^k) - C (v - v^k) to the coupling force at the same end-of-step point with
- * the same full weight, so its tangent is l_k K + l_c C with l_k = 1, l_c = gamma/(beta dt)
- * (statics: 1, 0).
+ * dF = -K (u - u^k) - C (v - v^k) to the coupling force with the weight l_w the step gives
+ * the coupling force: l_w = 1 at the end-of-step point; with a step-constant coupling load
+ * the force also shifts a_n (by M^-1 F), which the Newmark relations carry into a_n+1 and
+ * v_n+1, so a force change moves the step l_w = 1 + (1 - alpha_m) c2 - alpha_m
+ * - tau (1 - alpha_f) dt ((1 - gamma) - gamma c2) times as much, c2 = 1/(2 beta) - 1
+ * (Newmark: 2). Its tangent is l_k K + l_c C with l_k = l_w, l_c = l_w gamma/(beta dt)
+ * (statics: 1, 0). With l_w = 1 there the FEM's answer to a linear force law would not be
+ * the coupled solution, and the interface iteration converges linearly at about 1 - 1/l_w
+ * (docs/notes/interface_jacobian.md). The shift's effect through C_K = kappa K_T and through
+ * the C term's velocity would need M^-1 and is left out: exact for kappa = 0 and C = 0, which
+ * is what the DEM sends.
  */
 #include "fem_analysis.h"
 #include "fem_element.h"
@@ -579,10 +587,10 @@ static int assemble_chain(fem_analysis *s, const fem_element_ctx *c, const fem_e
 }
 
 /* The weights of the step equation's tangent c_m M + c_k K_T + c_c C_K (+ l_k K + l_c C of
- * an interface linearisation) and of its internal force, wf = 1 - alpha_f (see the top of
- * this file). */
+ * an interface linearisation), of its internal force, wf = 1 - alpha_f, and of the
+ * linearisation's force change, l_w (see the top of this file). */
 typedef struct step_weights {
-    double c_m, c_k, c_c, l_k, l_c, wf;
+    double c_m, c_k, c_c, l_k, l_c, wf, l_w;
 } step_weights;
 
 /* Residual r (all dofs; meaningful on free ones) and, with matrix != 0, the tangent with the
@@ -607,7 +615,7 @@ static double assemble(fem_analysis *s, double lambda, const step_weights *sw, c
         const double *df = s->lin.df;
         scale2 += s->lin.force_scale_n * s->lin.force_scale_n;
         for (int i = 0; i < s->ndof; i++) {
-            s->r[i] = lambda * s->f_model[i] + s->f_coupling[i] + df[i];
+            s->r[i] = lambda * s->f_model[i] + s->f_coupling[i] + sw->l_w * df[i];
             fext2 += s->r[i] * s->r[i];
         }
         if (matrix && (sw->l_k != 0.0 || sw->l_c != 0.0)) fem_ijac_scatter(&s->lin, sw->l_k, sw->l_c, x);
@@ -894,14 +902,20 @@ static void set_free_u(fem_analysis *s, double alpha)
 /* Tangent weights of the step equation (see the top of this file). */
 static step_weights newton_weights(const fem_model *m, const newton_setup *ns)
 {
-    step_weights sw = {.c_m = 0, .c_k = 1, .c_c = 0, .l_k = 1, .l_c = 0, .wf = 1};
+    step_weights sw = {.c_m = 0, .c_k = 1, .c_c = 0, .l_k = 1, .l_c = 0, .wf = 1, .l_w = 1};
     if (ns->dynamic) {
         double bdt = ns->beta * ns->dt;
         sw.c_m = (1.0 - ns->alpha_m) / (bdt * ns->dt) + m->tau_per_s * (1.0 - ns->alpha_f) * ns->gamma / bdt;
         sw.c_k = 1.0 - ns->alpha_f;
         sw.c_c = (1.0 - ns->alpha_f) * ns->gamma / bdt;
         sw.wf = 1.0 - ns->alpha_f;
-        sw.l_c = ns->gamma / bdt;
+        if (m->settings.coupling_load_constant) {
+            const double c2 = 1.0 / (2.0 * ns->beta) - 1.0;
+            sw.l_w = 1.0 + (1.0 - ns->alpha_m) * c2 - ns->alpha_m -
+                     m->tau_per_s * (1.0 - ns->alpha_f) * ns->dt * ((1.0 - ns->gamma) - ns->gamma * c2);
+        }
+        sw.l_k = sw.l_w;
+        sw.l_c = sw.l_w * ns->gamma / bdt;
     }
     return sw;
 }
@@ -1154,7 +1168,8 @@ int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err)
     double tau = m->tau_per_s;
     for (int i = 0; i < s->ndof; i++) s->w[i] = tau * s->cur.v[i];
     if (s->damping_K) freeze_damping(s, s->cur.u, s->cur.element_history, s->damping_start);
-    const step_weights mass_only = {.c_m = 1, .c_k = 0, .c_c = 0, .l_k = 0, .l_c = 0, .wf = 1};
+    const step_weights mass_only = {.c_m = 1, .c_k = 0, .c_c = 0, .l_k = 0, .l_c = 0, .wf = 1,
+                                    .l_w = 1};
     assemble(s, lambda, &mass_only, s->w, s->cur.v, NULL, 1, s->cur.element_history);
     if (linear_solve(s, 0, err)) return nc_error_prefix(err, "%s: initial acceleration (mass matrix)", m->source);
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
@@ -1182,19 +1197,23 @@ static void mass_multiply(const fem_analysis *s, const double *x, double *y)
 #define FEM_MASS_CG_TOL 1e-14   /* relative residual of the mass solve */
 #define FEM_MASS_CG_MAX_IT 200
 
-/* start.a += M^-1 (f_coupling - start.fc) on the free dofs: the coupling force changes at t_n
- * from the force a_n was computed with to this step's, and the trapezoidal (Newmark) and
- * alpha-weighted updates then use it over the whole step. Jacobi-preconditioned CG, matrix
- * free: M of bar elements is well conditioned (spectrum of D^-1 M within [0.5, 1.5]), so
- * this converges in a few tens of iterations (1 with a lumped mass). */
-static int shift_start_acceleration(fem_analysis *s, nc_error *err)
+/* start.a += M^-1 (to - from) on the free dofs (from NULL: zero): at the start of a step the
+ * coupling force changes at t_n from the force a_n was computed with (start.fc) to this
+ * step's (f_coupling), and the trapezoidal (Newmark) and alpha-weighted updates then use it
+ * over the whole step; after a step solved with an interface linearisation, by the
+ * linearisation's force change (lin.df), which acts over the whole step as well.
+ * Jacobi-preconditioned CG, matrix free: M of bar elements is well conditioned (spectrum of
+ * D^-1 M within [0.5, 1.5]), so this converges in a few tens of iterations (1 with a lumped
+ * mass). */
+static int shift_start_acceleration(fem_analysis *s, const double *to, const double *from,
+                                    nc_error *err)
 {
     const int n = s->neq;
     double *r = s->cg_r, *z = s->cg_z, *p = s->cg_p, *q = s->cg_q, *x = s->du;
     double b2 = 0;
     for (int e = 0; e < n; e++) {
         int d = s->dof_of_eq[e];
-        r[e] = s->f_coupling[d] - s->start.fc[d];
+        r[e] = to[d] - (from ? from[d] : 0.0);
         b2 += r[e] * r[e];
         x[e] = 0;
     }
@@ -1244,7 +1263,7 @@ static int begin_dynamic_step(fem_analysis *s, double dt_s, newton_setup *ns, nc
     }
     if (set->coupling_load_constant) {
         memcpy(s->a_unshifted, s->start.a, (size_t)s->ndof * sizeof(double));
-        if (shift_start_acceleration(s, err)) {
+        if (shift_start_acceleration(s, s->f_coupling, s->start.fc, err)) {
             unshift_start(s);
             return nc_error_prefix(err, "%s: step %ld", s->m->source, s->start.step);
         }
@@ -1271,7 +1290,15 @@ int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, 
     apply_supports(s, ns.lambda);
     if (u_guess)
         for (int q = 0; q < s->neq; q++) s->cur.u[s->dof_of_eq[q]] = u_guess[s->dof_of_eq[q]];
-    if (newton(s, &ns, err)) {
+    /* with a step-constant coupling load the linearisation's force change acts over the
+     * whole step too: Newton solved for u with its weight l_w (newton_weights), and a_n, then
+     * a_n+1 and v_n+1, follow it here (the top of this file) */
+    int rc = newton(s, &ns, err);
+    if (rc == 0 && s->m->settings.coupling_load_constant && s->lin.active) {
+        rc = shift_start_acceleration(s, s->lin.df, NULL, err);
+        if (rc == 0) update_kinematics(s, ns.dt, ns.beta, ns.gamma);
+    }
+    if (rc) {
         /* leave the state as it was before the call */
         unshift_start(s);
         state_copy(&s->cur, &s->start, s->ndof);
@@ -1497,7 +1524,7 @@ int fem_analysis_step_energy(const fem_analysis *s, int inertia, fem_step_energy
     const double lam1 = inertia ? fem_analysis_load_factor(s, s->cur.time_s) : 1.0;
     /* the coupling force the start-of-step acceleration stands for: with "step_constant" it
      * was shifted to this step's force */
-    const double *fc0 = m->settings.coupling_load_constant ? s->f_coupling : s->start.fc;
+    const double *fc0 = m->settings.coupling_load_constant ? s->cur.fc : s->start.fc;
     /* the loads' weights of the velocity update v_n+1 - v_n = dt ((1 - gamma) a_n + gamma
      * a_n+1): the impulse the integrator takes from the start and the end force */
     double beta, gamma = 0.5, am, af;
