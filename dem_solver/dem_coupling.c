@@ -251,9 +251,11 @@ static int try_free_flight(dem_sim *s, double dt, long substeps, int *done, nc_e
                        net->end[3 * k + 2] - net->start[3 * k + 2]};
         node_move = fmax(node_move, sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
     }
+    /* The grid finds every edge within near_distance_m of a sphere; beyond it a sphere's cell
+     * may hold a farther edge and miss a nearer one, so a larger gap is not trusted. */
     dem_coupled_info gap;
     dem_sim_net_gap(s, &gap);
-    double net_gap = gap.min_gap_m < 1e29 ? gap.min_gap_m : net->near_distance_m;
+    double net_gap = fmin(gap.min_gap_m, net->near_distance_m);
     if (net_gap <= travel + node_move + margin) return 0;
     /* sphere pairs */
     long close;

@@ -38,7 +38,8 @@ typedef struct dem_snapshot {
 /* Result values of a coupled solve. */
 typedef struct dem_coupled_info {
     int near_interface;   /* 1 if a particle is within net.near_distance_m of the net */
-    double min_gap_m;     /* smallest particle surface – net distance (1e30 if none near) */
+    double min_gap_m;     /* smallest particle surface – net distance, exact up to
+                           * near_distance_m (1e30 if none near) */
     long contacts;        /* particle–net contacts at the end of the step */
     long substeps;
 } dem_coupled_info;

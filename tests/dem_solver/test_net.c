@@ -3,7 +3,7 @@
  * contact; the rebound on an edge returns the requested restitution; a small sphere passes
  * between two edges and a large one does not; nodal forces are impulse-consistent; an edge that
  * sweeps from far away into a sphere within one coupling step is found in the sub-step it
- * reaches it. */
+ * reaches it; the free-flight check does not trust a net gap beyond near_distance_m. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -239,6 +239,61 @@ static void test_free_flight_far_from_net(void **state)
     assert_near(z_end[0], z_end[1], 1e-3);
 }
 
+/* The free-flight check may only trust the net gap within near_distance_m: the grid finds
+ * every edge whose clearance is below it, but beyond it the nearest edge may be missing from
+ * the sphere's cell while a farther one is there. Here edge A (a long diagonal, clearance
+ * 0.34 m) shares the sphere's cell and edge B (6 cm below the sphere falling at 10 m/s) does
+ * not: the 0.1 m the sphere travels in the step exceed B's clearance, so the step must be
+ * sub-stepped and the sphere must hit B, not fly through it. */
+static void test_free_flight_gap_beyond_near_distance(void **state)
+{
+    (void)state;
+    const double pz = -0.02, r = 0.1;
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"materials\": [{\"name\": \"m\", \"youngs_modulus_pa\": 1e7, \"poisson_ratio\": 0.2,"
+             " \"density_kg_m3\": 2500, \"restitution\": 0.5, \"friction\": 0.3}],"
+             " \"particles\": [{\"position\": [0, 0, %g], \"radius\": %g, \"velocity\": [0, 0, -10]}],"
+             " \"net_wall\": {\"youngs_modulus_pa\": 1e7, \"poisson_ratio\": 0.2, \"friction\": 0.3,"
+             " \"near_distance_m\": 0.01, \"cable_radius_m\": 0},"
+             " \"gravity\": [0, 0, 0], \"dt_s\": 1e-5, \"free_flight\": true}", pz, r);
+    dem_sim s;
+    dem_test_build(&s, json);
+    /* A: (-0.4, 0, 1) - (1.6, 0, -1); B: (-0.05, 0, pz - 0.16) - (0.05, 0, pz - 0.16); and 100
+     * short edges far away, which make the grid's cells small (dem_neighbor_grid.c) */
+    enum { FILL = 100, NODES = 4 + 2 * FILL, EDGES = 2 + FILL };
+    static double xyz[3 * NODES];
+    static int32_t edges[2 * EDGES];
+    const double a_b[12] = {-0.4, 0, 1.0, 1.6, 0, -1.0, -0.05, 0, pz - 0.16, 0.05, 0, pz - 0.16};
+    memcpy(xyz, a_b, sizeof a_b);
+    for (int k = 0; k < FILL; k++) {
+        double *q = xyz + 3 * (4 + 2 * k);
+        q[0] = 10.0 + 0.3 * k, q[1] = 0, q[2] = 0;
+        q[3] = q[0] + 0.01, q[4] = 0, q[5] = 0;
+    }
+    for (int e = 0; e < EDGES; e++) edges[2 * e] = 2 * e, edges[2 * e + 1] = 2 * e + 1;
+    nc_error err;
+    assert_int_equal(dem_sim_set_interface(&s, NODES, NULL, xyz, EDGES, edges, &err), 0);
+    /* the set-up this test needs: the sphere's cell holds A but not B */
+    const int32_t *items;
+    size_t count = dem_item_grid_query(s.model.net.grid, s.model.sph.pos, &items);
+    int has_a = 0, has_b = 0;
+    for (size_t c = 0; c < count; c++) has_a |= items[c] == 0, has_b |= items[c] == 1;
+    assert_true(has_a && !has_b);
+
+    static double force[3 * NODES], zero[3 * NODES];
+    dem_coupled_info info;
+    assert_int_equal(dem_sim_begin_step(&s, &err), 0);
+    assert_int_equal(dem_sim_solve_coupled(&s, 1e-2, zero, zero, force, &info, &err), 0);
+    double fb = force[3 * 2 + 2] + force[3 * 3 + 2];
+    print_message("sub-steps %ld, sphere z %.4f m, vz %.3f m/s, force on B %.3e N\n",
+                  info.substeps, s.model.bod.pos[2], s.model.bod.vel[2], fb);
+    assert_true(info.substeps > 1);
+    assert_true(fb < 0.0);                       /* the sphere pushed B down */
+    assert_true(s.model.bod.vel[2] > -10.0);     /* and was slowed by it */
+    dem_sim_free(&s);
+}
+
 /* Bad interface data and commands in the wrong order are errors naming the problem. */
 static void test_interface_errors(void **state)
 {
@@ -353,6 +408,7 @@ int main(void)
         cmocka_unit_test(test_pass_between_edges),
         cmocka_unit_test(test_impulse_consistent),
         cmocka_unit_test(test_free_flight_far_from_net),
+        cmocka_unit_test(test_free_flight_gap_beyond_near_distance),
         cmocka_unit_test(test_interface_errors),
         cmocka_unit_test(test_net_does_not_pass_through_resting_sphere),
         cmocka_unit_test(test_edge_sweeping_into_sphere),
