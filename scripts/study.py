@@ -741,12 +741,18 @@ def jacobian_metrics(run_dir, seconds, node, component):
             st = f["/steps"]
             it = np.array(st["iterations"])
             contact = np.array(st["in_contact"]) > 0
+            # /steps/iterations counts the accepted try; /iterations has a row for every
+            # iteration of every try, numbered by the step it tried
+            tries = np.bincount(np.array(f["/iterations/step"]).astype(int).ravel(),
+                                minlength=len(it))[:len(it)]
             r.update(steps=len(it), t_end=float(st["time"][-1]) if len(it) else 0.0,
                      unconverged=int((np.array(st["converged"]) == 0).sum()),
                      rejected=int(np.array(st["rejected"]).sum()),
                      contact_steps=int(contact.sum()),
                      it_avg=float(it[contact].mean()) if contact.any() else float("nan"),
                      it_max=int(it[contact].max()) if contact.any() else 0,
+                     all_avg=float(tries[contact].mean()) if contact.any() else float("nan"),
+                     all_max=int(tries[contact].max()) if contact.any() else 0,
                      finished=int(f.attrs.get("finished", 0)))
             e = f["/energy"]
             created, inp, above = np.array(e["created"]), np.array(e["input"]), np.array(e["above"])
@@ -775,11 +781,24 @@ def jacobian_status(r):
     return str(r["rc"])
 
 
+def meets_iterations(r):
+    """The iteration target, counted over every try of a contact step (a rejected try's
+    iterations are work the step cost)."""
+    return r["all_avg"] <= TARGET_AVG and r["all_max"] <= TARGET_MAX
+
+
+def tries_note(r):
+    """' (all tries a/m)' where rejected tries added iterations to the contact steps."""
+    if r["all_max"] == r["it_max"] and abs(r["all_avg"] - r["it_avg"]) < 5e-3:
+        return ""
+    return " (all tries %.1f/%d)" % (r["all_avg"], r["all_max"])
+
+
 def jacobian_meets(r, ref_peak):
     """(iterations target, reliability target (finished, 0 unconverged, no energy), peak target or None)."""
     if "error" in r:
         return False, False, None
-    its = r["contact_steps"] > 0 and r["it_avg"] <= TARGET_AVG and r["it_max"] <= TARGET_MAX
+    its = r["contact_steps"] > 0 and meets_iterations(r)
     reliable = (not r["timed_out"]) and r["rc"] in (0, 3) and r["finished"] == 1 and r["unconverged"] == 0 \
         and not r["energy_fired"]
     peak = None
@@ -886,6 +905,8 @@ def jacobian_cell(r, ref):
         return "no results"
     cell = "%s %s/%d u%d r%d" % (jacobian_status(r), "%.1f" % r["it_avg"] if np.isfinite(r["it_avg"]) else "-",
                                   r["it_max"], r["unconverged"], r["rejected"])
+    if r["contact_steps"] > 0:
+        cell += tries_note(r)
     if r["energy_fired"]:
         cell += " E%+.0f%%" % r["created_pct"]
     if ref is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
@@ -935,7 +956,7 @@ def jacobian_tables(out, rows, refs, speed_results):
                         refcell = "none (%s, %d unconverged)" % (jacobian_status(rr), rr.get("unconverged", -1))
                 lines.append("| %s | %g | %s | %g | %s | %s |" % (case, end, cor, dt0 * factor, " | ".join(cells), refcell))
     lines.append("")
-    lines.append("| variant | runs | iterations ≤ %g avg / ≤ %d max in contact | reliable (finished, 0 unconverged, no energy) "
+    lines.append("| variant | runs | iterations ≤ %g avg / ≤ %d max in contact, every try counted | reliable (finished, 0 unconverged, no energy) "
                  "| peak within %g %% (of runs with a reference) | all targets |" % (TARGET_AVG, TARGET_MAX, TARGET_PEAK_PCT))
     lines.append("|---|---|---|---|---|---|")
     for name, title, _ in JACOBIAN_VARIANTS:
@@ -978,7 +999,7 @@ def jacobian_figures(out, rows, refs):
                             "noref" if its and reliable and peak is None else
                             "reliable" if reliable else "its" if its else "none")
                     colour = colours[kind]
-                    text = "%s\n%d" % ("%.1f" % r["it_avg"] if np.isfinite(r["it_avg"]) else "-", r["it_max"])
+                    text = "%s\n%d" % ("%.1f" % r["all_avg"] if np.isfinite(r["all_avg"]) else "-", r["all_max"])
                     if r["timed_out"]:
                         text += "\ncap"
                     elif r["rc"] not in (0, 3):
@@ -998,7 +1019,7 @@ def jacobian_figures(out, rows, refs):
     handles = [plt.Rectangle((0, 0), 1, 1, facecolor=colours[k]) for k in ("all", "noref", "reliable", "its", "none", "missing")]
     fig.legend(handles, ["all targets met", "iterations and reliability met, no reference for the peak", "reliable, iterations above target", "iterations met, not reliable",
                          "neither", "not run (5Δt dropped: time budget)"], loc="lower center", ncol=6, fontsize=8)
-    fig.suptitle("interface iterations per contact step (average / max; u: unconverged steps accepted, cap: "
+    fig.suptitle("interface iterations per contact step, every try counted (average / max; u: unconverged steps accepted, cap: "
                  "stopped at the wall-time cap) and the targets (≤ 3 / ≤ 10, reliable, peak within 3 %)", fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 0.95))
     fig.savefig(os.path.join(out, "jacobian_targets.png"), dpi=120)
@@ -1054,6 +1075,7 @@ def study_work(out, jobs, end_time):
              "|---|---|---|" + "---|" * (len(WORK_VARIANTS) + 1)]
     meets, reliable = ({v[0]: 0 for v in WORK_VARIANTS} for _ in range(2))
     averages = {v[0]: [] for v in WORK_VARIANTS}
+    all_averages = {v[0]: [] for v in WORK_VARIANTS}
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         for cor in JACOBIAN_CORS:
             for factor in ((1, 5) if five else (1,)):
@@ -1063,12 +1085,13 @@ def study_work(out, jobs, end_time):
                     if "error" in r:
                         cells.append("no results")
                         continue
-                    ok = r["it_avg"] <= TARGET_AVG and r["it_max"] <= TARGET_MAX
+                    ok = meets_iterations(r)
                     meets[name] += ok
                     reliable[name] += jacobian_status(r) == "0" and r["unconverged"] == 0 and not r["energy_fired"]
                     averages[name].append(r["it_avg"])
-                    cell = "%s %.2f/%d r%d mismatch %+.2f %%" % (jacobian_status(r), r["it_avg"], r["it_max"],
-                                                                 r["rejected"], r["mismatch_pct"])
+                    all_averages[name].append(r["all_avg"])
+                    cell = "%s %.2f/%d r%d%s mismatch %+.2f %%" % (jacobian_status(r), r["it_avg"], r["it_max"],
+                                                                   r["rejected"], tries_note(r), r["mismatch_pct"])
                     cells.append("**%s**" % cell if ok else cell)
                 p, w = runs["paper"], runs["work"]
                 peak = ("%+.2f %%" % ((w["peak"] - p["peak"]) / p["peak"] * 100)
@@ -1076,16 +1099,19 @@ def study_work(out, jobs, end_time):
                 lines.append("| %s | %s | %s | %s | %s |" % (case, cor, "case" if factor == 1 else "5×",
                                                              " | ".join(cells), peak))
     lines.append("")
-    lines.append("Cell: exit status · iterations per contact step, average/largest (**bold**: ≤ %g and ≤ %d) · "
-                 "r rejected tries · the summed interface work mismatch, %% of the input energy (negative: lost)."
+    lines.append("Cell: exit status · iterations per contact step, average/largest, of the accepted tries · "
+                 "r rejected tries, and the average/largest with their iterations counted too · "
+                 "the summed interface work mismatch, %% of the input energy (negative: lost); "
+                 "**bold**: ≤ %g and ≤ %d counting every try."
                  % (TARGET_AVG, TARGET_MAX))
     lines.append("")
     for name, label, _ in WORK_VARIANTS:
         n = len(averages[name])
         lines.append("- %s: %d of %d runs reliable; %d of %d within ≤ %g on average and ≤ %d at most; "
-                     "%.2f iterations per contact step, the mean of the runs' averages"
+                     "%.2f iterations per contact step (%.2f counting every try), the mean of the runs' averages"
                      % (label, reliable[name], n, meets[name], n, TARGET_AVG, TARGET_MAX,
-                        float(np.mean(averages[name])) if n else float("nan")))
+                        float(np.mean(averages[name])) if n else float("nan"),
+                        float(np.mean(all_averages[name])) if n else float("nan")))
     text = "\n".join(lines) + "\n"
     print(text)
     with open(os.path.join(out, "work_table.md"), "w") as f:
