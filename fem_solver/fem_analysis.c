@@ -234,7 +234,10 @@ static int rank_one_alloc(fem_analysis *s)
     s->lr_k = calloc(r, sizeof(double));
     s->lr_c = calloc(r, sizeof(double));
     s->lr_c_frozen = calloc(r, sizeof(double));
-    if (!s->lr_eq || !s->lr_g || !s->lr_gc || !s->lr_k || !s->lr_c || !s->lr_c_frozen) return -1;
+    s->lr_shift = calloc(at + 1, sizeof(double));
+    if (!s->lr_eq || !s->lr_g || !s->lr_gc || !s->lr_k || !s->lr_c || !s->lr_c_frozen ||
+        !s->lr_shift)
+        return -1;
     for (int b = 0; b < m->n_members; b++) {
         const int r_b = s->lr_of_member[b];
         if (r_b < 0) continue;
@@ -246,12 +249,39 @@ static int rank_one_alloc(fem_analysis *s)
     return 0;
 }
 
-/* y += the rank-one terms of the tangent times x (both over the free equations) */
+/* A free equation that only a rank-one term holds (a rope end pulled along a straight rope
+ * in a static analysis: no geometric stiffness along the rope, its stretch all in the term)
+ * leaves the matrix singular, and the factorisation that preconditions GMRES fails. Its
+ * diagonal gets the term's own diagonal k g_e^2 (lr_shift), which rank_one_apply takes back:
+ * the tangent GMRES iterates on stays exact, the preconditioner is regular, and the
+ * correction GMRES must find grows from rank one by one per shifted equation. */
+static void rank_one_shift(fem_analysis *s, double *x)
+{
+    for (int r = 0; r < s->lr_members; r++) {
+        const size_t at = s->lr_at[r], n = s->lr_at[r + 1] - at;
+        for (size_t a = 0; a < n; a++) {
+            const int eq = s->lr_eq[at + a];
+            const double g = s->lr_g[at + a], term = s->lr_k[r] * g * g;
+            s->lr_shift[at + a] = 0.0;
+            if (eq < 0 || !(term > 0.0)) continue;
+            double *diag = x + s->K.diag[eq];
+            if (fabs(*diag) > 1e-10 * term) continue;
+            *diag += term;
+            s->lr_shift[at + a] = term;
+        }
+    }
+}
+
+/* y += the rank-one terms of the tangent times x, less the diagonal rank_one_shift put into
+ * the matrix (both over the free equations) */
 static void rank_one_apply(const fem_analysis *s, const double *x, double *y)
 {
     for (int r = 0; r < s->lr_members; r++) {
         const int *eq = s->lr_eq + s->lr_at[r];
         const int n = (int)(s->lr_at[r + 1] - s->lr_at[r]);
+        const double *shift = s->lr_shift + s->lr_at[r];
+        for (int a = 0; a < n; a++)
+            if (eq[a] >= 0 && shift[a] != 0.0) y[eq[a]] -= shift[a] * x[eq[a]];
         const double coef[2] = {s->lr_k[r], s->lr_c[r]};
         const double *vec[2] = {s->lr_g + s->lr_at[r], s->lr_gc + s->lr_at[r]};
         for (int t = 0; t < 2; t++) {
@@ -461,6 +491,7 @@ void fem_analysis_free(fem_analysis *s)
     free(s->mass_diag); free(s->mass_x); free(s->mass_y); free(s->a_unshifted);
     free(s->chain_f); free(s->chain_v); free(s->chain_K);
     free(s->lr_of_member); free(s->lr_at); free(s->lr_eq); free(s->lr_g); free(s->lr_gc);
+    free(s->lr_shift);
     free(s->lr_k); free(s->lr_c); free(s->lr_c_frozen);
     free(s->damping_K); free(s->damping_at); free(s->damping_start); free(s->damping_end);
     memset(s, 0, sizeof *s);
@@ -681,6 +712,7 @@ static double assemble(fem_analysis *s, double lambda, const step_weights *sw, c
                 }
         }
     }
+    if (matrix && s->lr_members > 0) rank_one_shift(s, x);
     for (int i = 0; i < s->ndof; i++) {
         s->r[i] -= wf * fd[i] + (fd_n ? (1.0 - wf) * fd_n[i] : 0.0);
     }

@@ -83,11 +83,13 @@ typedef struct fem_analysis {
      * equations lr_eq[lr_at[r] .. lr_at[r + 1]) of its chain nodes (-1: supported), the
      * stiffness term lr_k[r] g g^T (g in lr_g, the tangent weight c_k included) and the
      * damping term lr_c[r] g_c g_c^T (g_c in lr_gc, frozen with C_K: lr_c_frozen[r] = kappa k,
-     * times c_c), both of the last assembly with a matrix. */
+     * times c_c), both of the last assembly with a matrix. lr_shift (same indexing as
+     * lr_eq): what that assembly added to the matrix diagonal of an equation the term alone
+     * holds (rank_one_shift in fem_analysis.c), taken back in the tangent's product. */
     int lr_members;
     int *lr_of_member, *lr_eq;
     size_t *lr_at;
-    double *lr_g, *lr_gc, *lr_k, *lr_c, *lr_c_frozen;
+    double *lr_g, *lr_gc, *lr_k, *lr_c, *lr_c_frozen, *lr_shift;
     double *chain_f, *chain_v, *chain_K; /* chain member work arrays (3n, 3n, 3n x 3n) */
     /* stiffness-proportional damping C_K = kappa K_T(u_n), frozen over each step (kappa != 0
      * only): per member from damping_K + damping_at[b] (3x3 for a pair element, 3n x 3n for a

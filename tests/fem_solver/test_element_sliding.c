@@ -8,7 +8,8 @@
  * neighbours. The element tangent and the assembled tangent of a rope through two free
  * shackles (non-neighbour nodes, coupled by the dense material part, which the solver keeps
  * out of its matrix as a rank-one term) match central differences; a static rope end held
- * along the rope by the rope alone converges to equilibrium.
+ * along the rope by the rope alone converges to equilibrium, and on a straight rope (an
+ * exactly zero diagonal in the matrix) to the closed form.
  * Shackle contact (shackle_gap_m): the chain's force and tangent with segments below the gap,
  * taut and slack, against central differences of the force and of the strain energy; a
  * shackle driven along a straight rope into its anchor stops at the gap: undamped, its
@@ -174,6 +175,39 @@ static void test_rope_end_held_by_rope(void **state)
     /* the pull goes into the rope: the ties across it take a share only through their
      * rotation (1.5 mm over 2 m) */
     assert_near_rel(s.axial[0], 5000.0, 1e-5);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
+/* The same, exactly: a straight rope along x, its end free only along it and pulled there.
+ * The matrix has an exactly zero diagonal for that dof (no geometric stiffness along a
+ * straight rope, the stretch in the rank-one term), which the factorisation cannot take; the
+ * solver puts the term's diagonal there for the preconditioner (fem_analysis.c
+ * rank_one_shift). Closed form: N = 5000 N, the end moves (N - N_pre) L0 / EA. */
+static const char *const straight_end_json =
+    "{\"nodes\": [[0, 0, 0], [2, 0, 0], [4, 0, 0]],\n"
+    " \"elements\": [[0, 1], [1, 2]],\n"
+    " \"element_sets\": [{\"name\": \"rope\", \"type\": \"sliding_cable\", \"youngs_modulus_pa\": 1e11,"
+    " \"area_m2\": 1.26e-4, \"pretension_n\": 1000, \"density_kg_m3\": 7850}],\n"
+    " \"supports\": [{\"nodes\": [0, 1], \"dofs\": \"xyz\"}, {\"nodes\": [2], \"dofs\": \"yz\"}],\n"
+    " \"point_loads\": [{\"nodes\": [2], \"force_n\": [5000, 0, 0]}],\n"
+    " \"gravity_m_s2\": [0, 0, 0], \"analysis\": {\"type\": \"static\"}}\n";
+
+static void test_straight_rope_end(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    if (fem_input_load(fem_test_write("straight_end.json", straight_end_json), &m, &err))
+        fail_msg("%s", err.message);
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
+    const double EA = 1e11 * 1.26e-4, u_end = (5000.0 - 1000.0) * 4.0 / EA;
+    print_message("straight rope end: %d Newton iterations, end moved %.9e m (closed form "
+                  "%.9e), rope force %.6f N\n", s.stats.iterations, s.cur.u[6], u_end, s.axial[0]);
+    assert_near_rel(s.axial[0], 5000.0, 1e-9);
+    assert_near_rel(s.cur.u[6], u_end, 1e-9);
     fem_analysis_free(&s);
     fem_model_free(&m);
 }
@@ -466,6 +500,7 @@ int main(void)
         cmocka_unit_test(test_pulley_chain),
         cmocka_unit_test(test_two_shackles),
         cmocka_unit_test(test_rope_end_held_by_rope),
+        cmocka_unit_test(test_straight_rope_end),
         cmocka_unit_test(test_tangent),
         cmocka_unit_test(test_shackle_stops_at_anchor),
         cmocka_unit_test(test_contact_input),
