@@ -789,7 +789,7 @@ def meets_iterations(r):
 
 def tries_note(r):
     """' (all tries a/m)' where rejected tries added iterations to the contact steps."""
-    if r["all_max"] == r["it_max"] and abs(r["all_avg"] - r["it_avg"]) < 5e-3:
+    if r["contact_steps"] == 0 or (r["all_max"] == r["it_max"] and abs(r["all_avg"] - r["it_avg"]) < 5e-3):
         return ""
     return " (all tries %.1f/%d)" % (r["all_avg"], r["all_max"])
 
@@ -905,8 +905,7 @@ def jacobian_cell(r, ref):
         return "no results"
     cell = "%s %s/%d u%d r%d" % (jacobian_status(r), "%.1f" % r["it_avg"] if np.isfinite(r["it_avg"]) else "-",
                                   r["it_max"], r["unconverged"], r["rejected"])
-    if r["contact_steps"] > 0:
-        cell += tries_note(r)
+    cell += tries_note(r)
     if r["energy_fired"]:
         cell += " E%+.0f%%" % r["created_pct"]
     if ref is not None and r.get("finished") == 1 and np.isfinite(r.get("peak", float("nan"))):
