@@ -153,17 +153,22 @@ static const char *const rope_end_json =
     " \"point_loads\": [{\"nodes\": [2], \"force_n\": [4850.712500727, 0, 1212.678125182]}],\n"
     " \"gravity_m_s2\": [0, 0, 0], \"analysis\": {\"type\": \"static\"}}\n";
 
+/* Loads `json` (written to `name`), which has one sliding rope, and solves it statically. */
+static void solve_static_rope(const char *name, const char *json, fem_model *m, fem_analysis *s)
+{
+    nc_error err;
+    if (fem_input_load(fem_test_write(name, json), m, &err)) fail_msg("%s", err.message);
+    assert_int_equal(fem_analysis_init(s, m, &err), 0);
+    assert_int_equal(s->lr_members, 1);
+    if (fem_analysis_static(s, 1.0, &err)) fail_msg("%s", err.message);
+}
+
 static void test_rope_end_held_by_rope(void **state)
 {
     (void)state;
     fem_model m;
-    nc_error err;
-    if (fem_input_load(fem_test_write("rope_end.json", rope_end_json), &m, &err))
-        fail_msg("%s", err.message);
     fem_analysis s;
-    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
-    assert_int_equal(s.lr_members, 1);
-    if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
+    solve_static_rope("rope_end.json", rope_end_json, &m, &s);
     double f[18], worst = 0;
     fem_analysis_node_balance(&s, 1.0, f);
     for (int d = 3; d < 9; d++) worst = fmax(worst, fabs(f[d]));   /* nodes 1 and 2 */
@@ -197,12 +202,8 @@ static void test_straight_rope_end(void **state)
 {
     (void)state;
     fem_model m;
-    nc_error err;
-    if (fem_input_load(fem_test_write("straight_end.json", straight_end_json), &m, &err))
-        fail_msg("%s", err.message);
     fem_analysis s;
-    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
-    if (fem_analysis_static(&s, 1.0, &err)) fail_msg("%s", err.message);
+    solve_static_rope("straight_end.json", straight_end_json, &m, &s);
     const double EA = 1e11 * 1.26e-4, u_end = (5000.0 - 1000.0) * 4.0 / EA;
     print_message("straight rope end: %d Newton iterations, end moved %.9e m (closed form "
                   "%.9e), rope force %.6f N\n", s.stats.iterations, s.cur.u[6], u_end, s.axial[0]);
