@@ -1,8 +1,9 @@
-/* dem_net_jacobian — the record of a coupled step's net contacts and its frozen-particle
- * replay with forward derivatives (the contract is in dem_net_jacobian.h). The replay repeats
- * dem_detect_net.c, dem_emit_wall_contact() and dem_contact_force() for one contact and
- * carries, beside each value, its derivative with respect to the end positions of the
- * contact's nodes (6 columns for an edge: node a then node b; 3 for a node). */
+/* dem_net_jacobian — the record of a coupled step's net contacts and its replay with forward
+ * derivatives (the contract is in dem_net_jacobian.h). The replay repeats dem_detect_net.c,
+ * dem_emit_wall_contact() and dem_contact_force() for one contact and carries, beside each
+ * value, its derivative with respect to the end positions of the nodes the particle touches
+ * (3 columns per node); a responding particle (free sphere, or cluster as a rigid body)
+ * integrates the change of its net forces as dem_integrate.c does. */
 #include "dem_net_jacobian.h"
 
 #include <math.h>
@@ -11,6 +12,7 @@
 
 #include "dem_contact_geometry.h"
 #include "dem_contact_law.h"
+#include "dem_integrate.h"
 #include "dem_sim.h"
 
 void dem_net_jacobian_init(dem_net_jacobian *jac)
@@ -98,7 +100,10 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
         r->j = c->j[k];
         memcpy(r->p, s->model.sph.pos + 3 * i, sizeof r->p);
         memcpy(r->v, s->model.sph.vel + 3 * i, sizeof r->v);
-        memcpy(r->w, s->model.bod.omega + 3 * (size_t)s->model.sph.body[i], sizeof r->w);
+        r->body = s->model.sph.body[i];
+        memcpy(r->w, s->model.bod.omega + 3 * (size_t)r->body, sizeof r->w);
+        memcpy(r->quat, s->model.bod.quat + 4 * (size_t)r->body, sizeof r->quat);
+        for (int k = 0; k < 3; k++) r->offset[k] = r->p[k] - s->model.bod.pos[3 * (size_t)r->body + (size_t)k];
         r->radius = s->model.sph.radius[i];
         r->reach = r->radius + s->model.net.cable_radius_m;
         dem_net_wall_pair(&s->model, i, &r->pair);
@@ -135,17 +140,66 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
 
 #define NCOL (3 * DEM_JAC_MAX_NODES)
 
-/* A particle that touches the net in the step: its nodes (the columns of its tangents) and,
- * with the particle response, the tangents and value changes of its state. */
+/* The motion of a sphere (or of a body's centre of mass) as changes from the recorded
+ * state, and their tangents (columns: the particle's nodes, 3 each). */
+typedef struct motion {
+    double dx[3], dv[3], dw[3];   /* centre (m), its velocity (m/s), the body's spin (rad/s) */
+    double Dx[3][NCOL], Dv[3][NCOL], Dw[3][NCOL];
+} motion;
+
+/* A particle that touches the net in the step — a free sphere, a cluster as one rigid body,
+ * or one sphere of a cluster split for its many nodes — with its nodes (the columns of its
+ * tangents) and, with the particle response, the tangents and value changes of its state. */
 typedef struct particle {
-    int32_t i;
-    int n_nodes, respond, has_edge;
+    int32_t body, sphere;     /* sphere: -1 for the whole body */
+    int n_nodes, respond, has_edge, cluster;
     int overflow;             /* touches more than DEM_JAC_MAX_NODES nodes: left out of K */
     int32_t node[DEM_JAC_MAX_NODES];
-    double dx[3], dv[3], dw[3];               /* state - recorded state */
-    double Dx[3][NCOL], Dv[3][NCOL], Dw[3][NCOL];
-    double sf[3], st[3], Dsf[3][NCOL], Dst[3][NCOL]; /* net force / torque change of a sub-step */
+    motion m;                 /* the body's centre of mass and spin */
+    double dth[3], Dth[3][NCOL];   /* the body's turn (rad; clusters) */
+    double inv_inertia[9];    /* world frame, at the end of the step (clusters) */
+    double sf[3], st[3], Dsf[3][NCOL], Dst[3][NCOL]; /* net force / torque (about the centre
+                                                        of mass) change of a sub-step */
 } particle;
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* The motion of record r's sphere from its body's (place_spheres() of dem_integrate.c):
+ * x = x_b + o, v = v_b + ω × o, with the offset o turned by the body's turn θ (δo = θ × o),
+ * to first order. A free sphere (o = 0) moves as its body. */
+static const motion *sphere_motion(const particle *pt, const dem_jac_record *r, int nc,
+                                   int want, motion *scratch)
+{
+    const double *o = r->offset;
+    if (o[0] == 0.0 && o[1] == 0.0 && o[2] == 0.0) return &pt->m;
+    double to[3], wto[3], dwo[3];
+    cross(pt->dth, o, to);
+    cross(r->w, to, wto);
+    cross(pt->m.dw, o, dwo);
+    for (int k = 0; k < 3; k++) {
+        scratch->dx[k] = pt->m.dx[k] + to[k];
+        scratch->dv[k] = pt->m.dv[k] + dwo[k] + wto[k];
+        scratch->dw[k] = pt->m.dw[k];
+    }
+    for (int c = 0; c < nc && want; c++) {
+        double Dth[3] = {pt->Dth[0][c], pt->Dth[1][c], pt->Dth[2][c]};
+        double Dw[3] = {pt->m.Dw[0][c], pt->m.Dw[1][c], pt->m.Dw[2][c]}, Dto[3], wDto[3], Dwo[3];
+        cross(Dth, o, Dto);
+        cross(r->w, Dto, wDto);
+        cross(Dw, o, Dwo);
+        for (int k = 0; k < 3; k++) {
+            scratch->Dx[k][c] = pt->m.Dx[k][c] + Dto[k];
+            scratch->Dv[k][c] = pt->m.Dv[k][c] + Dwo[k] + wDto[k];
+            scratch->Dw[k][c] = Dw[k];
+        }
+    }
+    return scratch;
+}
 
 static double dot3(const double a[3], const double b[3])
 {
@@ -169,7 +223,8 @@ static int local_index(const particle *pt, int32_t node)
  * the nodal weight t, with their tangents (columns: the particle's nodes, 3 each). The
  * outgoing history in out. */
 static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac_record *r,
-                    const double *end, const dem_jac_state *in, const particle *pt, int want,
+                    const double *end, const dem_jac_state *in, const particle *pt,
+                    const motion *mo, int want,
                     double f[3], double tq[3], double df[3][NCOL], double dtq[3][NCOL],
                     double *t_out, double dt_out[NCOL], dem_jac_state *out)
 {
@@ -193,9 +248,9 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     /* the particle: recorded state plus its response (zero when frozen) */
     double p[3], vi[3], w[3];
     for (int k = 0; k < 3; k++) {
-        p[k] = r->p[k] + pt->dx[k];
-        vi[k] = r->v[k] + pt->dv[k];
-        w[k] = r->w[k] + pt->dw[k];
+        p[k] = r->p[k] + mo->dx[k];
+        vi[k] = r->v[k] + mo->dv[k];
+        w[k] = r->w[k] + mo->dw[k];
     }
     /* closest point (dem_detect_net.c) */
     double q[3], t = 0.0, Dt[NCOL] = {0}, Dq[3][NCOL] = {{0}};
@@ -219,7 +274,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
                 double Dd[3], dN = 0.0, dM = 0.0;
                 for (int k = 0; k < 3; k++) {
                     Dd[k] = Dxb[k] - Dxa[k];
-                    dN += (pt->Dx[k][c] - Dxa[k]) * d[k] + ap[k] * Dd[k];
+                    dN += (mo->Dx[k][c] - Dxa[k]) * d[k] + ap[k] * Dd[k];
                     dM += 2.0 * d[k] * Dd[k];
                 }
                 Dt[c] = interior ? (dN - t * dM) / M : 0.0;
@@ -233,7 +288,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     double n[3], Dn[3][NCOL] = {{0}}, Ddist[NCOL] = {0}, Dr[3][NCOL] = {{0}};
     for (int k = 0; k < 3; k++) n[k] = rr[k] / dist;
     for (int c = 0; c < nc && want; c++) {
-        for (int k = 0; k < 3; k++) Dr[k][c] = Dq[k][c] - pt->Dx[k][c];
+        for (int k = 0; k < 3; k++) Dr[k][c] = Dq[k][c] - mo->Dx[k][c];
         Ddist[c] = col_dot(n, Dr, c);
         for (int k = 0; k < 3; k++) Dn[k][c] = (Dr[k][c] - n[k] * Ddist[c]) / dist;
     }
@@ -295,12 +350,12 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     for (int k = 0; k < 3; k++) vc[k] = vo[k] - (vi[k] + wr[k]);
     for (int c = 0; c < nc && want; c++) {
         for (int k = 0; k < 3; k++) Dri[k][c] = Dlever[c] * n[k] + lever * Dn[k][c];
-        double a1[3] = {pt->Dw[0][c], pt->Dw[1][c], pt->Dw[2][c]};
+        double a1[3] = {mo->Dw[0][c], mo->Dw[1][c], mo->Dw[2][c]};
         double b1[3] = {Dri[0][c], Dri[1][c], Dri[2][c]};
         double Dwr[3] = {a1[1] * ri[2] - a1[2] * ri[1] + w[1] * b1[2] - w[2] * b1[1],
                          a1[2] * ri[0] - a1[0] * ri[2] + w[2] * b1[0] - w[0] * b1[2],
                          a1[0] * ri[1] - a1[1] * ri[0] + w[0] * b1[1] - w[1] * b1[0]};
-        for (int k = 0; k < 3; k++) Dvc[k][c] = Dvo[k][c] - pt->Dv[k][c] - Dwr[k];
+        for (int k = 0; k < 3; k++) Dvc[k][c] = Dvo[k][c] - mo->Dv[k][c] - Dwr[k];
     }
     /* the values exactly as the DEM computes them */
     double ft_in[3] = {ft[0], ft[1], ft[2]}, ktp_in = kt_prev, fnp_in = fn_prev;
@@ -445,49 +500,101 @@ static int block_cmp(const void *a, const void *b)
 static int rec_cmp(const void *a, const void *b)
 {
     const dem_jac_record *const *x = a, *const *y = b;
+    if ((*x)->body != (*y)->body) return (*x)->body < (*y)->body ? -1 : 1;
     return (*x)->i < (*y)->i ? -1 : (*x)->i > (*y)->i;
 }
 
-/* The particles of the records, each with its nodes; slot[x] is record x's particle. */
+/* The net nodes of record r: 1 (a node contact) or 2 (an edge's). */
+static int record_nodes(const dem_net *net, const dem_jac_record *r, int32_t nodes[2])
+{
+    int edge = r->kind == DEM_CONTACT_NET_EDGE;
+    nodes[0] = edge ? net->edges[2 * (size_t)r->j] : r->j;
+    nodes[1] = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+    return edge ? 2 : 1;
+}
+
+/* Whether the n records at rec touch more than DEM_JAC_MAX_NODES distinct nodes. */
+static int too_many_nodes(const dem_net *net, const dem_jac_record *const *rec, size_t n)
+{
+    int32_t seen[DEM_JAC_MAX_NODES];
+    int count = 0;
+    for (size_t x = 0; x < n; x++) {
+        int32_t nodes[2];
+        for (int k = 0, m = record_nodes(net, rec[x], nodes); k < m; k++) {
+            int known = 0;
+            for (int q = 0; q < count && !known; q++) known = seen[q] == nodes[k];
+            if (known) continue;
+            if (count == DEM_JAC_MAX_NODES) return 1;
+            seen[count++] = nodes[k];
+        }
+    }
+    return 0;
+}
+
+/* The particles of the records, each with its nodes; slot[x] is record x's particle. A
+ * cluster is one particle (a rigid body) unless it touches more than DEM_JAC_MAX_NODES
+ * nodes: then each of its spheres is one, frozen. */
 static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, particle **out,
                              size_t *n_out, size_t *slot, nc_error *err)
 {
     const dem_net *net = &s->model.net;
+    const dem_bodies *bod = &s->model.bod;
     size_t nr = jac->n_rec, np = 0;
     const dem_jac_record **order = malloc((nr + 1) * sizeof *order);
     if (!order) return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
     for (size_t x = 0; x < nr; x++) order[x] = &jac->rec[x];
     qsort(order, nr, sizeof *order, rec_cmp);
-    size_t distinct = 0;   /* one particle struct (tangent columns) per particle, not per record */
+    size_t distinct = 0;   /* at most one particle struct (tangent columns) per sphere */
     for (size_t x = 0; x < nr; x++) distinct += x == 0 || order[x]->i != order[x - 1]->i;
     particle *pts = calloc(distinct + 1, sizeof *pts);
     if (!pts) {
         free(order);
         return nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
     }
-    for (size_t x = 0; x < nr; x++) {
-        const dem_jac_record *r = order[x];
-        if (np == 0 || pts[np - 1].i != r->i) {
-            particle *pt = &pts[np++];
-            pt->i = r->i;
-            int32_t b = s->model.sph.body[r->i];
-            pt->respond = jac->particle_response && !s->model.bod.is_cluster[b];
-        }
-        particle *pt = &pts[np - 1];
-        slot[r - jac->rec] = np - 1;
-        int edge = r->kind == DEM_CONTACT_NET_EDGE;
-        pt->has_edge |= edge;
-        int32_t nodes[2] = {edge ? net->edges[2 * (size_t)r->j] : r->j,
-                            edge ? net->edges[2 * (size_t)r->j + 1] : r->j};
-        for (int k = 0; k < (edge ? 2 : 1); k++) {
-            if (pt->overflow || local_index(pt, nodes[k]) >= 0) continue;
-            if (pt->n_nodes == DEM_JAC_MAX_NODES) {
-                /* its force stays exact; its share of K is left out (counted in n_dropped) */
-                pt->overflow = 1;
-                pt->respond = 0;
-                continue;
+    for (size_t x = 0, y; x < nr; x = y) {
+        const int32_t b = order[x]->body;
+        for (y = x; y < nr && order[y]->body == b; y++) {}
+        const int whole = bod->is_cluster[b] && !too_many_nodes(net, order + x, y - x);
+        for (size_t z = x; z < y; z++) {
+            const dem_jac_record *r = order[z];
+            const int32_t sphere = whole ? -1 : r->i;
+            if (np == 0 || pts[np - 1].body != b || pts[np - 1].sphere != sphere) {
+                particle *pt = &pts[np++];
+                pt->body = b;
+                pt->sphere = sphere;
+                pt->cluster = whole;
+                pt->respond = jac->particle_response && (whole || !bod->is_cluster[b]);
+                if (whole) { /* R I_body⁻¹ Rᵀ at the body's first recorded contact */
+                    const dem_jac_record *first = order[x];
+                    for (size_t q = x + 1; q < y; q++)
+                        if (order[q] < first) first = order[q];
+                    double R[9];
+                    const double *ib = bod->inv_inertia_body + 9 * (size_t)b;
+                    dem_quat_to_matrix(first->quat, R);
+                    for (int i = 0; i < 3; i++)
+                        for (int j = 0; j < 3; j++) {
+                            double sum = 0.0;
+                            for (int k = 0; k < 3; k++)
+                                for (int l = 0; l < 3; l++) sum += R[3 * i + k] * ib[3 * k + l] * R[3 * j + l];
+                            pt->inv_inertia[3 * i + j] = sum;
+                        }
+                }
             }
-            pt->node[pt->n_nodes++] = nodes[k];
+            particle *pt = &pts[np - 1];
+            slot[r - jac->rec] = np - 1;
+            int32_t nodes[2];
+            int m = record_nodes(net, r, nodes);
+            pt->has_edge |= m == 2;
+            for (int k = 0; k < m; k++) {
+                if (pt->overflow || local_index(pt, nodes[k]) >= 0) continue;
+                if (pt->n_nodes == DEM_JAC_MAX_NODES) {
+                    /* its force stays exact; its share of K is left out (counted in n_dropped) */
+                    pt->overflow = 1;
+                    pt->respond = 0;
+                    continue;
+                }
+                pt->node[pt->n_nodes++] = nodes[k];
+            }
         }
     }
     free(order);
@@ -523,9 +630,10 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     block *blocks = NULL;
     dem_jac_state *state = malloc((jac->n_rec + 1) * sizeof *state);
     particle *pts = NULL;
+    motion *scratch = malloc(sizeof *scratch);   /* a cluster sphere's motion */
     size_t npt = 0;
     int rc = 0;
-    if (!end || !force || !impulse || !touched || !added_in || !slot || !state) {
+    if (!end || !force || !impulse || !touched || !added_in || !slot || !state || !scratch) {
         rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
         goto done;
     }
@@ -554,20 +662,45 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             particle *pt = &pts[slot[x]];
             const dem_jac_state *in = r->sub > 0 && r->link >= 0 ? &state[r->link] : NULL;
             double f[3], tq[3], df[3][NCOL] = {{0}}, dtq[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
-            contact(s, jac, r, end, in, pt, want_K && !pt->overflow, f, tq, df, dtq, &t, dt,
-                    &state[x]);
+            const int want = want_K && !pt->overflow, nc = 3 * pt->n_nodes;
+            const motion *mo = pt->cluster ? sphere_motion(pt, r, nc, want, scratch) : &pt->m;
+            contact(s, jac, r, end, in, pt, mo, want, f, tq, df, dtq, &t, dt, &state[x]);
             if (base) {
                 memcpy(r->f_base, f, sizeof f);
                 memcpy(r->t_base, tq, sizeof tq);
             }
-            if (pt->respond) { /* the change of the net's force and torque on the particle */
-                int nc = 3 * pt->n_nodes;
+            if (pt->respond && !pt->cluster) { /* the change of the net's force and torque */
                 for (int k = 0; k < 3; k++) {
                     pt->sf[k] += f[k] - r->f_base[k];
                     pt->st[k] += tq[k] - r->t_base[k];
                     for (int c = 0; c < nc && want_K; c++) {
                         pt->Dsf[k][c] += df[k][c];
                         pt->Dst[k][c] += dtq[k][c];
+                    }
+                }
+            } else if (pt->respond) { /* a cluster: the torque about its centre of mass, with
+                                       * the offset o turned by θ: tq + (o + θ × o) × f */
+                const double *o = r->offset;
+                double dfv[3] = {f[0] - r->f_base[0], f[1] - r->f_base[1], f[2] - r->f_base[2]};
+                double to[3], odf[3], tof[3];
+                cross(pt->dth, o, to);
+                cross(o, dfv, odf);
+                cross(to, f, tof);
+                for (int k = 0; k < 3; k++) {
+                    pt->sf[k] += dfv[k];
+                    pt->st[k] += tq[k] - r->t_base[k] + odf[k] + tof[k];
+                }
+                for (int c = 0; c < nc && want_K; c++) {
+                    double Dfc[3] = {df[0][c], df[1][c], df[2][c]};
+                    double Dth[3] = {pt->Dth[0][c], pt->Dth[1][c], pt->Dth[2][c]};
+                    double Dto[3], oDf[3], Dtof[3], toDf[3];
+                    cross(Dth, o, Dto);
+                    cross(o, Dfc, oDf);
+                    cross(Dto, f, Dtof);
+                    cross(to, Dfc, toDf);
+                    for (int k = 0; k < 3; k++) {
+                        pt->Dsf[k][c] += df[k][c];
+                        pt->Dst[k][c] += dtq[k][c] + oDf[k] + Dtof[k] + toDf[k];
                     }
                 }
             }
@@ -613,22 +746,39 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             for (int d = 0; d < 3; d++) impulse[3 * node + d] += jac->h * force[3 * node + d];
         }
         /* the particles' response to the change of the net force (symplectic Euler of
-         * dem_integrate.c, velocity first; free spheres only) */
+         * dem_integrate.c, velocity first; free spheres and whole clusters) */
         for (size_t x = 0; x < npt; x++) {
             particle *pt = &pts[x];
             if (!pt->respond) continue;
-            int32_t b = s->model.sph.body[pt->i];
-            double im = s->model.bod.inv_mass[b], ii = s->model.bod.inv_inertia_iso[b], h = jac->h;
+            motion *m = &pt->m;
+            double im = s->model.bod.inv_mass[pt->body], ii = s->model.bod.inv_inertia_iso[pt->body];
+            double h = jac->h;
             int nc = 3 * pt->n_nodes;
+            if (pt->cluster) { /* L += h T, ω = I⁻¹ L, the turn by h ω (world-frame I⁻¹) */
+                const double *I = pt->inv_inertia;
+                for (int k = 0; k < 3; k++)
+                    m->dw[k] += h * (I[3 * k] * pt->st[0] + I[3 * k + 1] * pt->st[1] + I[3 * k + 2] * pt->st[2]);
+                for (int c = 0; c < nc && want_K; c++)
+                    for (int k = 0; k < 3; k++) {
+                        m->Dw[k][c] += h * (I[3 * k] * pt->Dst[0][c] + I[3 * k + 1] * pt->Dst[1][c] +
+                                            I[3 * k + 2] * pt->Dst[2][c]);
+                        pt->Dth[k][c] += h * m->Dw[k][c];
+                    }
+                for (int k = 0; k < 3; k++) {
+                    pt->dth[k] += h * m->dw[k];
+                    pt->st[k] = 0.0;
+                    for (int c = 0; c < nc && want_K; c++) pt->Dst[k][c] = 0.0;
+                }
+            }
             for (int k = 0; k < 3; k++) {
-                pt->dv[k] += h * pt->sf[k] * im;
-                pt->dx[k] += h * pt->dv[k];
-                pt->dw[k] += h * pt->st[k] * ii;
+                m->dv[k] += h * pt->sf[k] * im;
+                m->dx[k] += h * m->dv[k];
+                if (!pt->cluster) m->dw[k] += h * pt->st[k] * ii;
                 pt->sf[k] = pt->st[k] = 0.0;
                 for (int c = 0; c < nc && want_K; c++) {
-                    pt->Dv[k][c] += h * pt->Dsf[k][c] * im;
-                    pt->Dx[k][c] += h * pt->Dv[k][c];
-                    pt->Dw[k][c] += h * pt->Dst[k][c] * ii;
+                    m->Dv[k][c] += h * pt->Dsf[k][c] * im;
+                    m->Dx[k][c] += h * m->Dv[k][c];
+                    if (!pt->cluster) m->Dw[k][c] += h * pt->Dst[k][c] * ii;
                     pt->Dsf[k][c] = pt->Dst[k][c] = 0.0;
                 }
             }
@@ -671,6 +821,6 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     }
 done:
     free(end); free(force); free(impulse); free(touched); free(added_in);
-    free(slot); free(blocks); free(state); free(pts);
+    free(slot); free(blocks); free(state); free(pts); free(scratch);
     return rc;
 }

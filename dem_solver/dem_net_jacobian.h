@@ -31,18 +31,23 @@
  *    heavy rock whose impact lasts about one coupling step — the granite sphere (R 0.4 m,
  *    710 kg) at 10 m/s on the steel net at dt 1e-3 s has K dt² / m ~ 1.4 and the frozen K is
  *    2.5 times the real one (tests/dem_solver/test_jacobian.c).
- *  - DEM_JAC_RESPOND_LOCAL (default): a free sphere that touches one node or one edge's two
- *    nodes in the step also carries the derivative of its own motion through the sub-steps
- *    (symplectic Euler of dem_integrate.c driven by the change of its net forces and
- *    torques); its other contacts (spheres, planes, meshes) keep their forces. For a
- *    particle that touches only the net this is the exact derivative of the real step
- *    (granite case: 7e-10 of max |K|). Particles touching more net nodes, and clusters, stay
- *    frozen, so every block stays within one element (what a structure with a fixed
- *    element pattern can take).
- *  - DEM_JAC_RESPOND: every free sphere responds; a particle touching several edges then
+ *  - DEM_JAC_RESPOND_LOCAL (default): a particle (a free sphere, or a cluster as one rigid
+ *    body) that touches one node or one edge's two nodes in the step also carries the
+ *    derivative of its own motion through the sub-steps (symplectic Euler of
+ *    dem_integrate.c driven by the change of its net forces and torques); its other
+ *    contacts (spheres, planes, meshes) keep their forces and, on a turning cluster, their
+ *    levers. For a free sphere that touches only the net this is the exact derivative of
+ *    the real step (granite case: 7e-10 of max |K|). A cluster's rotation is linearised:
+ *    its world-frame inertia is held at its orientation at its first recorded net contact
+ *    of the step and the gyroscopic change of ω with the turn is left out, terms of
+ *    relative order |ω| dt. Particles touching more net nodes stay frozen, so every block
+ *    stays within one element (what a structure with a fixed element pattern can take).
+ *  - DEM_JAC_RESPOND: every particle responds; a particle touching several edges then
  *    gives blocks between nodes that share no element. fem_solver grows its pattern by such
  *    pairs (fem_analysis_set_linearisation), so the participant (dem_participant.c) uses
  *    this mode.
+ * In every mode a cluster touching more than DEM_JAC_MAX_NODES nodes is split into its
+ * spheres, frozen (each sphere's share of K stays; a sphere touching more is dropped).
  * Why not the particles' mutual response: it couples every particle of a heap (a solve per
  * step instead of a sweep over the net contacts). The contact set is the one of the actual
  * run (K is a derivative: a contact that starts or ends exactly at u^{n+1} has a kink).
@@ -68,9 +73,12 @@
 /* One net contact in one sub-step, as the contact pass saw it. */
 typedef struct dem_jac_record {
     int32_t sub, i, kind, j;   /* sub-step, sphere, DEM_CONTACT_NET_EDGE / _NODE, edge / node */
+    int32_t body;              /* the sphere's body (a free sphere's own, or its cluster) */
     int32_t link;              /* the same contact in the previous sub-step's records, or -1 */
     int32_t has_prev;          /* its history was found in the previous DEM step */
     double p[3], v[3], w[3];   /* sphere centre (m), velocity (m/s), body spin (rad/s) */
+    double offset[3];          /* sphere centre - its body's centre of mass (m; 0 when free) */
+    double quat[4];            /* the body's orientation (w, x, y, z) */
     double radius, reach;      /* sphere radius, radius + cable radius (m) */
     dem_pair pair;
     double ft[3], kt_prev, fn_prev, impact_speed, n_prev[3]; /* incoming history (used in
@@ -81,9 +89,10 @@ typedef struct dem_jac_record {
 /* Particle response (dem_net_jacobian.particle_response). */
 enum {
     DEM_JAC_FROZEN = 0,        /* every particle frozen */
-    DEM_JAC_RESPOND_LOCAL = 1, /* free spheres that touch one node or one edge respond, the
-                                  others are frozen: blocks stay within one element */
-    DEM_JAC_RESPOND = 2        /* every free sphere responds: blocks may join any two nodes
+    DEM_JAC_RESPOND_LOCAL = 1, /* particles (free spheres, clusters) that touch one node or
+                                  one edge respond, the others are frozen: blocks stay
+                                  within one element */
+    DEM_JAC_RESPOND = 2        /* every particle responds: blocks may join any two nodes
                                   one particle touches */
 };
 

@@ -9,8 +9,10 @@
  * spinning sphere with history from the previous step, a sphere on two edges; every case has
  * 10 or more sub-steps. The replay at the received displacement reproduces the returned
  * force. With the option off the results are unchanged (memcmp against a run with it on).
- * The granite sphere on the steel net measures the frozen K against a finite difference of
- * the real step, and checks the responding K against it. */
+ * A cluster on the edge checks the rigid body's response (translation and turn) against the
+ * replay, also away from the solve's displacement. The granite sphere on the steel net, and the same rock as a spinning cluster,
+ * measure the frozen K against a finite difference of the real step and check the
+ * responding K against it. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -39,6 +41,8 @@ typedef struct scenario {
     int warmup;             /* coupled steps before the tested one (history) */
     int bent;               /* 3 nodes: node 2 at (0, 0.02, 0), the line folds back */
     const char *damping;    /* dem.json "damping" (NULL: the law's default) */
+    int cluster;            /* the particle is a cluster: the sphere above plus one of 0.8 its
+                               radius at (0.6, 0.3, 0.9) radii from it, off the contact */
 } scenario;
 
 static void build(dem_sim *s, const scenario *c)
@@ -49,17 +53,30 @@ static void build(dem_sim *s, const scenario *c)
         snprintf(dt, sizeof dt, "%.17g", c->dt_dem);
     else
         snprintf(dt, sizeof dt, "\"auto\"");
+    char body[1024];
+    if (c->cluster)
+        snprintf(body, sizeof body,
+                 "\"clusters\": [{\"material\": \"m\", \"velocity\": [%.17g, %.17g, %.17g],"
+                 " \"angular_velocity\": [%.17g, %.17g, %.17g], \"spheres\": ["
+                 "{\"position\": [%.17g, %.17g, %.17g], \"radius\": %.17g},"
+                 " {\"position\": [%.17g, %.17g, %.17g], \"radius\": %.17g}]}]",
+                 c->vel[0], c->vel[1], c->vel[2], c->omega[0], c->omega[1], c->omega[2], c->pos[0],
+                 c->pos[1], c->pos[2], c->radius, c->pos[0] + 0.6 * c->radius,
+                 c->pos[1] + 0.3 * c->radius, c->pos[2] + 0.9 * c->radius, 0.8 * c->radius);
+    else
+        snprintf(body, sizeof body,
+                 "\"particles\": [{\"position\": [%.17g, %.17g, %.17g], \"radius\": %.17g,"
+                 " \"velocity\": [%.17g, %.17g, %.17g], \"angular_velocity\": [%.17g, %.17g, %.17g]}]",
+                 c->pos[0], c->pos[1], c->pos[2], c->radius, c->vel[0], c->vel[1], c->vel[2],
+                 c->omega[0], c->omega[1], c->omega[2]);
     snprintf(json, sizeof json,
              "{\"contact_law\": \"%s\",%s \"linear\": {\"normal_stiffness_n_per_m\": 2e6},"
              " \"materials\": [{\"name\": \"m\", \"youngs_modulus_pa\": %.17g, \"poisson_ratio\": 0.25,"
-             " \"density_kg_m3\": %.17g, \"restitution\": %.17g, \"friction\": %.17g}],"
-             " \"particles\": [{\"position\": [%.17g, %.17g, %.17g], \"radius\": %.17g,"
-             " \"velocity\": [%.17g, %.17g, %.17g], \"angular_velocity\": [%.17g, %.17g, %.17g]}],"
+             " \"density_kg_m3\": %.17g, \"restitution\": %.17g, \"friction\": %.17g}], %s,"
              " \"net_wall\": {\"youngs_modulus_pa\": %.17g, \"poisson_ratio\": 0.3, \"friction\": %.17g%s},"
              " \"gravity\": [0, 0, -9.81], \"dt_s\": %s}",
-             c->law, damping, c->youngs, c->density, c->restitution, c->friction, c->pos[0], c->pos[1],
-             c->pos[2], c->radius, c->vel[0], c->vel[1], c->vel[2], c->omega[0], c->omega[1],
-             c->omega[2], c->net_youngs, c->net_friction, c->net_extra ? c->net_extra : "", dt);
+             c->law, damping, c->youngs, c->density, c->restitution, c->friction, body,
+             c->net_youngs, c->net_friction, c->net_extra ? c->net_extra : "", dt);
     dem_test_build(s, json);
     double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
     if (c->bent) {
@@ -112,21 +129,46 @@ static double max_abs(const double *a, size_t n)
     return m;
 }
 
+/* Builds scenario c, runs its warm-up and solves the tested step with the Jacobian (particle
+ * response `response`): s, jac, disp (the step's end displacement), force and info. */
+static void solve_tested_step(dem_sim *s, const scenario *c, int response, dem_net_jacobian *jac,
+                              double *disp, double *force, dem_coupled_info *info)
+{
+    build(s, c);
+    warm_up(s, c, disp);
+    dem_net_jacobian_init(jac);
+    jac->particle_response = response;
+    nc_error err;
+    assert_int_equal(dem_sim_solve_coupled_jacobian(s, c->dt_step, disp, NULL, force, info, jac, &err), 0);
+}
+
+/* -dF/du of the replay at disp by central differences (step eps, m), nd x nd into fd. */
+static void replay_differences(const dem_sim *s, dem_net_jacobian *jac, const double *disp,
+                               int nd, double eps, double *fd)
+{
+    nc_error err;
+    for (int col = 0; col < nd; col++) {
+        double dp[9], fp[9], fm[9];
+        memcpy(dp, disp, (size_t)nd * sizeof *dp);
+        dp[col] = disp[col] + eps;
+        assert_int_equal(dem_net_jacobian_replay(s, jac, dp, fp, 0, &err), 0);
+        dp[col] = disp[col] - eps;
+        assert_int_equal(dem_net_jacobian_replay(s, jac, dp, fm, 0, &err), 0);
+        for (int row = 0; row < nd; row++) fd[row * nd + col] = -(fp[row] - fm[row]) / (2.0 * eps);
+    }
+}
+
 /* Solves the tested step with the Jacobian (particles frozen, or responding), checks the
  * replay against the returned force and K against central differences of the replay (step
  * eps, m). K_out (3n x 3n) receives K if not NULL. */
 static void check_mode(const scenario *c, int response, double eps, double *K_out, int *n_contacts)
 {
     dem_sim s;
-    build(&s, c);
     double disp[9], force[9], replayed[9];
-    warm_up(&s, c, disp);
     dem_net_jacobian jac;
-    dem_net_jacobian_init(&jac);
-    jac.particle_response = response;
     dem_coupled_info info;
     nc_error err;
-    assert_int_equal(dem_sim_solve_coupled_jacobian(&s, c->dt_step, disp, NULL, force, &info, &jac, &err), 0);
+    solve_tested_step(&s, c, response, &jac, disp, force, &info);
     assert_true(info.substeps >= 10);
     if (n_contacts) *n_contacts = (int)jac.n_rec;
     int n = c->n_nodes, nd = 3 * n;
@@ -136,15 +178,7 @@ static void check_mode(const scenario *c, int response, double eps, double *K_ou
     for (int k = 0; k < nd; k++) assert_near(replayed[k], force[k], 1e-12 * fscale);
     double K[81], fd[81];
     dense(&jac, n, K);
-    for (int col = 0; col < nd; col++) {
-        double dp[9], fp[9], fm[9];
-        memcpy(dp, disp, sizeof dp);
-        dp[col] = disp[col] + eps;
-        assert_int_equal(dem_net_jacobian_replay(&s, &jac, dp, fp, 0, &err), 0);
-        dp[col] = disp[col] - eps;
-        assert_int_equal(dem_net_jacobian_replay(&s, &jac, dp, fm, 0, &err), 0);
-        for (int row = 0; row < nd; row++) fd[row * nd + col] = -(fp[row] - fm[row]) / (2.0 * eps);
-    }
+    replay_differences(&s, &jac, disp, nd, eps, fd);
     double kmax = max_abs(K, (size_t)(nd * nd));
     assert_true(kmax > 0.0);
     if (getenv("JAC_DEBUG"))
@@ -167,7 +201,7 @@ static void check_case(const scenario *c, double eps, double *K_out, int *n_cont
 static scenario base_case(void)
 {
     scenario c = {"hertz_mindlin", 0.1, 2500.0, 1e7, 0.5, 0.4, 1e7, 0.4, {0.3, 0.004, 0.0995},
-                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0, 0, NULL};
+                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0, 0, NULL, 0};
     return c;
 }
 
@@ -353,13 +387,20 @@ static void test_off_unchanged(void **state)
 }
 
 /* The granite sphere (R 0.4 m, rho 2650, E 3e10, nu 0.25, COR 0.2, mu 0.5) at 10 m/s on a
- * steel net (E 1e11), coupling dt 1e-3 s, in the step where it hits: the frozen K against a
- * central difference of the real step (particles responding), for the vertical motion of both
- * nodes. Prints the relative difference and bounds it. */
-static void granite_case(int response, double *rel_real, double *rel_replay)
+ * steel net (E 1e11), coupling dt 1e-3 s, in the step where it hits. */
+static scenario granite(void)
 {
     scenario c = {"hertz_mindlin", 0.4, 2650.0, 3e10, 0.2, 0.5, 1e11, 0.5, {0.3, 0.0, 0.4002},
-                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0, 0, NULL};
+                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0, 0, NULL, 0};
+    return c;
+}
+
+/* K of scenario c's step against a central difference of the real step (particles
+ * responding) and of the replay (particles as K treats them), for the motion of both nodes:
+ * the largest differences relative to max |K|, printed. */
+static void real_step_case(const scenario *cs, int response, double *rel_real, double *rel_replay)
+{
+    scenario c = *cs;
     dem_sim s;
     build(&s, &c);
     double disp[9], force[9];
@@ -396,10 +437,11 @@ static void granite_case(int response, double *rel_real, double *rel_replay)
     }
     *rel_real = worst / kmax;
     *rel_replay = worst_replay / kmax;
-    print_message("granite on steel, %s particle: %zu net contact records, %ld sub-steps, "
+    print_message("granite %s on steel, %s: %zu net contact records, %ld sub-steps, "
                   "max |K| %.4g N/m; |K - FD(real step)| / max|K| = %.3g, "
-                  "|K - FD(replay)| / max|K| = %.3g\n", response ? "responding" : "frozen",
-                  jac.n_rec, info.substeps, kmax, *rel_real, *rel_replay);
+                  "|K - FD(replay)| / max|K| = %.3g\n", c.cluster ? "cluster" : "sphere",
+                  response ? "responding" : "frozen", jac.n_rec, info.substeps, kmax, *rel_real,
+                  *rel_replay);
     dem_net_jacobian_free(&jac);
     dem_sim_free(&s);
 }
@@ -408,17 +450,89 @@ static void test_granite_on_steel(void **state)
 {
     (void)state;
     double real, replay;
+    scenario c = granite();
     /* frozen: the replay is what K linearises; the real step differs by the particle's
      * response (K dt² / m ~ 1.4 here: the rock's whole impact lasts about one coupling
      * step), measured 0.6 of max |K| (the real step's K is 0.4 of the frozen one) */
-    granite_case(DEM_JAC_FROZEN, &real, &replay);
+    real_step_case(&c, DEM_JAC_FROZEN, &real, &replay);
     assert_below(replay, 1e-6);
     assert_below(real, 0.7);
     /* responding: the rock touches only the net, so the response through its net contacts
      * is the whole real step */
-    granite_case(DEM_JAC_RESPOND_LOCAL, &real, &replay);
+    real_step_case(&c, DEM_JAC_RESPOND_LOCAL, &real, &replay);
     assert_below(replay, 1e-6);
     assert_below(real, 1e-6);
+}
+
+/* K of a replay away from the solve's displacement (shifted by `shift` m in z at every
+ * node; there the responding particle has moved and turned) against central differences of
+ * the replay there. */
+static void check_shifted(const scenario *c, int response, double shift, double eps)
+{
+    dem_sim s;
+    double disp[9], force[9];
+    dem_net_jacobian jac;
+    dem_coupled_info info;
+    nc_error err;
+    solve_tested_step(&s, c, response, &jac, disp, force, &info);
+    int n = c->n_nodes, nd = 3 * n;
+    for (int k = 2; k < nd; k += 3) disp[k] += shift;
+    assert_int_equal(dem_net_jacobian_replay(&s, &jac, disp, NULL, 1, &err), 0);
+    double K[81], fd[81];
+    dense(&jac, n, K);
+    replay_differences(&s, &jac, disp, nd, eps, fd);
+    double kmax = max_abs(K, (size_t)(nd * nd));
+    assert_true(kmax > 0.0);
+    for (int e = 0; e < nd * nd; e++) assert_near(K[e], fd[e], 1e-6 * kmax);
+    dem_net_jacobian_free(&jac);
+    dem_sim_free(&s);
+}
+
+/* A cluster on the edge (base_case's sphere plus a smaller one off the contact, spinning):
+ * K against central differences of the replay, the cluster frozen and responding as one
+ * rigid body (translation and rotation through the offset of the touching sphere). */
+static void test_cluster(void **state)
+{
+    (void)state;
+    scenario c = base_case();
+    c.cluster = 1;
+    c.omega[0] = 3.0;
+    c.omega[1] = -2.0;
+    c.omega[2] = 1.0;
+    double K0[36], K1[36];
+    check_mode(&c, DEM_JAC_FROZEN, 1e-8, K0, NULL);
+    check_mode(&c, DEM_JAC_RESPOND_LOCAL, 1e-8, K1, NULL);
+    any_pair = 1;
+    check_mode(&c, DEM_JAC_RESPOND, 1e-8, NULL, NULL);
+    any_pair = 0;
+    /* the body's response softens K (measured 2e-2 of max |K| here) */
+    double diff = 0.0;
+    for (int e = 0; e < 36; e++) diff = fmax(diff, fabs(K1[e] - K0[e]));
+    print_message("cluster: |K(responding) - K(frozen)| / max|K| = %.3g\n", diff / max_abs(K0, 36));
+    assert_true(diff > 1e-3 * max_abs(K0, 36));
+}
+
+/* The granite rock as a cluster (the sphere plus one of 0.32 m off the contact: the impact
+ * turns it), spinning: the rigid body's response makes K the real step's derivative but for
+ * the terms of order |ω| dt the rotation's linearisation leaves out (dem_net_jacobian.h). */
+static void test_granite_cluster(void **state)
+{
+    (void)state;
+    double real, replay;
+    scenario c = granite();
+    c.cluster = 1;
+    c.omega[0] = 2.0;
+    c.omega[1] = -3.0;
+    c.omega[2] = 1.0;
+    real_step_case(&c, DEM_JAC_FROZEN, &real, &replay);
+    assert_below(replay, 1e-6);
+    assert_true(real > 0.3);
+    real_step_case(&c, DEM_JAC_RESPOND_LOCAL, &real, &replay);
+    assert_below(replay, 1e-6);
+    assert_below(real, 5e-4); /* measured 5.0e-5; |ω| dt = 3.7e-3 */
+    /* 1 mm deeper than the solve: the rock turns by ~1e-3 rad more in the replay, and K must
+     * still be its derivative (the torque of the turned offsets changes with the force too) */
+    check_shifted(&c, DEM_JAC_RESPOND_LOCAL, -1e-3, 1e-7);
 }
 
 int main(void)
@@ -436,6 +550,8 @@ int main(void)
         cmocka_unit_test(test_two_edges),
         cmocka_unit_test(test_off_unchanged),
         cmocka_unit_test(test_granite_on_steel),
+        cmocka_unit_test(test_cluster),
+        cmocka_unit_test(test_granite_cluster),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
