@@ -12,6 +12,7 @@
 
 #include "dem_contact_geometry.h"
 #include "dem_contact_law.h"
+#include "dem_detect.h"
 #include "dem_integrate.h"
 #include "dem_sim.h"
 
@@ -162,13 +163,6 @@ typedef struct particle {
                                                         of mass) change of a sub-step */
 } particle;
 
-static void cross(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* The motion of record r's sphere from its body's (place_spheres() of dem_integrate.c):
  * x = x_b + o, v = v_b + ω × o, with the offset o turned by the body's turn θ (δo = θ × o),
  * to first order. A free sphere (o = 0) moves as its body. */
@@ -178,9 +172,9 @@ static const motion *sphere_motion(const particle *pt, const dem_jac_record *r, 
     const double *o = r->offset;
     if (o[0] == 0.0 && o[1] == 0.0 && o[2] == 0.0) return &pt->m;
     double to[3], wto[3], dwo[3];
-    cross(pt->dth, o, to);
-    cross(r->w, to, wto);
-    cross(pt->m.dw, o, dwo);
+    dem_cross3(pt->dth, o, to);
+    dem_cross3(r->w, to, wto);
+    dem_cross3(pt->m.dw, o, dwo);
     for (int k = 0; k < 3; k++) {
         scratch->dx[k] = pt->m.dx[k] + to[k];
         scratch->dv[k] = pt->m.dv[k] + dwo[k] + wto[k];
@@ -189,9 +183,9 @@ static const motion *sphere_motion(const particle *pt, const dem_jac_record *r, 
     for (int c = 0; c < nc && want; c++) {
         double Dth[3] = {pt->Dth[0][c], pt->Dth[1][c], pt->Dth[2][c]};
         double Dw[3] = {pt->m.Dw[0][c], pt->m.Dw[1][c], pt->m.Dw[2][c]}, Dto[3], wDto[3], Dwo[3];
-        cross(Dth, o, Dto);
-        cross(r->w, Dto, wDto);
-        cross(Dw, o, Dwo);
+        dem_cross3(Dth, o, Dto);
+        dem_cross3(r->w, Dto, wDto);
+        dem_cross3(Dw, o, Dwo);
         for (int k = 0; k < 3; k++) {
             scratch->Dx[k][c] = pt->m.Dx[k][c] + Dto[k];
             scratch->Dv[k][c] = pt->m.Dv[k][c] + Dwo[k] + wDto[k];
@@ -564,20 +558,17 @@ static int collect_particles(const dem_sim *s, const dem_net_jacobian *jac, part
                 pt->sphere = sphere;
                 pt->cluster = whole;
                 pt->respond = jac->particle_response && (whole || !bod->is_cluster[b]);
-                if (whole) { /* R I_body⁻¹ Rᵀ at the body's first recorded contact */
+                if (whole) { /* R I_body⁻¹ Rᵀ at the body's first recorded contact, column
+                              * by column as dem_integrate.c maps L to ω */
                     const dem_jac_record *first = order[x];
                     for (size_t q = x + 1; q < y; q++)
                         if (order[q] < first) first = order[q];
-                    double R[9];
-                    const double *ib = bod->inv_inertia_body + 9 * (size_t)b;
-                    dem_quat_to_matrix(first->quat, R);
-                    for (int i = 0; i < 3; i++)
-                        for (int j = 0; j < 3; j++) {
-                            double sum = 0.0;
-                            for (int k = 0; k < 3; k++)
-                                for (int l = 0; l < 3; l++) sum += R[3 * i + k] * ib[3 * k + l] * R[3 * j + l];
-                            pt->inv_inertia[3 * i + j] = sum;
-                        }
+                    for (int j = 0; j < 3; j++) {
+                        const double unit[3] = {j == 0, j == 1, j == 2};
+                        double col[3];
+                        dem_cluster_omega(first->quat, bod->inv_inertia_body + 9 * (size_t)b, unit, col);
+                        for (int i = 0; i < 3; i++) pt->inv_inertia[3 * i + j] = col[i];
+                    }
                 }
             }
             particle *pt = &pts[np - 1];
@@ -683,9 +674,9 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                 const double *o = r->offset;
                 double dfv[3] = {f[0] - r->f_base[0], f[1] - r->f_base[1], f[2] - r->f_base[2]};
                 double to[3], odf[3], tof[3];
-                cross(pt->dth, o, to);
-                cross(o, dfv, odf);
-                cross(to, f, tof);
+                dem_cross3(pt->dth, o, to);
+                dem_cross3(o, dfv, odf);
+                dem_cross3(to, f, tof);
                 for (int k = 0; k < 3; k++) {
                     pt->sf[k] += dfv[k];
                     pt->st[k] += tq[k] - r->t_base[k] + odf[k] + tof[k];
@@ -694,10 +685,10 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                     double Dfc[3] = {df[0][c], df[1][c], df[2][c]};
                     double Dth[3] = {pt->Dth[0][c], pt->Dth[1][c], pt->Dth[2][c]};
                     double Dto[3], oDf[3], Dtof[3], toDf[3];
-                    cross(Dth, o, Dto);
-                    cross(o, Dfc, oDf);
-                    cross(Dto, f, Dtof);
-                    cross(to, Dfc, toDf);
+                    dem_cross3(Dth, o, Dto);
+                    dem_cross3(o, Dfc, oDf);
+                    dem_cross3(Dto, f, Dtof);
+                    dem_cross3(to, Dfc, toDf);
                     for (int k = 0; k < 3; k++) {
                         pt->Dsf[k][c] += df[k][c];
                         pt->Dst[k][c] += dtq[k][c] + oDf[k] + Dtof[k] + toDf[k];
