@@ -292,6 +292,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     for (int c = 0; c < nc; c++) Dlever[c] = -0.5 * Dov[c];
     /* the incoming history (dem_new_record) and the crossed-cable flip (dem_emit_wall_contact) */
     double ft[3], kt_prev, fn_prev, impact_speed, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
+    double Dv0[NCOL] = {0};   /* of impact_speed, when an earlier sub-step of this step set it */
     const double *np;
     int has_prev;
     if (in) {
@@ -303,6 +304,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         has_prev = 1;
         memcpy(Dft, in->dft, sizeof Dft);
         memcpy(Dktp, in->dkt, sizeof Dktp);
+        memcpy(Dv0, in->dv0, sizeof Dv0);
     } else if (r->sub == 0 && r->has_prev) {
         memcpy(ft, r->ft, sizeof ft);
         kt_prev = r->kt_prev;
@@ -382,10 +384,14 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
                               : L.fn_elastic + 2.0 * pr->zeta * L.cn_root * rate, Dfn[NCOL];
     int clamped = law->no_tension && fn < 0.0;
     if (clamped) fn = 0.0;
+    /* a v0 held from an earlier sub-step of this step depends on u^{n+1} through that
+     * sub-step's δ̇ (Dv0): ∂fn/∂v0 = −fn_elastic ξ δ̇ / v0; where this sub-step sets v0 it
+     * becomes δ̇ here, Dv0 = Dδ̇ = −Dvn */
     for (int c = 0; c < nc; c++)
         Dfn[c] = clamped ? 0.0
                  : v0_now ? L.kn_tangent * (1.0 + pr->hunt_crossley) * Dov[c]
-                 : hunt_crossley ? L.kn_tangent * (1.0 + xi * rate) * Dov[c] - L.fn_elastic * xi * Dvn[c]
+                 : hunt_crossley ? L.kn_tangent * (1.0 + xi * rate) * Dov[c] - L.fn_elastic * xi * Dvn[c] -
+                                       L.fn_elastic * xi * rate * Dv0[c] / impact_speed
                                  : (L.kn_tangent + 2.0 * pr->zeta * L.dcn_root * rate) * Dov[c] -
                                        2.0 * pr->zeta * L.cn_root * Dvn[c];
     double kt = L.kt, Dkt[NCOL], ct = 2.0 * pr->zeta * L.cn_root * pr->kt_kn_root, Dct[NCOL];
@@ -470,9 +476,11 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
     memset(out->dft, 0, sizeof out->dft);
     memset(out->dkt, 0, sizeof out->dkt);
+    memset(out->dv0, 0, sizeof out->dv0);
     for (int c = 0; c < nc; c++) {
         for (int k = 0; k < 3; k++) out->dft[k][c] = Dft[k][c];
         out->dkt[c] = Dkt[c];
+        out->dv0[c] = v0_now ? -Dvn[c] : Dv0[c];
         dt_out[c] = Dt[c];
     }
 }

@@ -20,7 +20,8 @@
  * wall_position "middle") and its velocity; the closest point on an edge and its parameter t
  * (the shape functions (1-t), t and their change along the edge), the normal and the
  * overlap; the crossed-cable sign flip; the lever of the particle's rotation; the law (normal
- * spring, dashpot through δ̇, the no-tension clamp of Hertz, the tangential spring with its
+ * spring, dashpot through δ̇ and, with Hunt–Crossley, through the impact speed v0 an earlier
+ * sub-step of the step set; the no-tension clamp of Hertz; the tangential spring with its
  * history carried through the sub-steps — its projection onto the turning tangent plane, the
  * unloading rescale kt/kt_prev and the Coulomb cap when sliding); the step average or, with
  * coupling_force "end_of_step", the last sub-step only.
@@ -103,6 +104,7 @@ enum {
 typedef struct dem_jac_state {
     double ft[3], kt, fn, impact_speed, n[3];
     double dft[3][3 * DEM_JAC_MAX_NODES], dkt[3 * DEM_JAC_MAX_NODES];
+    double dv0[3 * DEM_JAC_MAX_NODES];   /* of impact_speed (Hunt–Crossley v0) */
 } dem_jac_state;
 
 typedef struct dem_net_jacobian {

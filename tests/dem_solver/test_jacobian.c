@@ -5,7 +5,8 @@
  * through their net contacts (DEM_JAC_RESPOND_LOCAL / _RESPOND). Cases: an edge-interior
  * contact (both nodes, off-diagonal blocks), a vertex contact, a sliding contact (Coulomb
  * cap, checked on the returned force), a contact that closes within the step, one whose
- * force drops to the no-tension clamp (Hertz) within the step, Hertz and linear laws, a
+ * force drops to the no-tension clamp (Hertz) within the step, a Hunt–Crossley contact that
+ * begins in the step and then slows (its impact speed held), Hertz and linear laws, a
  * spinning sphere with history from the previous step, a sphere on two edges; every case has
  * 10 or more sub-steps. The replay at the received displacement reproduces the returned
  * force. With the option off the results are unchanged (memcmp against a run with it on).
@@ -248,6 +249,22 @@ static void test_hunt_crossley_first_touch(void **state)
     int n = 0;
     check_case(&c, 1e-9, NULL, &n);
     assert_true(n > 0 && n < 10);
+}
+
+/* The Hunt–Crossley dashpot on a contact that begins in the tested step and then slows: the
+ * sub-step of the first touch sets v0 = δ̇, which depends on the end displacement through the
+ * wall's velocity, and the later sub-steps hold it while the stiffer contact brakes the
+ * approach, so their force depends on the displacement through v0 as well. */
+static void test_hunt_crossley_held_impact_speed(void **state)
+{
+    (void)state;
+    scenario c = base_case();
+    c.damping = "hunt_crossley";
+    c.youngs = c.net_youngs = 1e9;
+    c.pos[2] = 0.10005; /* touches after ~2 of the 10 sub-steps */
+    int n = 0;
+    check_case(&c, 1e-9, NULL, &n);
+    assert_true(n > 0);
 }
 
 static void test_spinning_with_history(void **state)
@@ -542,6 +559,7 @@ int main(void)
         cmocka_unit_test(test_edge_interior_linear),
         cmocka_unit_test(test_hunt_crossley_with_history),
         cmocka_unit_test(test_hunt_crossley_first_touch),
+        cmocka_unit_test(test_hunt_crossley_held_impact_speed),
         cmocka_unit_test(test_spinning_with_history),
         cmocka_unit_test(test_vertex),
         cmocka_unit_test(test_sliding),
