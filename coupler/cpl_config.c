@@ -160,10 +160,12 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
-    static const char *const predictors[] = {"constant", "linear", NULL};
+    static const char *const predictors[] = {"constant", "linear", "quadratic", NULL};
     cpl_loop_settings *s = &c->loop;
     int scheme = s->scheme, policy = s->on_max_iterations, quantity = s->relaxed,
         predictor = s->predictor;
+    const cJSON *predictor_item = cJSON_GetObjectItemCaseSensitive(root, "predictor");
+    const int predictor_given = predictor_item && !cJSON_IsNull(predictor_item);
     long max_it = s->max_iterations, max_steps = s->max_steps,
          backtracking = s->contact_backtracking;
     if (nc_json_check_keys(root, where, keys, err) ||
@@ -209,6 +211,10 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     s->scheme = (cpl_scheme)scheme;
     s->on_max_iterations = (cpl_maxit_policy)policy;
     s->relaxed = (cpl_relaxed_quantity)quantity;
+    /* the quadratic guess saves strong iterations; a weak step keeps its guess, and with a
+     * damped contact the quadratic one made it create energy (coupler/README.md) */
+    if (!predictor_given)
+        predictor = s->scheme == CPL_SCHEME_STRONG ? CPL_PREDICT_QUADRATIC : CPL_PREDICT_LINEAR;
     s->predictor = (cpl_predictor)predictor;
     s->max_iterations = (int)max_it;
     s->max_steps = max_steps;

@@ -28,6 +28,8 @@ struct cpl_loop {
     double grid_origin_s;   /* where the level last left 0: reduced steps lie on its grid */
     double *u, *v, *f;      /* accepted state: u, u̇ at the start of the step, last force on
                                the structure */
+    double *u_before;       /* u at the start of the last accepted step (quadratic predictor) */
+    double dt_before_s;     /* that step's length; 0: no accepted step yet */
     double *u_in, *v_in;    /* DEM input of the current iteration */
     double *f_dem;          /* DEM output */
     double *f_in;           /* FEM input */
@@ -61,7 +63,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->on_max_iterations = CPL_MAXIT_ACCEPT;
     s->relaxed = CPL_RELAXED_DISPLACEMENT_VELOCITY;
     cpl_relax_settings_default(&s->relax);
-    s->predictor = CPL_PREDICT_LINEAR;
+    s->predictor = CPL_PREDICT_QUADRATIC;
     s->far_step = 0;
     s->far_step_factor = 100.0;
     s->skip_fem_without_contact = 0;
@@ -177,7 +179,7 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->last_near = -1;
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
                           &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1,
-                          &L->u_prev, &L->v_prev};
+                          &L->u_prev, &L->v_prev, &L->u_before};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -225,6 +227,7 @@ void cpl_loop_free(cpl_loop *L)
     free(L->check1);
     free(L->u_prev);
     free(L->v_prev);
+    free(L->u_before);
     cpl_jacobian_free(&L->jac);
     free(L);
 }
@@ -293,12 +296,14 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_int(t, p, "level", &L->level);
     cpl_ckpt_int(t, p, "converged_run", &L->converged_run);
     cpl_ckpt_f64(t, p, "grid_origin", &L->grid_origin_s, 1);
+    cpl_ckpt_f64(t, p, "dt_before", &L->dt_before_s, 1);
     cpl_ckpt_long(t, p, "next_checkpoint", &L->next_checkpoint);
     /* the accepted interface state (the predictor's input) and the work vectors of the last
      * iteration (overwritten before use; saved so that nothing is left to chance) */
     struct { const char *name; double *v; size_t n; } vec[] = {
-        {"u", L->u, n3}, {"v", L->v, n3}, {"f", L->f, n3}, {"u_in", L->u_in, n3},
-        {"v_in", L->v_in, n3}, {"f_dem", L->f_dem, n3}, {"f_in", L->f_in, n3},
+        {"u", L->u, n3}, {"v", L->v, n3}, {"f", L->f, n3}, {"u_before", L->u_before, n3},
+        {"u_in", L->u_in, n3}, {"v_in", L->v_in, n3}, {"f_dem", L->f_dem, n3},
+        {"f_in", L->f_in, n3},
         {"u_out", L->u_out, n3}, {"v_out", L->v_out, n3}, {"r", L->r, n3},
         {"check0", L->check0, n3}, {"check1", L->check1, n3}, {"x_in", L->x_in, L->nx},
         {"x_out", L->x_out, L->nx}};
@@ -784,6 +789,34 @@ static void predicted_resultant(const cpl_jacobian *j, const double *f0, const d
     }
 }
 
+/* The first guess of the end-of-step interface motion (u_in, v_in) for a step of dt_s, the
+ * DEM's input in iteration 1 (the DEM moves its wall from where it was to this position
+ * during the step): u + Δt u̇ ("linear"); the last accepted u alone ("constant") makes the
+ * wall lag a further half step behind the structure. "quadratic" adds the acceleration of
+ * the parabola through the last two accepted positions with the last velocity as its slope,
+ * u(−Δt₀) = u_before, u(0) = u, u̇(0) = v:
+ *   u + Δt v + c Δt², v + 2 c Δt,   c = (u_before − u + Δt₀ v) / Δt₀²,
+ * so that the error of the guess falls from ½ ü Δt² to O(Δt³): with the Jacobian the
+ * structure's answer to iteration 1 is Newton's step from the guess, whose error falls with
+ * the square of the guess's (docs/notes/interface_jacobian.md "A quadratic predictor"). Used
+ * only while the step is within a factor 2 of the last one (the step control halves and
+ * doubles it; a far step of efficiency option (i) would stretch one step's acceleration over
+ * many), else linear. */
+static void predict(cpl_loop *L, double dt_s)
+{
+    const size_t n3 = L->n3;
+    const double dt0 = L->dt_before_s, ratio = dt0 > 0.0 ? dt_s / dt0 : 0.0;
+    const int quadratic = L->s.predictor == CPL_PREDICT_QUADRATIC && ratio >= 0.5 &&
+                          ratio <= 2.0;
+    const double moving = L->s.predictor == CPL_PREDICT_CONSTANT ? 0.0 : 1.0;
+    for (size_t i = 0; i < n3; i++) {
+        const double c =
+            quadratic ? (L->u_before[i] - L->u[i] + dt0 * L->v[i]) / (dt0 * dt0) : 0.0;
+        L->u_in[i] = L->u[i] + moving * dt_s * L->v[i] + c * dt_s * dt_s;
+        L->v_in[i] = L->v[i] + 2.0 * c * dt_s;
+    }
+}
+
 /* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
  * failure that ends the run, else 0 with the outcome in t. */
 static int run_step(run_ctx *c, cpl_call *call, try_result *t)
@@ -805,14 +838,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
     if (strong) cpl_relax_begin_step(L->relax);
 
-    /* first guess of the end-of-step interface position for the DEM (the DEM moves its wall
-     * from where it was to this position during the step): u + Δt u̇ by default; the last
-     * accepted u alone makes the wall lag a further half step behind the structure */
-    for (size_t i = 0; i < n3; i++) {
-        L->u_in[i] = L->u[i] + (L->s.predictor == CPL_PREDICT_LINEAR ? call->dt_s * L->v[i] : 0.0);
-        L->v_in[i] = L->v[i];
-        L->f_in[i] = L->f[i];
-    }
+    predict(L, call->dt_s);
+    memcpy(L->f_in, L->f, n3 * sizeof(double));
     const int max_it = strong ? L->s.max_iterations : 1;
     int converged = 0, slow = 0, k;
     double ratios[CPL_SLOW_WINDOW + 1];     /* tolerance ratios of the last iterations */
@@ -1031,6 +1058,8 @@ static int advance_step(run_ctx *c)
         return -1;
 
     /* the structure's end state is the start of the next step */
+    memcpy(L->u_before, L->u, n3 * sizeof(double));
+    L->dt_before_s = dt;
     memcpy(L->u, L->u_out, n3 * sizeof(double));
     memcpy(L->v, L->v_out, n3 * sizeof(double));
     memcpy(L->f, L->f_in, n3 * sizeof(double));

@@ -106,7 +106,7 @@ typedef struct cpl_participant {
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
 typedef enum { CPL_RELAXED_DISPLACEMENT_VELOCITY = 0, CPL_RELAXED_FORCE } cpl_relaxed_quantity;
 typedef enum { CPL_MAXIT_ACCEPT = 0, CPL_MAXIT_STOP } cpl_maxit_policy;
-typedef enum { CPL_PREDICT_CONSTANT = 0, CPL_PREDICT_LINEAR } cpl_predictor;
+typedef enum { CPL_PREDICT_CONSTANT = 0, CPL_PREDICT_LINEAR, CPL_PREDICT_QUADRATIC } cpl_predictor;
 
 typedef struct cpl_loop_settings {
     cpl_scheme scheme;
@@ -125,7 +125,7 @@ typedef struct cpl_loop_settings {
     cpl_maxit_policy on_max_iterations;
     cpl_relaxed_quantity relaxed;
     cpl_relax_settings relax;
-    cpl_predictor predictor;        /* first guess of the step's end-of-step u (linear) */
+    cpl_predictor predictor;        /* first guess of the step's end-of-step u (quadratic) */
     int far_step;                   /* efficiency option (i): enlarge Δt when not near */
     double far_step_factor;         /* the paper used 100 */
     int skip_fem_without_contact;   /* efficiency option (ii) */
@@ -300,7 +300,7 @@ int cpl_loop_checkpoints_on(const cpl_loop *loop, const cpl_participant *fem,
                             const cpl_participant *dem);
 /* Adds everything the rest of the run depends on, bit for bit, to t: step, time, step
  * control, relaxation state (its method's own entries), predictor input (the accepted
- * u, u̇, F), the interface Jacobian, the restore verification, the energy balance, the
+ * u, u̇, F and the u and Δt of the step before), the interface Jacobian, the restore verification, the energy balance, the
  * counters of the summary, the next checkpoint time. Before loading, call
  * cpl_loop_checkpoint_prepare with the file (sizes that vary: the Jacobian's blocks). */
 void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);

@@ -44,6 +44,7 @@ static void test_minimal_and_defaults(void **state)
     assert_int_equal(c.loop.max_iterations, 50);
     assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "none");
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_ACCEPT);
+    assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);   /* weak: the linear guess */
     assert_string_equal(c.fem.endpoint, "");
     /* step control: dt_min dt / 64, doubling after 4 good steps, unconverged not accepted */
     assert_near(cpl_loop_settings_dt_min(&c.loop), 1e-3 / 64.0, 0.0);
@@ -54,6 +55,15 @@ static void test_minimal_and_defaults(void **state)
     assert_near(c.loop.energy.tol_rel, 0.01, 0.0);
     assert_near(c.loop.energy.tol_abs_j, 1e-9, 0.0);
     assert_int_equal(c.accept_energy_growth, 0);
+    /* strong: the quadratic guess, unless the file says otherwise */
+    assert_int_equal(parse("{\"scheme\": \"strong\", \"dt\": 0.001, \"end_time\": 0.5}", &c, &err), 0);
+    assert_int_equal(c.loop.predictor, CPL_PREDICT_QUADRATIC);
+    assert_int_equal(parse("{\"scheme\": \"strong\", \"dt\": 0.001, \"end_time\": 0.5,"
+                           " \"predictor\": \"linear\"}", &c, &err), 0);
+    assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);
+    assert_int_equal(parse("{\"scheme\": \"weak\", \"dt\": 0.001, \"end_time\": 0.5,"
+                           " \"predictor\": \"quadratic\"}", &c, &err), 0);
+    assert_int_equal(c.loop.predictor, CPL_PREDICT_QUADRATIC);
 }
 
 static void test_full_file(void **state)

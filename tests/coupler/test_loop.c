@@ -1,7 +1,7 @@
 /* Coupling loops against closed-form in-process participants (cpl_test_models.h):
  * weak lags (first-order error), strong reproduces the monolithic solution, α = 1 diverges
  * exactly where |J| > 1, Aitken beats constant α, IQN-ILS bound, force vs displacement
- * relaxation, efficiency options, max-iteration policy, participant errors, interruption,
+ * relaxation, the quadratic predictor, efficiency options, max-iteration policy, participant errors, interruption,
  * step rejection (failed solve, divergence, dt_min and the policy, with the efficiency
  * options). */
 #include <stdarg.h>
@@ -118,6 +118,79 @@ static void test_weak_lags_first_order(void **state)
     assert_below(1e-3 * r1.u_mono_scale, r1.u_err);
     assert_below(1.6, ratio);
     assert_below(ratio, 2.5);
+}
+
+/* A structure that moves as u(t) = ½ a t² whatever the force (its velocity a t exact), and
+ * particles that only record the interface position each step's first iteration gives them:
+ * what the predictor guessed. */
+typedef struct guess_recorder {
+    double accel;            /* m/s² */
+    double guess[64], time[64];
+    long steps;
+} guess_recorder;
+
+static int prescribed_solve(void *ctx, const cpl_call *call, const double *in0,
+                            const double *in1, double *out0, double *out1,
+                            cpl_solve_info *info, nc_error *err)
+{
+    (void)in0; (void)in1; (void)info; (void)err;
+    const guess_recorder *g = ctx;
+    const double t = call->time_s + call->dt_s;
+    for (int k = 0; k < 3; k++) {
+        out0[k] = 0.5 * g->accel * t * t;
+        out1[k] = g->accel * t;
+    }
+    return 0;
+}
+
+static int recording_solve(void *ctx, const cpl_call *call, const double *in0,
+                           const double *in1, double *out0, double *out1,
+                           cpl_solve_info *info, nc_error *err)
+{
+    (void)in1; (void)out1; (void)info; (void)err;
+    guess_recorder *g = ctx;
+    if (call->iteration == 1 && g->steps < 64) {
+        g->guess[g->steps] = in0[2];
+        g->time[g->steps++] = call->time_s + call->dt_s;
+    }
+    memset(out0, 0, 3 * sizeof *out0);
+    return 0;
+}
+
+static int no_op(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)ctx; (void)call; (void)err;
+    return 0;
+}
+
+/* Each step's first guess of the end-of-step position under a constant acceleration: the
+ * quadratic predictor (the default) is exact from the second step on (the parabola through
+ * the last two positions with the last velocity as its slope), the linear one misses by
+ * ½ a Δt², and without a previous step the quadratic one is the linear one. */
+static void test_quadratic_predictor(void **state)
+{
+    (void)state;
+    const double a = -9.81, dt = 0.01;
+    for (int quadratic = 0; quadratic <= 1; quadratic++) {
+        guess_recorder g = {.accel = a};
+        cpl_participant fem = {"fem", &g, no_op, prescribed_solve, no_op, 0, NULL, NULL};
+        cpl_participant dem = {"dem", &g, no_op, recording_solve, no_op, 0, NULL, NULL};
+        cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, dt, 0.2);
+        if (quadratic) assert_int_equal(s.predictor, CPL_PREDICT_QUADRATIC);
+        s.predictor = quadratic ? CPL_PREDICT_QUADRATIC : CPL_PREDICT_LINEAR;
+        cpl_loop *loop;
+        nc_error err;
+        cpl_failure failure;
+        assert_int_equal(cpl_loop_create(&loop, &s, 1, NULL, NULL, &err), 0);
+        assert_int_equal(cpl_loop_run(loop, &fem, &dem, NULL, NULL, &failure, &err), 0);
+        cpl_loop_free(loop);
+        assert_int_equal(g.steps, 20);
+        for (long n = 0; n < g.steps; n++) {
+            const double exact = 0.5 * a * g.time[n] * g.time[n];
+            const double miss = quadratic && n > 0 ? 0.0 : -0.5 * a * dt * dt;
+            assert_near(g.guess[n], exact + miss, 1e-12);
+        }
+    }
 }
 
 /* Largest |J| of the per-dof Gauss–Seidel map (K diagonal: one node, no link). */
@@ -778,6 +851,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_strong_matches_monolithic),
         cmocka_unit_test(test_weak_lags_first_order),
+        cmocka_unit_test(test_quadratic_predictor),
         cmocka_unit_test(test_alpha_one_diverges_where_theory_says),
         cmocka_unit_test(test_aitken_fewer_iterations_than_constant),
         cmocka_unit_test(test_iqn_bound_on_linear_problem),
