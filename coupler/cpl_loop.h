@@ -300,8 +300,8 @@ int cpl_loop_checkpoints_on(const cpl_loop *loop, const cpl_participant *fem,
                             const cpl_participant *dem);
 /* Adds everything the rest of the run depends on, bit for bit, to t: step, time, step
  * control, relaxation state (its method's own entries), predictor input (the accepted
- * u, u̇, F and the u and Δt of the step before), the interface Jacobian, the restore verification, the energy balance, the
- * counters of the summary, the next checkpoint time. Before loading, call
+ * u, u̇, F and the u and Δt of the step before), the interface Jacobian, the restore
+ * verification, the energy balance, the counters of the summary, the next checkpoint time. Before loading, call
  * cpl_loop_checkpoint_prepare with the file (sizes that vary: the Jacobian's blocks). */
 void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);
 int cpl_loop_checkpoint_prepare(cpl_loop *loop, const char *path, nc_error *err);

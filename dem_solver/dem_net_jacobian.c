@@ -158,7 +158,7 @@ typedef struct particle {
     int32_t node[DEM_JAC_MAX_NODES];
     motion m;                 /* the body's centre of mass and spin */
     double dth[3], Dth[3][NCOL];   /* the body's turn (rad; clusters) */
-    double inv_inertia[9];    /* world frame, at the end of the step (clusters) */
+    double inv_inertia[9];    /* world frame, at its first recorded contact (clusters) */
     double sf[3], st[3], Dsf[3][NCOL], Dst[3][NCOL]; /* net force / torque (about the centre
                                                         of mass) change of a sub-step */
 } particle;
@@ -195,6 +195,15 @@ static const motion *sphere_motion(const particle *pt, const dem_jac_record *r, 
     return scratch;
 }
 
+/* The net nodes of record r: 1 (a node contact) or 2 (an edge's). */
+static int record_nodes(const dem_net *net, const dem_jac_record *r, int32_t nodes[2])
+{
+    int edge = r->kind == DEM_CONTACT_NET_EDGE;
+    nodes[0] = edge ? net->edges[2 * (size_t)r->j] : r->j;
+    nodes[1] = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+    return edge ? 2 : 1;
+}
+
 static double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -226,9 +235,9 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     const dem_params *prm = &s->model.prm;
     const dem_contact_law *law = dem_contact_law_of(prm->law);
     double frac = jac->frac[r->sub], dts = jac->dt_step, h = jac->h;
-    int edge = r->kind == DEM_CONTACT_NET_EDGE;
-    int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
-    int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+    int32_t nodes[2];
+    const int edge = record_nodes(net, r, nodes) == 2;
+    const int32_t na = nodes[0], nb = nodes[1];
     int nc = 3 * pt->n_nodes, ca = 3 * local_index(pt, na), cb = 3 * local_index(pt, nb);
     double xa[3], xb[3], va[3], vb[3];
     for (int k = 0; k < 3; k++) {
@@ -506,15 +515,6 @@ static int rec_cmp(const void *a, const void *b)
     return (*x)->i < (*y)->i ? -1 : (*x)->i > (*y)->i;
 }
 
-/* The net nodes of record r: 1 (a node contact) or 2 (an edge's). */
-static int record_nodes(const dem_net *net, const dem_jac_record *r, int32_t nodes[2])
-{
-    int edge = r->kind == DEM_CONTACT_NET_EDGE;
-    nodes[0] = edge ? net->edges[2 * (size_t)r->j] : r->j;
-    nodes[1] = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
-    return edge ? 2 : 1;
-}
-
 /* Whether the n records at rec touch more than DEM_JAC_MAX_NODES distinct nodes. */
 static int too_many_nodes(const dem_net *net, const dem_jac_record *const *rec, size_t n)
 {
@@ -703,9 +703,9 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                     }
                 }
             }
-            int edge = r->kind == DEM_CONTACT_NET_EDGE;
-            int32_t na = edge ? net->edges[2 * (size_t)r->j] : r->j;
-            int32_t nb = edge ? net->edges[2 * (size_t)r->j + 1] : r->j;
+            int32_t nodes[2];
+            const int nrow = record_nodes(net, r, nodes), edge = nrow == 2;
+            const int32_t na = nodes[0], nb = nodes[1];
             if (edge) { /* as the contact pass sums the net reactions */
                 for (int d = 0; d < 3; d++) {
                     force[3 * (size_t)na + (size_t)d] -= (1.0 - t) * f[d];
@@ -720,7 +720,6 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             if (!want_K || wgt == 0.0 || pt->overflow) continue;
             /* F_a = -(1-t) f, F_b = -t f; K = -weight dF; columns: the particle's nodes
              * (frozen: only this contact's nodes carry a derivative) */
-            int nodes[2] = {na, nb}, nrow = edge ? 2 : 1;
             for (int a = 0; a < nrow; a++) {
                 double sa = a == 0 ? 1.0 - t : t, sgn = a == 0 ? 1.0 : -1.0;
                 for (int b = 0; b < pt->n_nodes; b++) {
@@ -756,7 +755,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             if (pt->cluster) { /* L += h T, ω = I⁻¹ L, the turn by h ω (world-frame I⁻¹) */
                 const double *I = pt->inv_inertia;
                 for (int k = 0; k < 3; k++)
-                    m->dw[k] += h * (I[3 * k] * pt->st[0] + I[3 * k + 1] * pt->st[1] + I[3 * k + 2] * pt->st[2]);
+                    m->dw[k] += h * (I[3 * k] * pt->st[0] + I[3 * k + 1] * pt->st[1] +
+                                     I[3 * k + 2] * pt->st[2]);
                 for (int c = 0; c < nc && want_K; c++)
                     for (int k = 0; k < 3; k++) {
                         m->Dw[k][c] += h * (I[3 * k] * pt->Dst[0][c] + I[3 * k + 1] * pt->Dst[1][c] +

@@ -1085,7 +1085,9 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     if (worst >= 0)
         snprintf(where, sizeof where, "; largest residual %.3g N at node %d (dof %s)", worst_n, worst / 3,
                  dof_name(worst % 3));
-    return nc_error_set(err, FEM_ERR_NEWTON, "Newton did not converge in %d iterations (residual %.3g N, tolerance %.3g N, last increment %.3g m, tolerance %.3g m%s)",
+    return nc_error_set(err, FEM_ERR_NEWTON,
+                        "Newton did not converge in %d iterations (residual %.3g N, tolerance "
+                        "%.3g N, last increment %.3g m, tolerance %.3g m%s)",
                         set->max_iterations, rnorm, tol, dunorm, set->displacement_tol_m, where);
 }
 
