@@ -156,7 +156,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "relative_tolerance", "work_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
-        "verify_restore", "contact_backtracking", "timeouts", "output", "checkpoint", "comment", NULL};
+        "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
+        "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
     static const char *const quantities[] = {"displacement_velocity", "force", NULL};
@@ -167,7 +168,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     const cJSON *predictor_item = cJSON_GetObjectItemCaseSensitive(root, "predictor");
     const int predictor_given = predictor_item && !cJSON_IsNull(predictor_item);
     long max_it = s->max_iterations, max_steps = s->max_steps,
-         backtracking = s->contact_backtracking;
+         backtracking = s->contact_backtracking, check_interval = s->jacobian_check_interval;
     if (nc_json_check_keys(root, where, keys, err) ||
         parse_participant(root, where, "fem", base_dir, &c->fem, err) ||
         parse_participant(root, where, "dem", base_dir, &c->dem, err) ||
@@ -204,6 +205,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                          err) ||
         nc_json_int_opt(root, where, "contact_backtracking", backtracking, 0, 30, &backtracking,
                         err) ||
+        nc_json_int_opt(root, where, "jacobian_check", check_interval, 0, 1000000000L,
+                        &check_interval, err) ||
         parse_timeouts(root, where, c, err) ||
         parse_output(root, where, c, err) ||
         parse_checkpoint(root, where, s, err))
@@ -219,6 +222,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
     s->max_iterations = (int)max_it;
     s->max_steps = max_steps;
     s->contact_backtracking = (int)backtracking;
+    s->jacobian_check_interval = (int)check_interval;
     if (cpl_loop_settings_check(s, where, err)) return -1;
     /* dt against the float spacing of the times it is added to (nc_time.h), and a bound on
      * the number of steps, so that a run that could not advance or never end is refused */

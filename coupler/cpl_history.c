@@ -127,7 +127,8 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
          series(h, &h->i_force, "/iterations/contact_force", NC_H5_F64, 3, "N", err) ||
          series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, "1", err) ||
          series(h, &h->i_attempt, "/iterations/attempt", NC_H5_I32, 1, "1", err) ||
-         series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, "s", err)))
+         series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, "s", err) ||
+         series(h, &h->i_jacobian_miss, "/iterations/jacobian_miss", NC_H5_F64, 1, "1", err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
         nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_settings_method(&s->relax), err) ||
@@ -181,7 +182,8 @@ int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_er
            nc_h5_series_append(&h->i_force, rec->contact_force, err) ||
            nc_h5_series_append(&h->i_fem_solved, &solved, err) ||
            nc_h5_series_append(&h->i_attempt, &attempt, err) ||
-           nc_h5_series_append(&h->i_dt, &rec->dt_s, err)
+           nc_h5_series_append(&h->i_dt, &rec->dt_s, err) ||
+           nc_h5_series_append(&h->i_jacobian_miss, &rec->jacobian_miss, err)
                ? -1 : 0;
 }
 
@@ -289,7 +291,7 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
                            &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,
                            &h->s_rejected, &h->i_step, &h->i_iteration, &h->i_residual,
                            &h->i_alpha, &h->i_force, &h->i_fem_solved, &h->i_attempt, &h->i_dt,
-                           &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
+                           &h->i_jacobian_miss, &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
                            &h->r_iterations, &h->r_residual, &h->r_reason, &h->e_above};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) nc_h5_series_close(&h->e_series[k]);

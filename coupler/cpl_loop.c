@@ -37,6 +37,12 @@ struct cpl_loop {
     double *x_in, *x_out, *r;
     double *check0, *check1;    /* restore verification: the repeated solve's outputs */
     double *u_prev, *v_prev;    /* contact backtracking: the last iterate with contact */
+    double *lin_u, *lin_v;      /* jacobian_check: the iteration's DEM input (where the DEM
+                                   linearised), the step the iteration took from there, */
+    double *step_u, *step_v;
+    double *probe_u, *probe_v, *probe_plus, *probe_minus, *probe_predicted;   /* the probes'
+                                   inputs, their forces, K's prediction along the step */
+    cpl_jacobian_check jac_check;   /* what the checks found */
     int verified_fem, verified_dem;
     int use_jacobian;       /* interface-Jacobian coupling in this run */
     cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
@@ -158,6 +164,15 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (s->grow_after < 1)
         return nc_error_set(err, 1, "%s: step_control.grow_after must be >= 1, got %d", where,
                             s->grow_after);
+    if (s->jacobian_check_interval < 0)
+        return nc_error_set(err, 1, "%s: jacobian_check must be >= 0 (0: off), got %d", where,
+                            s->jacobian_check_interval);
+    if (s->jacobian_check_interval > 0 &&
+        (s->scheme != CPL_SCHEME_STRONG || !cpl_loop_settings_jacobian_applies(s)))
+        return nc_error_set(err, 1, "%s: jacobian_check needs the strong scheme with "
+                            "relaxed_quantity \"displacement_velocity\" and interface_jacobian "
+                            "on: it checks the linearisation along the steps of the iteration",
+                            where);
     char relax_where[512];
     nc_json_path(relax_where, sizeof relax_where, where, "relaxation");
     if (cpl_relax_settings_check(&s->relax, relax_where, err)) return -1;
@@ -179,7 +194,9 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     L->last_near = -1;
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
                           &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1,
-                          &L->u_prev, &L->v_prev, &L->u_before};
+                          &L->u_prev, &L->v_prev, &L->u_before, &L->lin_u, &L->lin_v,
+                          &L->step_u, &L->step_v, &L->probe_u, &L->probe_v, &L->probe_plus,
+                          &L->probe_minus, &L->probe_predicted};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -228,6 +245,10 @@ void cpl_loop_free(cpl_loop *L)
     free(L->u_prev);
     free(L->v_prev);
     free(L->u_before);
+    double *check_vectors[] = {L->lin_u, L->lin_v, L->step_u, L->step_v, L->probe_u,
+                               L->probe_v, L->probe_plus, L->probe_minus, L->probe_predicted};
+    for (size_t i = 0; i < sizeof check_vectors / sizeof *check_vectors; i++)
+        free(check_vectors[i]);
     cpl_jacobian_free(&L->jac);
     free(L);
 }
@@ -250,6 +271,7 @@ const double *cpl_loop_force(const cpl_loop *L) { return L->f; }
 double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
 const cpl_energy *cpl_loop_energy(const cpl_loop *L) { return &L->energy; }
 int cpl_loop_uses_jacobian(const cpl_loop *L) { return L->use_jacobian; }
+const cpl_jacobian_check *cpl_loop_jacobian_check(const cpl_loop *L) { return &L->jac_check; }
 long cpl_loop_step(const cpl_loop *L) { return L->step; }
 
 /* ---- checkpoint and resume ------------------------------------------------------------ */
@@ -338,6 +360,14 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
     cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
+    cpl_jacobian_check *jc = &L->jac_check;
+    cpl_ckpt_long(t, "jacobian_check", "checks", &jc->checks);
+    cpl_ckpt_long(t, "jacobian_check", "missed", &jc->missed);
+    cpl_ckpt_long(t, "jacobian_check", "solves", &jc->solves);
+    cpl_ckpt_f64(t, "jacobian_check", "worst", &jc->worst, 1);
+    cpl_ckpt_long(t, "jacobian_check", "worst_step", &jc->worst_step);
+    cpl_ckpt_int(t, "jacobian_check", "worst_iteration", &jc->worst_iteration);
+    cpl_ckpt_f64(t, "jacobian_check", "worst_time", &jc->worst_time_s, 1);
     /* the energy balance and guard */
     cpl_energy *e = &L->energy;
     const char *r = "energy";
@@ -643,13 +673,13 @@ static double retry_dt(const cpl_loop *L, double dt_rejected, int *level)
 }
 
 static int report_iteration(run_ctx *c, const cpl_call *call, double residual, double alpha,
-                            int fem_solved)
+                            int fem_solved, double jacobian_miss)
 {
     if (!c->obs || !c->obs->on_iteration) return 0;
     cpl_iteration_record rec = {.step = call->step, .iteration = call->iteration,
                                 .time_s = call->time_s, .dt_s = call->dt_s,
                                 .residual = residual, .alpha = alpha, .fem_solved = fem_solved,
-                                .attempt = c->attempt};
+                                .attempt = c->attempt, .jacobian_miss = jacobian_miss};
     cpl_total_force(c->L->f_dem, c->L->n3 / 3, rec.contact_force);
     if (c->obs->on_iteration(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
     return 0;
@@ -817,6 +847,47 @@ static void predict(cpl_loop *L, double dt_s)
     }
 }
 
+/* jacobian_check (cpl_jacobian_check.h): the linearisation L->jac the structure just solved
+ * with, taken by the DEM at (lin_u, lin_v), along the step to the next input (u_in, v_in):
+ * two more DEM solves at lin ± ε step. The DEM's next solve is the iteration's own, so its
+ * state after the step is not the probes'. *miss stays NAN where there is nothing to compare
+ * (no force and no linearisation, or no step). */
+static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
+{
+    cpl_loop *L = c->L;
+    const size_t n3 = L->n3;
+    *miss = NAN;
+    if (L->jac.n_blocks == 0 && all_zero(L->f_dem, n3)) return 0;
+    for (size_t i = 0; i < n3; i++) {
+        L->step_u[i] = L->u_in[i] - L->lin_u[i];
+        L->step_v[i] = L->v_in[i] - L->lin_v[i];
+    }
+    const double eps = cpl_jacobian_check_epsilon(L->step_u, L->step_v, n3, call->dt_s);
+    if (!(eps > 0.0)) return 0;
+    cpl_jacobian_apply(&L->jac, L->step_u, L->step_v, n3, L->probe_predicted);
+    cpl_jacobian *jacobian_out = call->jacobian_out;
+    const cpl_jacobian *jacobian_in = call->jacobian_in;
+    call->jacobian_out = NULL;
+    call->jacobian_in = NULL;
+    for (int side = 0; side < 2; side++) {
+        const double sign = side ? -1.0 : 1.0;
+        for (size_t i = 0; i < n3; i++) {
+            L->probe_u[i] = L->lin_u[i] + sign * eps * L->step_u[i];
+            L->probe_v[i] = L->lin_v[i] + sign * eps * L->step_v[i];
+        }
+        cpl_solve_info info;
+        if (do_solve(c, c->dem, call, L->probe_u, L->probe_v,
+                     side ? L->probe_minus : L->probe_plus, NULL, &info))
+            return -1;
+        L->jac_check.solves++;
+    }
+    call->jacobian_out = jacobian_out;
+    call->jacobian_in = jacobian_in;
+    *miss = cpl_jacobian_check_miss(L->probe_plus, L->probe_minus, eps, L->probe_predicted, n3);
+    cpl_jacobian_check_add(&L->jac_check, *miss, call->step, call->iteration, call->time_s);
+    return 0;
+}
+
 /* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
  * failure that ends the run, else 0 with the outcome in t. */
 static int run_step(run_ctx *c, cpl_call *call, try_result *t)
@@ -847,6 +918,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     int free_seen = 0;                      /* an iterate of this try had no contact */
     int contact_required = 0;               /* ... and a later one had contact again */
     double r_prev[3] = {0.0, 0.0, 0.0}, r_pred[3] = {0.0, 0.0, 0.0};
+    const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
+                          call->step % L->s.jacobian_check_interval == 0;
     for (k = 1; k <= max_it; k++) {
         call->iteration = k;
         t->iterations = k;
@@ -904,7 +977,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                                                                /* eqs. (28), (29), (35) */
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
             if (!strong || converged || k == max_it || slow) {
-                if (report_iteration(c, call, t->residual, NAN, solved)) return -1;
+                if (report_iteration(c, call, t->residual, NAN, solved, NAN)) return -1;
                 break;
             }
             double alpha;
@@ -913,6 +986,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 memcpy(L->u_prev, L->u_in, n3 * sizeof(double));
                 memcpy(L->v_prev, L->v_in, n3 * sizeof(double));
                 resultant(L->f_dem, n3, r_prev);
+            }
+            if (check_due) {
+                memcpy(L->lin_u, L->u_in, n3 * sizeof(double));
+                memcpy(L->lin_v, L->v_in, n3 * sizeof(double));
             }
             pack(L, L->x_in, L->u_in, L->v_in);
             pack(L, L->x_out, L->u_out, L->v_out);
@@ -927,7 +1004,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (backtrack_prev)
                 predicted_resultant(L->use_jacobian ? &L->jac : NULL, L->f_dem, L->u_prev,
                                     L->v_prev, L->u_in, L->v_in, n3, r_pred);
-            if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
+            double miss = NAN;
+            if (check_due && check_linearisation(c, call, &miss)) return try_failed(c, t);
+            if (report_iteration(c, call, t->residual, alpha, solved, miss)) return -1;
         } else {
             /* algorithm 3: residual and relaxation of the forces, then the structure */
             t->residual = cpl_residual(L->f_dem, L->f_in, L->r, n3);       /* eqs. (30), (36) */
@@ -935,7 +1014,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             converged = cpl_converged(t->residual, norm, L->s.tol_abs, L->s.tol_rel);
             ratios[k % (CPL_SLOW_WINDOW + 1)] = tolerance_ratio(L, t->residual, norm);
             if (!converged && too_slow(L, ratios, k, call->dt_s)) {
-                if (report_iteration(c, call, t->residual, NAN, 0)) return -1;
+                if (report_iteration(c, call, t->residual, NAN, 0, NAN)) return -1;
                 slow = 1;
                 break;
             }
@@ -953,7 +1032,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             int solved = fem_solve_or_skip(c, call, L->f_in, t->fem_solved, &t->fem_info); /* eq. (42) */
             if (solved < 0) return try_failed(c, t);
             t->fem_solved |= solved;
-            if (report_iteration(c, call, t->residual, alpha, solved)) return -1;
+            if (report_iteration(c, call, t->residual, alpha, solved, NAN)) return -1;
             if (converged || k == max_it) break;
             memcpy(L->u_in, L->u_out, n3 * sizeof(double));                /* eqs. (37), (38) */
             memcpy(L->v_in, L->v_out, n3 * sizeof(double));

@@ -40,6 +40,7 @@
 #include <stdint.h>
 #include "cpl_checkpoint.h"
 #include "cpl_energy.h"
+#include "cpl_jacobian_check.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
 
@@ -148,6 +149,12 @@ typedef struct cpl_loop_settings {
                                        (0: off) */
     double checkpoint_interval_s;   /* simulated time between checkpoints (0: none); taken
                                        only when both participants can */
+    int jacobian_check_interval;    /* strong, relaxed u, u̇, with the Jacobian: on every
+                                       step whose index is a multiple of this, the
+                                       linearisation of each iteration that is followed by
+                                       another is checked against central differences of the
+                                       DEM's step (cpl_jacobian_check.h; 2 extra DEM solves
+                                       per check; 0: off) */
 } cpl_loop_settings;
 
 /* The early rejection of a slow try (reject_slow): from iteration CPL_SLOW_FIRST on, the
@@ -179,6 +186,9 @@ typedef struct cpl_iteration_record {
     double contact_force[3];        /* total force of the DEM on the net, N */
     int fem_solved;                 /* 0 when skipped by efficiency option (ii) */
     int attempt;                    /* 0 for a step's first try, n after n rejections */
+    double jacobian_miss;           /* jacobian_check: the relative miss of the DEM's
+                                       linearisation of this iteration along the step to the
+                                       next input (NAN: not checked) */
 } cpl_iteration_record;
 
 typedef enum {
@@ -316,5 +326,7 @@ long cpl_loop_step(const cpl_loop *loop);
 /* 1 when the run uses interface-Jacobian coupling (set by cpl_loop_run: the setting is on
  * and both participants can). */
 int cpl_loop_uses_jacobian(const cpl_loop *loop);
+/* What jacobian_check found so far. */
+const cpl_jacobian_check *cpl_loop_jacobian_check(const cpl_loop *loop);
 
 #endif

@@ -444,6 +444,32 @@ static int shutdown_all(app *a, const cpl_participant *failed)
     return rc;
 }
 
+/* jacobian_check's findings (cpl_jacobian_check.h); nothing when it was off. */
+static void print_jacobian_check(app *a)
+{
+    const cpl_jacobian_check *j = cpl_loop_jacobian_check(a->loop);
+    FILE *o = a->progress.out;
+    if (a->cfg.loop.jacobian_check_interval <= 0) return;
+    if (!cpl_loop_uses_jacobian(a->loop)) {
+        fprintf(o, "coupler: jacobian check: nothing checked, the interface Jacobian was off\n");
+        return;
+    }
+    if (j->checks == 0) {
+        fprintf(o, "coupler: jacobian check: nothing checked (%ld extra DEM solves): no checked "
+                "step had an iteration with contact followed by another\n", j->solves);
+        return;
+    }
+    fprintf(o, "coupler: jacobian check: %ld linearisations against central differences of the "
+            "DEM's step (%ld extra DEM solves): relative miss above %g in %ld, largest %.3g at "
+            "step %ld (t = %.9g s) iteration %d%s\n", j->checks, j->solves,
+            CPL_JACOBIAN_CHECK_WARN, j->missed, j->worst, j->worst_step, j->worst_time_s,
+            j->worst_iteration,
+            j->missed ? "; a wrong derivative misses in every check of the contacts it "
+                        "belongs to and makes the iteration converge linearly, a single miss "
+                        "can be a contact beginning or ending within the probe "
+                        "(/iterations/jacobian_miss in coupling.h5)" : "");
+}
+
 static void print_timing(app *a)
 {
     const cpl_timing *t = cpl_loop_timing(a->loop);
@@ -461,6 +487,7 @@ static void print_timing(app *a)
     fprintf(o, "coupler: interface Jacobian %s\n",
             cpl_loop_uses_jacobian(a->loop) ? "on: the FEM solved with the DEM's contact linearisation"
                                             : "off: plain exchange of forces and displacements");
+    print_jacobian_check(a);
     fprintf(o, "coupler: wall time %.3f s: waiting for fem %.3f s (%.1f%%), for dem %.3f s "
             "(%.1f%%), coupler itself %.3f s (%.1f%%)\n", t->total_s, t->wait_fem_s,
             t->total_s > 0 ? 100.0 * t->wait_fem_s / t->total_s : 0.0, t->wait_dem_s,

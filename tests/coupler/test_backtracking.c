@@ -15,7 +15,11 @@
  * converge in 60 iterations (and cycles: the force is zero in about half of them); with it
  * every step converges to the bisection root (1e-9 m) and the loop counts its extra DEM
  * solves. The same model, reporting particles left out of its linearisation from a given
- * time on, checks that the loop counts those steps and passes the number on. */
+ * time on, checks that the loop counts those steps and passes the number on; reporting its K
+ * scaled by a factor, it checks jacobian_check (cpl_jacobian_check.h): the exact derivative
+ * passes to 1e-4 (the steps end within 1e-6 m of the contact boundary, where the central
+ * difference of pen^0.5 itself misses by up to 7e-6), K × 0.7 misses by 0.3 (±1e-4) in every
+ * check, and the check changes nothing in the run. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -37,6 +41,7 @@ typedef struct node_model {
 typedef struct obstacle_model {
     double speed_m_s, kc, p;
     double dropped_from_s;   /* solves ending after this time report 2 dropped particles */
+    double k_scale;          /* the K it reports: the exact one times this */
     long solves, zero_answers;
 } obstacle_model;
 
@@ -103,7 +108,7 @@ static int obstacle_solve(void *ctx, const cpl_call *call, const double *u, cons
     int32_t nodes[2] = {0, 0};
     if (pen > 0.0) {
         f[2] = -o->kc * pow(pen, o->p);
-        K[8] = o->kc * o->p * pow(pen, o->p - 1.0);
+        K[8] = o->k_scale * o->kc * o->p * pow(pen, o->p - 1.0);
     } else {
         o->zero_answers++;
     }
@@ -137,7 +142,21 @@ typedef struct run_log {
     long dropped_steps;      /* step records with jacobian_dropped 2 */
     double max_error_m;
     node_model before;       /* committed state at the start of the current step */
+    long misses_recorded;    /* iteration records with a jacobian_miss */
+    double largest_miss_recorded;
+    double u_end;            /* the node's displacement at the end of the run */
 } run_log;
+
+static int on_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
+{
+    (void)err;
+    run_log *l = ctx;
+    if (!isnan(rec->jacobian_miss)) {
+        l->misses_recorded++;
+        l->largest_miss_recorded = fmax(l->largest_miss_recorded, rec->jacobian_miss);
+    }
+    return 0;
+}
 
 static int on_step(void *ctx, const cpl_step_record *rec, nc_error *err)
 {
@@ -153,13 +172,22 @@ static int on_step(void *ctx, const cpl_step_record *rec, nc_error *err)
     return 0;
 }
 
-static void run(int backtracking, double dropped_from_s, run_log *log, long *backtracks,
-                long *dropped_steps)
+/* What run_checked() adds to run(): the obstacle's K scale, the check interval, and what the
+ * check found. */
+typedef struct check_case {
+    double k_scale;
+    int interval;
+    cpl_jacobian_check found;
+} check_case;
+
+static void run_checked(int backtracking, double dropped_from_s, run_log *log,
+                        long *backtracks, long *dropped_steps, check_case *check)
 {
     /* a 0.16 kg net node on a 1e5 N/m support, an obstacle at 10 m/s, kc pen^0.5 */
     node_model node = {.m_kg = 0.16, .k_n_m = 1e5};
     obstacle_model obstacle = {.speed_m_s = 10.0, .kc = 3e6, .p = 0.5,
-                               .dropped_from_s = dropped_from_s};
+                               .dropped_from_s = dropped_from_s,
+                               .k_scale = check ? check->k_scale : 1.0};
     cpl_participant fem = {.name = "fem", .ctx = &node, .begin_step = node_begin,
                            .solve = node_solve, .accept = node_accept, .can_jacobian = 1};
     cpl_participant dem = {.name = "dem", .ctx = &obstacle, .begin_step = obstacle_begin,
@@ -172,11 +200,12 @@ static void run(int backtracking, double dropped_from_s, run_log *log, long *bac
     s.max_iterations = 60;
     s.dt_min_s = s.dt_s;   /* no step rejection: the iteration itself is under test */
     s.contact_backtracking = backtracking;
+    s.jacobian_check_interval = check ? check->interval : 0;
     memset(log, 0, sizeof *log);
     log->node = &node;
     log->obstacle = &obstacle;
     log->before = node;
-    cpl_observer obs = {.ctx = log, .on_step = on_step};
+    cpl_observer obs = {.ctx = log, .on_step = on_step, .on_iteration = on_iteration};
     cpl_loop *loop = NULL;
     assert_int_equal(cpl_loop_create(&loop, &s, 1, NULL, NULL, &err), 0);
     cpl_failure where;
@@ -184,6 +213,8 @@ static void run(int backtracking, double dropped_from_s, run_log *log, long *bac
     assert_int_equal(rc, 0);
     *backtracks = cpl_loop_timing(loop)->backtracks;
     *dropped_steps = cpl_loop_timing(loop)->jacobian_dropped_steps;
+    if (check) check->found = *cpl_loop_jacobian_check(loop);
+    log->u_end = node.u;
     cpl_loop_free(loop);
     log->obstacle = NULL;
     log->node = NULL;
@@ -194,6 +225,12 @@ static void run(int backtracking, double dropped_from_s, run_log *log, long *bac
     if (backtracking == 0) {
         assert_true(obstacle.zero_answers > obstacle.solves / 4);   /* the cycle */
     }
+}
+
+static void run(int backtracking, double dropped_from_s, run_log *log, long *backtracks,
+                long *dropped_steps)
+{
+    run_checked(backtracking, dropped_from_s, log, backtracks, dropped_steps, NULL);
 }
 
 static void test_without_backtracking_the_iteration_cycles(void **state)
@@ -233,12 +270,57 @@ static void test_dropped_particles_are_counted(void **state)
     assert_int_equal(log.dropped_steps, 3);
 }
 
+/* the exact K passes the check on every step, and the check changes nothing in the run */
+static void test_jacobian_check_passes_the_exact_derivative(void **state)
+{
+    (void)state;
+    run_log plain, checked;
+    long backtracks = 0, dropped = 0;
+    run(4, INFINITY, &plain, &backtracks, &dropped);
+    check_case check = {.k_scale = 1.0, .interval = 1};
+    run_checked(4, INFINITY, &checked, &backtracks, &dropped, &check);
+    print_message("exact K: %ld checks (%ld DEM solves), largest miss %.3g\n",
+                  check.found.checks, check.found.solves, check.found.worst);
+    assert_true(check.found.checks >= checked.steps);
+    assert_int_equal(check.found.solves, 2 * check.found.checks);
+    assert_int_equal(check.found.missed, 0);
+    assert_below(check.found.worst, 1e-4);
+    assert_int_equal(checked.misses_recorded, check.found.checks);
+    assert_near(checked.largest_miss_recorded, check.found.worst, 0.0);
+    assert_int_equal(checked.converged, checked.steps);
+    assert_true(checked.u_end == plain.u_end);
+    /* every second step only: step indices 0, 2, 4 */
+    check_case sparse = {.k_scale = 1.0, .interval = 2};
+    run_checked(4, INFINITY, &checked, &backtracks, &dropped, &sparse);
+    assert_true(sparse.found.checks > 0 && sparse.found.checks < check.found.checks);
+}
+
+/* a K 30 % too small: every check reports a miss of 0.3 = |D − 0.7 D| / |D| */
+static void test_jacobian_check_finds_a_wrong_derivative(void **state)
+{
+    (void)state;
+    run_log log;
+    long backtracks = 0, dropped = 0;
+    check_case check = {.k_scale = 0.7, .interval = 1};
+    run_checked(4, INFINITY, &log, &backtracks, &dropped, &check);
+    print_message("K x 0.7: %ld checks, %ld above %g, largest miss %.6f at step %ld iteration "
+                  "%d\n", check.found.checks, check.found.missed, CPL_JACOBIAN_CHECK_WARN,
+                  check.found.worst, check.found.worst_step, check.found.worst_iteration);
+    assert_true(check.found.checks > 0);
+    assert_int_equal(check.found.missed, check.found.checks);
+    assert_near(check.found.worst, 0.3, 1e-4);
+    assert_true(check.found.worst_iteration >= 1);
+    assert_near(log.largest_miss_recorded, check.found.worst, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_without_backtracking_the_iteration_cycles),
         cmocka_unit_test(test_backtracking_converges_to_the_step_solution),
         cmocka_unit_test(test_dropped_particles_are_counted),
+        cmocka_unit_test(test_jacobian_check_passes_the_exact_derivative),
+        cmocka_unit_test(test_jacobian_check_finds_a_wrong_derivative),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -64,6 +64,11 @@ static void test_minimal_and_defaults(void **state)
     assert_int_equal(parse("{\"scheme\": \"weak\", \"dt\": 0.001, \"end_time\": 0.5,"
                            " \"predictor\": \"quadratic\"}", &c, &err), 0);
     assert_int_equal(c.loop.predictor, CPL_PREDICT_QUADRATIC);
+    /* the Jacobian check is opt-in */
+    assert_int_equal(c.loop.jacobian_check_interval, 0);
+    assert_int_equal(parse("{\"scheme\": \"strong\", \"dt\": 0.001, \"end_time\": 0.5,"
+                           " \"jacobian_check\": 10}", &c, &err), 0);
+    assert_int_equal(c.loop.jacobian_check_interval, 10);
 }
 
 static void test_full_file(void **state)
@@ -163,6 +168,17 @@ static void test_bad_input_messages(void **state)
                  " \"work_tolerance\": 2}", "work_tolerance");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"accept_energy_growth\": \"yes\"}", "accept_energy_growth");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"jacobian_check\": -1}", "jacobian_check");
+    /* it checks the linearisation along the iteration's steps: nothing to check without */
+    expect_error("{\"scheme\": \"weak\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"jacobian_check\": 1}", "jacobian_check needs the strong scheme");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxed_quantity\": \"force\", \"jacobian_check\": 1}",
+                 "jacobian_check needs the strong scheme");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"interface_jacobian\": false, \"jacobian_check\": 1}",
+                 "interface_jacobian");
 }
 
 static void test_load_missing_file(void **state)
