@@ -4,8 +4,6 @@
 
 #include <math.h>
 
-#include "cpl_loop.h"
-
 double cpl_jacobian_check_epsilon(const double *du, const double *dv, size_t n3, double dt_s)
 {
     double largest = 0.0;
@@ -17,23 +15,6 @@ double cpl_jacobian_check_epsilon(const double *du, const double *dv, size_t n3,
     const double probe_m = fmin(fmax(CPL_JACOBIAN_CHECK_FRACTION * largest,
                                      CPL_JACOBIAN_CHECK_MIN_M), CPL_JACOBIAN_CHECK_MAX_M);
     return probe_m / largest;
-}
-
-void cpl_jacobian_apply(const cpl_jacobian *j, const double *du, const double *dv, size_t n3,
-                        double *out)
-{
-    for (size_t i = 0; i < n3; i++) out[i] = 0.0;
-    for (size_t b = 0; b < j->n_blocks; b++) {
-        /* block b: the motion of node nodes[2b+1] on the force of node nodes[2b] */
-        const size_t f = 3 * (size_t)j->nodes[2 * b], m = 3 * (size_t)j->nodes[2 * b + 1];
-        if (f + 3 > n3 || m + 3 > n3) continue;     /* the remote wrapper checked the nodes */
-        const double *K = j->stiffness + 9 * b, *C = j->damping + 9 * b;
-        for (int r = 0; r < 3; r++)
-            for (int q = 0; q < 3; q++) {
-                out[f + r] -= K[3 * r + q] * du[m + q];
-                if (j->has_damping) out[f + r] -= C[3 * r + q] * dv[m + q];
-            }
-    }
 }
 
 double cpl_jacobian_check_miss(const double *f_plus, const double *f_minus, double eps,

@@ -9,7 +9,8 @@
  * took to the next input, and solves the DEM's step twice more, at x ± ε d:
  *
  *   D = (F(x + ε d) − F(x − ε d)) / (2 ε)    (central difference along d)
- *   P = −(K d_u + C d_u̇)                     (the linearisation's prediction)
+ *   P = −(K d_u + C d_u̇)                     (the linearisation's prediction,
+ *                                             cpl_jacobian_apply)
  *   miss = ‖D − P‖ / max(‖D‖, ‖P‖)
  *
  * ε makes the largest displacement component of ε d, or Δt times the largest velocity
@@ -21,8 +22,6 @@
 #define CPL_JACOBIAN_CHECK_H
 
 #include <stddef.h>
-
-struct cpl_jacobian;
 
 #define CPL_JACOBIAN_CHECK_FRACTION 1e-3
 #define CPL_JACOBIAN_CHECK_MIN_M 1e-10
@@ -43,10 +42,6 @@ typedef struct cpl_jacobian_check {
 
 /* ε for the step (du, dv) (n3 each) of a step of dt_s; 0 when the step is zero. */
 double cpl_jacobian_check_epsilon(const double *du, const double *dv, size_t n3, double dt_s);
-
-/* out = −(K du + C dv) (n3), C only when j has damping. */
-void cpl_jacobian_apply(const struct cpl_jacobian *j, const double *du, const double *dv,
-                        size_t n3, double *out);
 
 /* The relative miss of the prediction `predicted` against the central difference of
  * f_plus and f_minus at ±eps; NAN when both are zero (nothing to compare). */

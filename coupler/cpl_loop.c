@@ -37,11 +37,12 @@ struct cpl_loop {
     double *x_in, *x_out, *r;
     double *check0, *check1;    /* restore verification: the repeated solve's outputs */
     double *u_prev, *v_prev;    /* contact backtracking: the last iterate with contact */
+    double *du, *dv, *df;       /* a change of the interface motion and the force change the
+                                   linearisation predicts for it (predicted_resultant,
+                                   jacobian_check) */
     double *lin_u, *lin_v;      /* jacobian_check: the iteration's DEM input (where the DEM
-                                   linearised), the step the iteration took from there, */
-    double *step_u, *step_v;
-    double *probe_u, *probe_v, *probe_plus, *probe_minus, *probe_predicted;   /* the probes'
-                                   inputs, their forces, K's prediction along the step */
+                                   linearised); the probes' inputs and forces */
+    double *probe_u, *probe_v, *probe_plus, *probe_minus;
     cpl_jacobian_check jac_check;   /* what the checks found */
     int verified_fem, verified_dem;
     int use_jacobian;       /* interface-Jacobian coupling in this run */
@@ -115,6 +116,23 @@ void cpl_jacobian_free(cpl_jacobian *j)
     free(j->stiffness);
     free(j->damping);
     memset(j, 0, sizeof *j);
+}
+
+void cpl_jacobian_apply(const cpl_jacobian *j, const double *du, const double *dv, size_t n3,
+                        double *out)
+{
+    for (size_t i = 0; i < n3; i++) out[i] = 0.0;
+    for (size_t b = 0; b < j->n_blocks; b++) {
+        /* block b: the motion of node nodes[2b+1] on the force of node nodes[2b] */
+        const size_t f = 3 * (size_t)j->nodes[2 * b], m = 3 * (size_t)j->nodes[2 * b + 1];
+        if (f + 3 > n3 || m + 3 > n3) continue;     /* the remote wrapper checked the nodes */
+        const double *K = j->stiffness + 9 * b, *C = j->damping + 9 * b;
+        for (int r = 0; r < 3; r++)
+            for (int q = 0; q < 3; q++) {
+                out[f + r] -= K[3 * r + q] * du[m + q];
+                if (j->has_damping) out[f + r] -= C[3 * r + q] * dv[m + q];
+            }
+    }
 }
 
 int cpl_loop_settings_jacobian_applies(const cpl_loop_settings *s)
@@ -195,8 +213,8 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
     double **vectors[] = {&L->u, &L->v, &L->f, &L->u_in, &L->v_in, &L->f_dem, &L->f_in,
                           &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1,
                           &L->u_prev, &L->v_prev, &L->u_before, &L->lin_u, &L->lin_v,
-                          &L->step_u, &L->step_v, &L->probe_u, &L->probe_v, &L->probe_plus,
-                          &L->probe_minus, &L->probe_predicted};
+                          &L->du, &L->dv, &L->df, &L->probe_u, &L->probe_v, &L->probe_plus,
+                          &L->probe_minus};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -245,8 +263,8 @@ void cpl_loop_free(cpl_loop *L)
     free(L->u_prev);
     free(L->v_prev);
     free(L->u_before);
-    double *check_vectors[] = {L->lin_u, L->lin_v, L->step_u, L->step_v, L->probe_u,
-                               L->probe_v, L->probe_plus, L->probe_minus, L->probe_predicted};
+    double *check_vectors[] = {L->du, L->dv, L->df, L->lin_u, L->lin_v, L->probe_u,
+                               L->probe_v, L->probe_plus, L->probe_minus};
     for (size_t i = 0; i < sizeof check_vectors / sizeof *check_vectors; i++)
         free(check_vectors[i]);
     cpl_jacobian_free(&L->jac);
@@ -798,25 +816,23 @@ static int all_zero(const double *f, size_t n3)
     return 1;
 }
 
-/* The resultant that the linearisation j about (u0, v0), with force f0 there, predicts at
- * (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)], what the FEM solved with (j NULL: the
- * constant force f0). */
-static void predicted_resultant(const cpl_jacobian *j, const double *f0, const double *u0,
+/* The resultant that the linearisation L->jac about (u0, v0), with force f0 there, predicts
+ * at (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)], what the FEM solved with (without
+ * interface-Jacobian coupling: the constant force f0). */
+static void predicted_resultant(cpl_loop *L, const double *f0, const double *u0,
                                 const double *v0, const double *u1, const double *v1,
-                                size_t n3, double out[3])
+                                double out[3])
 {
-    resultant(f0, n3, out);
-    if (!j) return;
-    for (size_t b = 0; b < j->n_blocks; b++) {
-        /* block (i, j): the motion of node j on the force of node i */
-        const size_t m = 3 * (size_t)j->nodes[2 * b + 1];
-        const double *K = j->stiffness + 9 * b, *C = j->damping + 9 * b;
-        for (int r = 0; r < 3; r++)
-            for (int q = 0; q < 3; q++) {
-                out[r] -= K[3 * r + q] * (u1[m + q] - u0[m + q]);
-                if (j->has_damping) out[r] -= C[3 * r + q] * (v1[m + q] - v0[m + q]);
-            }
+    resultant(f0, L->n3, out);
+    if (!L->use_jacobian) return;
+    for (size_t i = 0; i < L->n3; i++) {
+        L->du[i] = u1[i] - u0[i];
+        L->dv[i] = v1[i] - v0[i];
     }
+    cpl_jacobian_apply(&L->jac, L->du, L->dv, L->n3, L->df);
+    double change[3];
+    resultant(L->df, L->n3, change);
+    for (int d = 0; d < 3; d++) out[d] += change[d];
 }
 
 /* The first guess of the end-of-step interface motion (u_in, v_in) for a step of dt_s, the
@@ -859,12 +875,12 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     *miss = NAN;
     if (L->jac.n_blocks == 0 && all_zero(L->f_dem, n3)) return 0;
     for (size_t i = 0; i < n3; i++) {
-        L->step_u[i] = L->u_in[i] - L->lin_u[i];
-        L->step_v[i] = L->v_in[i] - L->lin_v[i];
+        L->du[i] = L->u_in[i] - L->lin_u[i];
+        L->dv[i] = L->v_in[i] - L->lin_v[i];
     }
-    const double eps = cpl_jacobian_check_epsilon(L->step_u, L->step_v, n3, call->dt_s);
+    const double eps = cpl_jacobian_check_epsilon(L->du, L->dv, n3, call->dt_s);
     if (!(eps > 0.0)) return 0;
-    cpl_jacobian_apply(&L->jac, L->step_u, L->step_v, n3, L->probe_predicted);
+    cpl_jacobian_apply(&L->jac, L->du, L->dv, n3, L->df);
     cpl_jacobian *jacobian_out = call->jacobian_out;
     const cpl_jacobian *jacobian_in = call->jacobian_in;
     call->jacobian_out = NULL;
@@ -872,8 +888,8 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     for (int side = 0; side < 2; side++) {
         const double sign = side ? -1.0 : 1.0;
         for (size_t i = 0; i < n3; i++) {
-            L->probe_u[i] = L->lin_u[i] + sign * eps * L->step_u[i];
-            L->probe_v[i] = L->lin_v[i] + sign * eps * L->step_v[i];
+            L->probe_u[i] = L->lin_u[i] + sign * eps * L->du[i];
+            L->probe_v[i] = L->lin_v[i] + sign * eps * L->dv[i];
         }
         cpl_solve_info info;
         if (do_solve(c, c->dem, call, L->probe_u, L->probe_v,
@@ -883,7 +899,7 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     }
     call->jacobian_out = jacobian_out;
     call->jacobian_in = jacobian_in;
-    *miss = cpl_jacobian_check_miss(L->probe_plus, L->probe_minus, eps, L->probe_predicted, n3);
+    *miss = cpl_jacobian_check_miss(L->probe_plus, L->probe_minus, eps, L->df, n3);
     cpl_jacobian_check_add(&L->jac_check, *miss, call->step, call->iteration, call->time_s);
     return 0;
 }
@@ -1002,8 +1018,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             }
             unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
             if (backtrack_prev)
-                predicted_resultant(L->use_jacobian ? &L->jac : NULL, L->f_dem, L->u_prev,
-                                    L->v_prev, L->u_in, L->v_in, n3, r_pred);
+                predicted_resultant(L, L->f_dem, L->u_prev, L->v_prev, L->u_in, L->v_in,
+                                    r_pred);
             double miss = NAN;
             if (check_due && check_linearisation(c, call, &miss)) return try_failed(c, t);
             if (report_iteration(c, call, t->residual, alpha, solved, miss)) return -1;

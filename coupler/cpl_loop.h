@@ -27,6 +27,10 @@
  * predicted a force of the same sense (or after the try's contact-free answer was seen to
  * collide), is moved halfway back towards that one, up to contact_backtracking times, and
  * only the DEM is solved again (docs/notes/contact_backtracking.md).
+ * Jacobian check (jacobian_check > 0, strong, with the Jacobian): on every such step each
+ * iteration's linearisation is compared with two more DEM solves of the step along the step
+ * the iteration took (cpl_jacobian_check.h); the DEM's own solve of the next iteration comes
+ * after them, so the results are the same as without the check.
  * Energy balance: every accepted step feeds the energies both participants reported with
  * their last solve to the energy guard (cpl_energy.h); its record goes with the step record.
  * The loop itself never prints: it reports every iteration, rejection and step to an
@@ -59,6 +63,10 @@ typedef struct cpl_jacobian {
 int cpl_jacobian_set(cpl_jacobian *j, size_t n, const int32_t *nodes, const double *stiffness,
                      const double *damping, nc_error *err);
 void cpl_jacobian_free(cpl_jacobian *j);
+/* out = −(K du + C dv) (n × 3 each; C only when j has damping): the change of the force the
+ * linearisation predicts for a change (du, dv) of the interface motion. */
+void cpl_jacobian_apply(const cpl_jacobian *j, const double *du, const double *dv, size_t n3,
+                        double *out);
 
 /* What a participant is asked to do: step, iteration (1-based; 0 outside solve), the
  * start time and size of the step; with interface-Jacobian coupling, what to linearise. */

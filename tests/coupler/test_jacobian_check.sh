@@ -4,8 +4,9 @@
 # its impact steps go through contact backtracking), 0.6 s, the default strong settings.
 # Checks:
 #  - with the check on every step, the summary counts the checks (2 extra DEM solves each)
-#    and none above 1e-3: dem_solver's K is the derivative of its own step (measured: the
-#    largest miss 1.7e-6 over 1.5 s, docs/notes/interface_jacobian.md);
+#    and none above 1e-3, and the largest recorded miss is below 1e-4: dem_solver's K is the
+#    derivative of its own step (measured: 1.1e-6 to 0.6 s, 1.7e-6 over 1.5 s,
+#    docs/notes/interface_jacobian.md);
 #  - /iterations/jacobian_miss holds one finite value per check, NaN elsewhere, and is NaN
 #    throughout with the check off (no summary line then);
 #  - the check changes nothing in the run: every iteration's residual and contact force, the
@@ -33,7 +34,7 @@ with h5py.File(plain + "/coupling.h5", "r") as a, h5py.File(checked + "/coupling
     found = miss[~np.isnan(miss)]
     print("checked: %d misses recorded, largest %.3g" % (found.size, found.max()))
     assert found.size == checks, "%d misses recorded, the summary says %d" % (found.size, checks)
-    assert found.max() < 1e-3, "a miss above 1e-3"
+    assert found.max() < 1e-4, "a miss of %.3g: K is not the derivative of the DEM's step" % found.max()
     for name in ("/iterations/residual", "/iterations/contact_force", "/steps/time",
                  "/steps/iterations"):
         assert np.array_equal(a[name][()], b[name][()]), "%s differs with the check" % name
