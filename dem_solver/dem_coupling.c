@@ -11,6 +11,7 @@
 #include "dem_contact_geometry.h"
 #include "dem_integrate.h"
 #include "dem_net_jacobian.h"
+#include "dem_net_strands.h"
 #include "dem_neighbor_list.h"
 #include "dem_sim.h"
 
@@ -90,9 +91,10 @@ int dem_sim_set_interface(dem_sim *s, size_t n_nodes, const int32_t *node_ids,
     net->n_edges = n_edges;
     net->node_ids = malloc(n_nodes * sizeof(int32_t));
     net->edges = malloc(2 * n_edges * sizeof(int32_t));
+    net->strand = malloc(2 * n_edges * sizeof(int32_t));
     double **arrays[] = {&net->ref, &net->start, &net->end, &net->end_vel, &net->cur,
                          &net->vel, &net->force, &net->impulse};
-    int ok = net->node_ids && net->edges;
+    int ok = net->node_ids && net->edges && net->strand;
     for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++) {
         *arrays[k] = calloc(3 * n_nodes, sizeof(double));
         ok = ok && *arrays[k];
@@ -114,6 +116,7 @@ int dem_sim_set_interface(dem_sim *s, size_t n_nodes, const int32_t *node_ids,
     memcpy(net->start, coords, 3 * n_nodes * sizeof(double));
     memcpy(net->end, coords, 3 * n_nodes * sizeof(double));
     memcpy(net->cur, coords, 3 * n_nodes * sizeof(double));
+    if (dem_net_find_strands(n_nodes, coords, n_edges, edges, net->strand, err)) return -1;
     net->active = 1;
     s->snap.valid = 0;
     return build_net_grid(s, err);

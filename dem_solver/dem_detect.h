@@ -157,7 +157,8 @@ int dem_emit_wall_contact(const dem_sim *s, dem_emit_ctx *ctx, size_t i, dem_con
 typedef struct dem_feature {
     int type;      /* 0 face, 1 edge, 2 vertex (mesh); 1 edge, 2 node (net) */
     int32_t id;    /* triangle / edge / vertex index */
-    int32_t owner; /* triangle (mesh) or edge (net) that produced it */
+    int32_t owner; /* triangle (mesh) or edge (net) that produced it; a net node: the
+                      strand (rope) through it (dem_net_strands.h) */
     double q[3];   /* closest point */
     double d2;
     double t;      /* net edge parameter */

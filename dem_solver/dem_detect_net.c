@@ -1,12 +1,36 @@
 /* dem_detect_net — contacts of a sphere with the coupled net (eqs. (14), (15)): the closest
  * point of every nearby cable edge at its current position, an interior point as an edge
- * contact (its reaction split onto the two nodes), an end as a node contact (each node once, and
- * not when an edge at that node is touched in its interior). */
+ * contact (its reaction split onto the two nodes), an end as a node contact. A node is touched
+ * once per rope through it (dem_net_strands.h), not by a rope one of whose edges at that node
+ * is touched in its interior, and not by the end of a rope fastened there to another (that
+ * rope's contact is the one). So the force stays continuous as the closest point passes
+ * from an edge to the node, and a sphere over the crossing of two ropes presses on both, as it
+ * does a hair beside it (one node contact per node halved the force over the node and on the
+ * rope lines through it). */
 #include "dem_detect.h"
 
 #include <string.h>
 
 #include "dem_contact_geometry.h"
+
+/* Adds x unless listed: an edge once, a node once per strand (x.owner). */
+static void add_feature(dem_feature *f, int *n, const dem_feature *x, int *overflow)
+{
+    for (int k = 0; k < *n; k++)
+        if (f[k].type == x->type && f[k].id == x->id && (x->type == 1 || f[k].owner == x->owner))
+            return;
+    if (*n == DEM_MAX_FEATURES) {
+        *overflow = 1;
+        return;
+    }
+    f[(*n)++] = *x;
+}
+
+/* The strand of edge e at node v. */
+static int32_t strand_at(const dem_net *net, int32_t e, int32_t v)
+{
+    return net->strand[2 * (size_t)e + (net->edges[2 * (size_t)e] == v ? 0 : 1)];
+}
 
 static int present(const dem_sim *s)
 {
@@ -34,32 +58,32 @@ static int detect(const dem_sim *s, dem_emit_ctx *out, size_t i, double dt, int 
         dem_feature x;
         x.d2 = dem_closest_on_segment(p, net->cur + 3 * (size_t)a, net->cur + 3 * (size_t)b, x.q, &x.t);
         if (x.d2 >= reach * reach || x.d2 == 0.0) continue; /* eqs. (14), (15) */
-        x.owner = e;
-        if (x.t <= 0.0) {
+        if (x.t <= 0.0 || x.t >= 1.0) {
             x.type = 2;
-            x.id = a;
-        } else if (x.t >= 1.0) {
-            x.type = 2;
-            x.id = b;
+            x.id = x.t <= 0.0 ? a : b;
+            x.owner = net->strand[2 * (size_t)e + (x.t <= 0.0 ? 0 : 1)];
+            if (x.owner < 0) continue; /* an attached end: the rope it is fastened to counts */
         } else {
             x.type = 1;
             x.id = e;
+            x.owner = e;
         }
-        dem_add_feature(f, &nf, &x, overflow);
+        add_feature(f, &nf, &x, overflow);
     }
     for (int a = 0; a < nf; a++) {
-        if (f[a].type == 2) { /* a node of an edge touched in its interior is the same contact */
+        if (f[a].type == 2) { /* the rope touched in an edge's interior at this node */
             int drop = 0;
             for (int b = 0; b < nf && !drop; b++) {
                 if (f[b].type != 1) continue;
                 const int32_t *e = net->edges + 2 * (size_t)f[b].id;
-                drop = e[0] == f[a].id || e[1] == f[a].id;
+                drop = (e[0] == f[a].id || e[1] == f[a].id) &&
+                       strand_at(net, f[b].id, f[a].id) == f[a].owner;
             }
             if (drop) continue;
         }
         double dist = sqrt(f[a].d2);
         dem_contact_in in;
-        in.aux = 0;
+        in.aux = f[a].type == 2 ? f[a].owner : 0;
         in.reach = reach;
         in.overlap = reach - dist;
         for (int k = 0; k < 3; k++) in.n[k] = (f[a].q[k] - p[k]) / dist;

@@ -28,14 +28,14 @@ void dem_model_init(dem_model *m)
 
 void dem_net_free(dem_net *n)
 {
-    free(n->node_ids); free(n->edges); free(n->ref); free(n->start); free(n->end);
+    free(n->node_ids); free(n->edges); free(n->strand); free(n->ref); free(n->start); free(n->end);
     free(n->end_vel); free(n->cur); free(n->vel); free(n->force); free(n->impulse);
     free(n->box_lo); free(n->box_hi);
     if (n->grid) {
         dem_item_grid_free(n->grid);
         free(n->grid);
     }
-    n->node_ids = n->edges = NULL;
+    n->node_ids = n->edges = n->strand = NULL;
     n->ref = n->start = n->end = n->end_vel = n->cur = n->vel = n->force = n->impulse = NULL;
     n->box_lo = n->box_hi = NULL;
     n->grid = NULL;

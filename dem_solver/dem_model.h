@@ -113,6 +113,8 @@ typedef struct dem_net {
     size_t n_nodes, n_edges;
     int32_t *node_ids;     /* FEM ids (for output only) */
     int32_t *edges;        /* 2 node indices per edge */
+    int32_t *strand;       /* 2 per edge: the rope each end belongs to at its node
+                              (dem_net_strands.h), the key of a node contact */
     double *ref;           /* 3n reference coordinates */
     double *start;         /* 3n position at the start of the coupling step */
     double *end;           /* 3n position at the end of the step (from the FEM) */

@@ -99,6 +99,7 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
         r->i = (int32_t)i;
         r->kind = kind;
         r->j = c->j[k];
+        r->aux = c->aux[k];
         memcpy(r->p, s->model.sph.pos + 3 * i, sizeof r->p);
         memcpy(r->v, s->model.sph.vel + 3 * i, sizeof r->v);
         r->body = s->model.sph.body[i];
@@ -114,7 +115,7 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
         memset(r->n_prev, 0, sizeof r->n_prev);
         r->kt_prev = r->fn_prev = r->impact_speed = 0.0;
         for (int32_t p = s->contact.prev_first[i]; p < s->contact.prev_first[i + 1]; p++)
-            if (pv->kind[p] == kind && pv->j[p] == r->j && pv->aux[p] == c->aux[k]) {
+            if (pv->kind[p] == kind && pv->j[p] == r->j && pv->aux[p] == r->aux) {
                 r->has_prev = 1;
                 memcpy(r->ft, pv->ft + 3 * (size_t)p, sizeof r->ft);
                 memcpy(r->n_prev, pv->normal + 3 * (size_t)p, sizeof r->n_prev);
@@ -127,7 +128,8 @@ int dem_net_jacobian_record(dem_net_jacobian *jac, const dem_sim *s, long sub, n
         r->link = -1;
         while (q < hi && (size_t)jac->rec[q].i < i) q++;
         for (size_t u = q; u < hi && (size_t)jac->rec[u].i == i; u++)
-            if (jac->rec[u].kind == kind && jac->rec[u].j == r->j) {
+            if (jac->rec[u].kind == kind && jac->rec[u].j == r->j &&
+                jac->rec[u].aux == r->aux) {
                 r->link = (int32_t)u;
                 break;
             }

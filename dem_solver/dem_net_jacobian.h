@@ -74,6 +74,7 @@
 /* One net contact in one sub-step, as the contact pass saw it. */
 typedef struct dem_jac_record {
     int32_t sub, i, kind, j;   /* sub-step, sphere, DEM_CONTACT_NET_EDGE / _NODE, edge / node */
+    int32_t aux;               /* a node contact's strand (the contact's key with i, kind, j) */
     int32_t body;              /* the sphere's body (a free sphere's own, or its cluster) */
     int32_t link;              /* the same contact in the previous sub-step's records, or -1 */
     int32_t has_prev;          /* its history was found in the previous DEM step */

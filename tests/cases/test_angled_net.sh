@@ -9,10 +9,15 @@
 #    Table 2's EA = 8.8 N the net only deflects the 97 kg rock, which leaves it past the lower
 #    fixed edge at about 0.45 s (an angled net guides rocks rather than stopping them);
 #  - the centre node (monitor 0) reaches -0.6 m +- 0.15 m (paper fig. 20a: about -0.6 m);
-#  - strong 2e-4 matches weak coupling ("within a few percent of weak 1e-4"): max
-#    |u_z difference| over 0-0.2 s < 6 % of the peak against weak 1e-4 (measured 4.0 %) and
-#    < 2 % against weak 5e-5 (measured 0.5 %): most of the first difference is weak 1e-4's own
-#    first-order lag, which halving the step removes (weak 1e-4 vs 5e-5: measured 4.1 %);
+#  - strong 2e-4 matches weak coupling: max |u_z difference| over 0-0.2 s < 2 % of the peak
+#    against weak 5e-5 (measured 1.1 %). Weak 1e-4 keeps the contact but is not accurate
+#    during the impact: < 20 % against strong 2e-4 (measured 13.3 %, 12.5 % against weak
+#    5e-5: its own error, which halving the step removes; 5.2 % at 0.2 s). The paper has strong
+#    2e-4 match weak 1e-4 (fig. 20a); here that held within 4 % only while a node on the
+#    rock's path (the rope line x = 0) was one contact for both ropes through it, which left
+#    the crossing rope out (docs/notes/interface_jacobian.md, "A node is touched once per
+#    rope"): with both ropes touched the contact is stiffer and 1e-4 is near the plain
+#    exchange's limit for the 0.03 kg nodes;
 #  - weak 2e-4 "loses contact": its centre node departs from weak 1e-4 by > 50 % of the peak
 #    (the net is flung off and the rock thrown back, fig. 19a); it creates energy (the
 #    coupler's energy guard fires; the run opts in with accept_energy_growth, the warning is
@@ -64,7 +69,7 @@ assert -0.75 < us.min() < -0.45, "centre node deflection not about -0.6 m"
 print("centre node: max|strong2-weak05| %.4f m (%.1f %%), max|weak1-weak05| %.4f m (%.1f %%)"
       % (np.abs(us - u05).max(), 100 * np.abs(us - u05).max() / peak, np.abs(u1 - u05).max(),
          100 * np.abs(u1 - u05).max() / peak))
-assert np.abs(us - u1).max() < 0.06 * peak, "strong 2e-4 does not match weak 1e-4"
+assert np.abs(us - u1).max() < 0.20 * peak, "weak 1e-4 departs from strong 2e-4 by > 20 %"
 assert np.abs(us - u05).max() < 0.02 * peak, "strong 2e-4 does not match weak 5e-5"
 assert np.abs(u2 - u1).max() > 0.5 * peak, "weak 2e-4 did not lose contact (paper fig. 19a)"
 its = h5py.File(d + "/strong2/coupling.h5", "r")["/steps/iterations"][:]

@@ -12,7 +12,7 @@
 #    by more than 1 % of it, and the net throws it back slower than it came: its largest
 #    upward speed after the impact is below the impact speed (measured 9.4 of 10.0 m/s);
 #  - the interface iteration is not a slow fixed point: at most 5 iterations per contact step
-#    on average (measured 3.76; 4.05 when a step had at most 10 iterations before it was
+#    on average (measured 3.75; 4.05 when a step had at most 10 iterations before it was
 #    retried at half the Δt, 4.8 before the Hunt–Crossley impact speed was in the DEM's
 #    Jacobian and the predictor quadratic; 5.5 before the FEM solved with the skew part of
 #    the contact's linearisation, with 331 steps accepted unconverged);

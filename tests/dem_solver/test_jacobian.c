@@ -7,7 +7,8 @@
  * cap, checked on the returned force), a contact that closes within the step, one whose
  * force drops to the no-tension clamp (Hertz) within the step, a Hunt–Crossley contact that
  * begins in the step and then slows (its impact speed held), Hertz and linear laws, a
- * spinning sphere with history from the previous step, a sphere on two edges; every case has
+ * spinning sphere with history from the previous step, a sphere on two edges, a sphere on two
+ * ropes through one node whose two node contacts have different histories; every case has
  * 10 or more sub-steps. The replay at the received displacement reproduces the returned
  * force. With the option off the results are unchanged (memcmp against a run with it on).
  * A cluster on the edge checks the rigid body's response (translation and turn) against the
@@ -44,7 +45,11 @@ typedef struct scenario {
     const char *damping;    /* dem.json "damping" (NULL: the law's default) */
     int cluster;            /* the particle is a cluster: the sphere above plus one of 0.8 its
                                radius at (0.6, 0.3, 0.9) radii from it, off the contact */
+    int crossing;           /* 5 nodes: two ropes bent at node 1, 0-1-2 with its apex towards
+                               +y and 3-1-4 beside it, its apex towards +y too */
 } scenario;
+
+#define NDOF 15 /* 3 per node, 5 nodes at most */
 
 static void build(dem_sim *s, const scenario *c)
 {
@@ -79,24 +84,29 @@ static void build(dem_sim *s, const scenario *c)
              c->law, damping, c->youngs, c->density, c->restitution, c->friction, body,
              c->net_youngs, c->net_friction, c->net_extra ? c->net_extra : "", dt);
     dem_test_build(s, json);
-    double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+    double xyz[NDOF] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
     if (c->bent) {
         xyz[6] = 0.0;
         xyz[7] = 0.02;
     }
-    int32_t edges[4] = {0, 1, 1, 2};
+    int32_t edges[8] = {0, 1, 1, 2, 3, 1, 1, 4};
+    size_t n_edges = (size_t)c->n_nodes - 1;
+    if (c->crossing) {
+        const double cross[NDOF] = {0, -0.3, 0, 1, 0, 0, 2, -0.3, 0, 1.3, -1, 0, 0.7, -1, 0};
+        memcpy(xyz, cross, sizeof xyz);
+        n_edges = 4;
+    }
     nc_error err;
-    assert_int_equal(dem_sim_set_interface(s, (size_t)c->n_nodes, NULL, xyz, (size_t)c->n_nodes - 1,
-                                           edges, &err), 0);
+    assert_int_equal(dem_sim_set_interface(s, (size_t)c->n_nodes, NULL, xyz, n_edges, edges, &err), 0);
 }
 
 /* Runs the warm-up steps (net at rest) and begins the tested step. */
 static void warm_up(dem_sim *s, const scenario *c, double *disp)
 {
     nc_error err;
-    double force[9];
+    double force[NDOF];
     dem_coupled_info info;
-    memset(disp, 0, 9 * sizeof *disp);
+    memset(disp, 0, 3 * (size_t)c->n_nodes * sizeof *disp);
     for (int k = 0; k < c->warmup; k++) {
         assert_int_equal(dem_sim_begin_step(s, &err), 0);
         assert_int_equal(dem_sim_solve_coupled(s, c->dt_step, disp, NULL, force, &info, &err), 0);
@@ -149,7 +159,7 @@ static void replay_differences(const dem_sim *s, dem_net_jacobian *jac, const do
 {
     nc_error err;
     for (int col = 0; col < nd; col++) {
-        double dp[9], fp[9], fm[9];
+        double dp[NDOF], fp[NDOF], fm[NDOF];
         memcpy(dp, disp, (size_t)nd * sizeof *dp);
         dp[col] = disp[col] + eps;
         assert_int_equal(dem_net_jacobian_replay(s, jac, dp, fp, 0, &err), 0);
@@ -165,7 +175,7 @@ static void replay_differences(const dem_sim *s, dem_net_jacobian *jac, const do
 static void check_mode(const scenario *c, int response, double eps, double *K_out, int *n_contacts)
 {
     dem_sim s;
-    double disp[9], force[9], replayed[9];
+    double disp[NDOF], force[NDOF], replayed[NDOF];
     dem_net_jacobian jac;
     dem_coupled_info info;
     nc_error err;
@@ -177,7 +187,7 @@ static void check_mode(const scenario *c, int response, double eps, double *K_ou
     assert_true(fscale > 0.0);
     assert_int_equal(dem_net_jacobian_replay(&s, &jac, disp, replayed, 0, &err), 0);
     for (int k = 0; k < nd; k++) assert_near(replayed[k], force[k], 1e-12 * fscale);
-    double K[81], fd[81];
+    double K[NDOF * NDOF], fd[NDOF * NDOF];
     dense(&jac, n, K);
     replay_differences(&s, &jac, disp, nd, eps, fd);
     double kmax = max_abs(K, (size_t)(nd * nd));
@@ -202,7 +212,7 @@ static void check_case(const scenario *c, double eps, double *K_out, int *n_cont
 static scenario base_case(void)
 {
     scenario c = {"hertz_mindlin", 0.1, 2500.0, 1e7, 0.5, 0.4, 1e7, 0.4, {0.3, 0.004, 0.0995},
-                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0, 0, NULL, 0};
+                  {0.2, 0.0, -0.5}, {0, 0, 0}, 1e-4, 1e-3, "", 2, {0.0, 0.0, -2e-4}, 0, 0, NULL, 0, 0};
     return c;
 }
 
@@ -386,6 +396,41 @@ static void test_two_edges(void **state)
     assert_true(fabs(K1[2 * 9 + 8]) > 0.0);
 }
 
+/* Two ropes through node 1, each bent there: the sphere touches the node once per rope. It
+ * slides in friction from the interior of edge 1-2 to beyond rope 0-1-2's bend within the step,
+ * so that rope's contact becomes a node contact without history beside rope 3-1-4's node
+ * contact with it: the replay must keep the two apart (they differ only in their strand). */
+static void test_crossing_node_per_rope(void **state)
+{
+    (void)state;
+    scenario c = base_case();
+    c.n_nodes = 5;
+    c.crossing = 1;
+    c.pos[0] = 1.008;
+    c.pos[1] = 0.01;
+    c.pos[2] = 0.099;
+    c.vel[0] = -3.0;
+    c.vel[2] = 0.0;
+    c.node_motion[2] = -2e-5; /* slower than the base case's, which ends the contact */
+    c.warmup = 1;
+    dem_sim s;
+    dem_net_jacobian jac;
+    double disp[NDOF], force[NDOF];
+    dem_coupled_info info;
+    solve_tested_step(&s, &c, DEM_JAC_FROZEN, &jac, disp, force, &info);
+    int edge_first = 0, two_nodes_last = 0;
+    for (size_t r = 0; r < jac.n_rec; r++) {
+        const dem_jac_record *x = &jac.rec[r];
+        if (x->sub == 0 && x->kind == DEM_CONTACT_NET_EDGE) edge_first = 1;
+        if (x->sub + 1 == (int32_t)info.substeps && x->kind == DEM_CONTACT_NET_NODE) two_nodes_last++;
+    }
+    dem_net_jacobian_free(&jac);
+    dem_sim_free(&s);
+    assert_true(edge_first);
+    assert_int_equal(two_nodes_last, 2);
+    check_case(&c, 1e-8, NULL, NULL);
+}
+
 /* Option off: the same step without the Jacobian gives the same bits. */
 static void test_off_unchanged(void **state)
 {
@@ -422,7 +467,7 @@ static void test_off_unchanged(void **state)
 static scenario granite(void)
 {
     scenario c = {"hertz_mindlin", 0.4, 2650.0, 3e10, 0.2, 0.5, 1e11, 0.5, {0.3, 0.0, 0.4002},
-                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0, 0, NULL, 0};
+                  {0.0, 0.0, -10.0}, {0, 0, 0}, 0.0, 1e-3, "", 2, {0.0, 0.0, -4e-3}, 0, 0, NULL, 0, 0};
     return c;
 }
 
@@ -509,7 +554,7 @@ static void check_shifted(const scenario *c, int response, double shift, double 
     int n = c->n_nodes, nd = 3 * n;
     for (int k = 2; k < nd; k += 3) disp[k] += shift;
     assert_int_equal(dem_net_jacobian_replay(&s, &jac, disp, NULL, 1, &err), 0);
-    double K[81], fd[81];
+    double K[NDOF * NDOF], fd[NDOF * NDOF];
     dense(&jac, n, K);
     replay_differences(&s, &jac, disp, nd, eps, fd);
     double kmax = max_abs(K, (size_t)(nd * nd));
@@ -580,6 +625,7 @@ int main(void)
         cmocka_unit_test(test_closes_within_step),
         cmocka_unit_test(test_separates_with_clamp),
         cmocka_unit_test(test_two_edges),
+        cmocka_unit_test(test_crossing_node_per_rope),
         cmocka_unit_test(test_off_unchanged),
         cmocka_unit_test(test_granite_on_steel),
         cmocka_unit_test(test_cluster),

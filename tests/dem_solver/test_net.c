@@ -1,6 +1,6 @@
 /* test_net — the coupled net wall (eqs. (13)–(15), consistent nodal loads): a sphere resting on
  * an edge loads both nodes with the lever rule and in total its weight; a shared vertex is one
- * contact; the rebound on an edge returns the requested restitution; a small sphere passes
+ * contact; two crossing ropes are touched once each, with the force continuous over the node; the rebound on an edge returns the requested restitution; a small sphere passes
  * between two edges and a large one does not; nodal forces are impulse-consistent; an edge that
  * sweeps from far away into a sphere within one coupling step is found in the sub-step it
  * reaches it; the free-flight check does not trust a net gap beyond near_distance_m. */
@@ -109,6 +109,72 @@ static void test_shared_vertex_counted_once(void **state)
         assert_near(-f[8], x * W, 1e-3 * W);
         assert_near(f[2], 0.0, 1e-9 * W);
         dem_sim_free(&s);
+    }
+}
+
+/* The vertical force (N) of one short coupling step (the sphere at rest, no gravity, no
+ * damping: it moves by 1e-11 m, and what the force does not depend on its speed) on a net of n nodes xyz and m edges, and the number of contacts. */
+static double static_press(double x, double y, double z, size_t n, const double *xyz, size_t m,
+                           const int32_t *edges, long *contacts)
+{
+    dem_sim s;
+    build_one(&s, x, y, z, 0.1, 0.0, 1.0, "hertz_mindlin", 0.0, 1e-7);
+    nc_error err;
+    assert_int_equal(dem_sim_set_interface(&s, n, NULL, xyz, m, edges, &err), 0);
+    double f[3 * 8], zero[3 * 8] = {0};
+    dem_coupled_info info;
+    assert_int_equal(dem_sim_begin_step(&s, &err), 0);
+    assert_int_equal(dem_sim_solve_coupled(&s, 1e-6, zero, zero, f, &info, &err), 0);
+    double fz = 0.0;
+    for (size_t k = 0; k < n; k++) fz += f[3 * k + 2];
+    *contacts = info.contacts;
+    dem_sim_free(&s);
+    return fz;
+}
+
+/* Two ropes crossing at node 2: a sphere pressing on the crossing touches each rope once,
+ * whether its centre is over the node, a hair off one rope line or off both (one node contact
+ * per node gave half the force over the node and on the rope lines: a jump of 2 over 1e-9 m);
+ * a rope bending at a node is one rope; the force of the crossing is twice one rope's; the end
+ * of a rope fastened to another adds no contact of its own. */
+static void test_crossing_ropes_each_touched_once(void **state)
+{
+    (void)state;
+    const double z = 0.099; /* 1 mm overlap */
+    double cross[15] = {-1, 0, 0, 1, 0, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0};
+    int32_t cross_edges[8] = {0, 2, 2, 1, 3, 2, 2, 4};
+    long c1, c;
+    double one = static_press(0.0, 0.0, z, 5, cross, 2, cross_edges, &c1); /* rope along x */
+    assert_int_equal(c1, 1);
+    assert_below(one, 0.0);
+    const double at[4][2] = {{0, 0}, {1e-9, 0}, {0, 1e-9}, {1e-9, 1e-9}};
+    for (int k = 0; k < 4; k++) {
+        double both = static_press(at[k][0], at[k][1], z, 5, cross, 4, cross_edges, &c);
+        print_message("crossing, centre at (%g, %g): %.9g N in %ld contacts (one rope %.9g N)\n",
+                      at[k][0], at[k][1], both, c, one);
+        assert_int_equal(c, 2);
+        assert_near_rel(both, 2.0 * one, 1e-6);
+    }
+    /* a rope bending by 90 degrees at node 1, the sphere beyond the bend: one contact, the
+     * force of one rope's end at the same distance */
+    double bend[9] = {1, 0, 0, 0, 0, 0, 0, 1, 0};
+    int32_t bend_edges[4] = {0, 1, 1, 2};
+    double d = 0.005, outside = static_press(-d, -d, z, 3, bend, 2, bend_edges, &c);
+    double end = static_press(-d, -d, z, 3, bend, 1, bend_edges, &c1);
+    assert_int_equal(c, 1);
+    assert_int_equal(c1, 1);
+    assert_near_rel(outside, end, 1e-12);
+    /* a rope (3-1) ending on a border rope (0-1-2) at node 1, the sphere beyond the border:
+     * the border rope alone is touched, over its node as beside it */
+    double tee[12] = {-1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0};
+    int32_t tee_edges[6] = {0, 1, 1, 2, 3, 1};
+    const double beyond[2] = {0.0, 0.003};
+    for (int k = 0; k < 2; k++) {
+        double with_end = static_press(beyond[k], -d, z, 4, tee, 3, tee_edges, &c);
+        double border = static_press(beyond[k], -d, z, 4, tee, 2, tee_edges, &c1);
+        assert_int_equal(c, 1);
+        assert_int_equal(c1, 1);
+        assert_near_rel(with_end, border, 1e-12);
     }
 }
 
@@ -404,6 +470,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rest_on_edge_lever_rule),
         cmocka_unit_test(test_shared_vertex_counted_once),
+        cmocka_unit_test(test_crossing_ropes_each_touched_once),
         cmocka_unit_test(test_rebound_on_edge),
         cmocka_unit_test(test_pass_between_edges),
         cmocka_unit_test(test_impulse_consistent),
