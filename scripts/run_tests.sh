@@ -5,6 +5,9 @@
 # - script tests: tests/<module>/test_*.sh and tests/<module>/test_*.py (each file counts once;
 #   exit 0 = pass, 77 = skipped). They get NC_BIN (programs), NC_BUILD_TESTS and NC_TMP.
 # FILTER (optional) is a substring a test path must contain.
+# The case tests (tests/cases/: whole coupled runs, most of the suite's time) run NC_TEST_JOBS
+# at a time (default: the number of cores), after every other test has run alone: those time
+# replies, stalls and signals and must not share the machine.
 set -u
 build_tests=${1:?build test dir}
 bin_dir=${2:?bin dir}
@@ -42,21 +45,71 @@ run_cmocka() {
   echo "$((SECONDS - start)) $prog" >>"$timings"
 }
 
-run_script() {
-  local script=$1 rc
-  echo "== $script"
-  local start=$SECONDS
-  local dir="$tmp_root/$(basename "$script").d"
+# Runs one script test in its own NC_TMP; its exit status.
+exec_script() {
+  local script=$1 dir="$tmp_root/$(basename "$script").d"
   mkdir -p "$dir"
   case "$script" in
     *.py) (cd "$root" && NC_TMP="$dir" timeout 1200 "$PYTHON" "$script") ;;
     *)    (cd "$root" && NC_TMP="$dir" timeout 1200 bash "$script") ;;
   esac
-  rc=$?
-  if [ $rc -eq 0 ]; then passed=$((passed + 1)); echo "-- PASS $script"
-  elif [ $rc -eq 77 ]; then skipped=$((skipped + 1)); echo "-- SKIP $script"
+}
+
+# Counts a finished script test: its exit status, seconds and name.
+count_script() {
+  local rc=$1 seconds=$2 script=$3
+  if [ "$rc" -eq 0 ]; then passed=$((passed + 1)); echo "-- PASS $script"
+  elif [ "$rc" -eq 77 ]; then skipped=$((skipped + 1)); echo "-- SKIP $script"
   else failed=$((failed + 1)); failed_names+=("$script"); echo "-- FAIL $script (exit $rc)"; fi
-  echo "$((SECONDS - start)) $script" >>"$timings"
+  echo "$seconds $script" >>"$timings"
+}
+
+run_script() {
+  local script=$1 rc
+  echo "== $script"
+  local start=$SECONDS
+  exec_script "$script"
+  rc=$?
+  count_script "$rc" "$((SECONDS - start))" "$script"
+}
+
+# Runs the given script tests up to max_jobs at a time, each one's output whole when it ends.
+pool_dir="$tmp_root/pool"
+pool_reported=0
+report_finished() {
+  local k
+  for ((k = pool_reported; k < pool_started; k++)); do
+    [ -f "$pool_dir/$k.rc" ] || break   # in start order, so the output keeps that order
+    echo "== ${pool_names[$k]}"
+    cat "$pool_dir/$k.log"
+    count_script "$(cat "$pool_dir/$k.rc")" "$(cat "$pool_dir/$k.seconds")" "${pool_names[$k]}"
+    pool_reported=$((k + 1))
+  done
+}
+run_pool() {
+  local max_jobs=$1 script running=0
+  shift
+  mkdir -p "$pool_dir"
+  pool_names=("$@")
+  pool_started=0
+  for script in "$@"; do
+    if [ "$running" -ge "$max_jobs" ]; then
+      wait -n
+      running=$((running - 1))
+      report_finished
+    fi
+    (
+      start=$SECONDS
+      exec_script "$script" >"$pool_dir/$pool_started.log" 2>&1
+      rc=$?
+      echo "$((SECONDS - start))" >"$pool_dir/$pool_started.seconds"
+      echo "$rc" >"$pool_dir/$pool_started.rc"
+    ) &
+    pool_started=$((pool_started + 1))
+    running=$((running + 1))
+  done
+  wait
+  report_finished
 }
 
 while IFS= read -r prog; do
@@ -64,10 +117,16 @@ while IFS= read -r prog; do
   run_cmocka "$prog"
 done < <(find "$build_tests" -type f -name 'test_*' ! -name '*.o' ! -name '*.d' -perm -u+x 2>/dev/null | sort)
 
+case_scripts=()
 while IFS= read -r script; do
   [ -n "$filter" ] && [[ "$script" != *"$filter"* ]] && continue
+  if [[ "$script" == tests/cases/* ]]; then case_scripts+=("$script"); continue; fi
   run_script "$script"
 done < <(cd "$root" && find tests -type f \( -name 'test_*.sh' -o -name 'test_*.py' \) | sort)
+
+case_jobs=${NC_TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
+[[ $case_jobs =~ ^[1-9][0-9]*$ ]] || { echo "NC_TEST_JOBS: expected a count >= 1, got '$case_jobs'"; exit 2; }
+[ ${#case_scripts[@]} -gt 0 ] && run_pool "$case_jobs" "${case_scripts[@]}"
 
 echo
 echo "slowest tests (seconds):"
