@@ -10,7 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define DEM_CK_FORMAT 2   /* 2: counts stored as 64-bit integers */
+#define DEM_CK_FORMAT 3   /* 2: counts stored as 64-bit integers; 3: a net node contact keyed by
+                             its rope (aux), one per rope through the node */
 
 /* The identity of a model: what must agree between the checkpoint and the run resuming it. */
 typedef struct identity {
