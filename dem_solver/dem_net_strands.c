@@ -37,31 +37,24 @@ int dem_net_find_strands(size_t n_nodes, const double *coords, size_t n_edges,
 {
     size_t n_ends = 2 * n_edges;
     size_t *first = calloc(n_nodes + 1, sizeof *first);
+    size_t *fill = malloc((n_nodes ? n_nodes : 1) * sizeof *fill);
     int32_t *ends = malloc((n_ends ? n_ends : 1) * sizeof *ends);
-    if (!first || !ends) {
-        free(first);
-        free(ends);
-        return nc_error_set(err, 1, "dem: out of memory for the net's strands (%zu edges)", n_edges);
-    }
+    char *paired = calloc(n_ends ? n_ends : 1, 1);
+    end_pair *pairs = NULL;
+    int rc = 0;
+    if (!first || !fill || !ends || !paired) goto out_of_memory;
     for (size_t k = 0; k < n_ends; k++) {
         first[(size_t)edges[k] + 1]++;
         strand[k] = (int32_t)(k / 2);
     }
-    for (size_t v = 0; v < n_nodes; v++) first[v + 1] += first[v];
-    size_t *fill = malloc((n_nodes ? n_nodes : 1) * sizeof *fill);
     size_t max_degree = 0;
-    if (fill)
-        for (size_t v = 0; v < n_nodes; v++) {
-            fill[v] = first[v];
-            size_t d = first[v + 1] - first[v];
-            if (d > max_degree) max_degree = d;
-        }
-    end_pair *pairs = fill ? malloc((max_degree * max_degree / 2 + 1) * sizeof *pairs) : NULL;
-    char *paired = fill ? calloc(n_ends ? n_ends : 1, 1) : NULL;
-    if (!fill || !pairs || !paired) {
-        free(first), free(ends), free(fill), free(pairs), free(paired);
-        return nc_error_set(err, 1, "dem: out of memory for the net's strands (%zu edges)", n_edges);
+    for (size_t v = 0; v < n_nodes; v++) {
+        first[v + 1] += first[v];
+        fill[v] = first[v];
+        if (first[v + 1] - first[v] > max_degree) max_degree = first[v + 1] - first[v];
     }
+    pairs = malloc((max_degree * max_degree / 2 + 1) * sizeof *pairs);
+    if (!pairs) goto out_of_memory;
     for (size_t k = 0; k < n_ends; k++) ends[fill[edges[k]]++] = (int32_t)k;
     for (size_t v = 0; v < n_nodes; v++) {
         size_t np = 0, with_length = 0;
@@ -93,6 +86,14 @@ int dem_net_find_strands(size_t n_nodes, const double *coords, size_t n_edges,
                 strand[ends[x]] = DEM_NET_ATTACHED_END(ends[x] / 2);
         }
     }
-    free(first), free(ends), free(fill), free(pairs), free(paired);
-    return 0;
+    goto done;
+out_of_memory:
+    rc = nc_error_set(err, 1, "dem: out of memory for the net's strands (%zu edges)", n_edges);
+done:
+    free(first);
+    free(fill);
+    free(ends);
+    free(paired);
+    free(pairs);
+    return rc;
 }

@@ -5,13 +5,21 @@
 # - script tests: tests/<module>/test_*.sh and tests/<module>/test_*.py (each file counts once;
 #   exit 0 = pass, 77 = skipped). They get NC_BIN (programs), NC_BUILD_TESTS and NC_TMP.
 # FILTER (optional) is a substring a test path must contain.
-# The case tests (tests/cases/: whole coupled runs, most of the suite's time) run NC_TEST_JOBS
-# at a time (default: the number of cores), after every other test has run alone: those time
-# replies, stalls and signals and must not share the machine.
+# The case tests (tests/cases/: whole coupled runs, most of the suite's time; their limits are
+# the launcher's, a 75 s stall and a 60 s reply) run NC_TEST_JOBS at a time (default: the number
+# of cores), after every other test has run alone: those time replies, stalls and signals in
+# seconds and must not share the machine.
 set -u
 build_tests=${1:?build test dir}
 bin_dir=${2:?bin dir}
 filter=${3:-${TEST_FILTER:-}}
+case_jobs=${NC_TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
+if ! [[ $case_jobs =~ ^[1-9][0-9]*$ ]]; then
+  echo "NC_TEST_JOBS: expected a count >= 1, got '$case_jobs'"
+  exit 2
+fi
+# wait -n -p (which job ended) needs bash 5.1; an older bash runs the case tests one at a time
+if ((BASH_VERSINFO[0] * 100 + BASH_VERSINFO[1] < 501)); then case_jobs=1; fi
 root=$(cd "$(dirname "$0")/.." && pwd)
 PYTHON=/usr/bin/python3   # Debian's interpreter, which has python3-zmq/h5py/numpy
 mkdir -p "$bin_dir"
@@ -21,6 +29,9 @@ export NC_ROOT=$root
 export PYTHON
 tmp_root=$(mktemp -d "${TMPDIR:-/tmp}/netcouple-tests.XXXXXX")
 trap 'rm -rf "$tmp_root"' EXIT
+pool_pids=()   # the case tests running in the background (run_pool)
+# Ctrl-C or a kill: the case tests running in the background go too, before their files do
+trap '[ ${#pool_pids[@]} -gt 0 ] && kill "${pool_pids[@]}" 2>/dev/null; wait; exit 130' INT TERM
 passed=0; failed=0; skipped=0
 failed_names=()
 timings="$tmp_root/timings"   # "seconds name" per test file, for the slowest-tests list
@@ -45,14 +56,19 @@ run_cmocka() {
   echo "$((SECONDS - start)) $prog" >>"$timings"
 }
 
-# Runs one script test in its own NC_TMP; its exit status.
+# A script test's own NC_TMP (made) and interpreter, into script_dir and script_interpreter.
+prepare_script() {
+  script_dir="$tmp_root/$(basename "$1").d"
+  mkdir -p "$script_dir"
+  script_interpreter=bash
+  case "$1" in *.py) script_interpreter=$PYTHON ;; esac
+}
+
+# Runs one script test; its exit status. The subshell becomes timeout(1), which runs the test
+# in a process group of its own and passes a SIGTERM on to all of it.
 exec_script() {
-  local script=$1 dir="$tmp_root/$(basename "$script").d"
-  mkdir -p "$dir"
-  case "$script" in
-    *.py) (cd "$root" && NC_TMP="$dir" timeout 1200 "$PYTHON" "$script") ;;
-    *)    (cd "$root" && NC_TMP="$dir" timeout 1200 bash "$script") ;;
-  esac
+  prepare_script "$1"
+  (cd "$root" && NC_TMP="$script_dir" exec timeout 1200 "$script_interpreter" "$1")
 }
 
 # Counts a finished script test: its exit status, seconds and name.
@@ -73,43 +89,42 @@ run_script() {
   count_script "$rc" "$((SECONDS - start))" "$script"
 }
 
-# Runs the given script tests up to max_jobs at a time, each one's output whole when it ends.
+# Runs the given script tests up to max_jobs at a time. Each one's output is printed whole, in
+# start order, once it and those started before it have ended. pool_pids: the running tests'
+# timeout(1) processes, which the INT/TERM trap stops.
 pool_dir="$tmp_root/pool"
-pool_reported=0
-report_finished() {
-  local k
-  for ((k = pool_reported; k < pool_started; k++)); do
-    [ -f "$pool_dir/$k.rc" ] || break   # in start order, so the output keeps that order
-    echo "== ${pool_names[$k]}"
-    cat "$pool_dir/$k.log"
-    count_script "$(cat "$pool_dir/$k.rc")" "$(cat "$pool_dir/$k.seconds")" "${pool_names[$k]}"
-    pool_reported=$((k + 1))
-  done
-}
 run_pool() {
-  local max_jobs=$1 script running=0
+  local max_jobs=$1
   shift
+  local names=("$@") n=$# next=0 reported=0 running=0 pid rc k
+  local -A index_of=()
+  local -a rc_of=() start_of=() seconds_of=()
   mkdir -p "$pool_dir"
-  pool_names=("$@")
-  pool_started=0
-  for script in "$@"; do
-    if [ "$running" -ge "$max_jobs" ]; then
-      wait -n
-      running=$((running - 1))
-      report_finished
+  while [ "$reported" -lt "$n" ]; do
+    if [ "$next" -lt "$n" ] && [ "$running" -lt "$max_jobs" ]; then
+      start_of[next]=$SECONDS
+      prepare_script "${names[next]}"
+      # the background job is timeout(1) itself: the trap's SIGTERM reaches the whole test
+      (cd "$root" && NC_TMP="$script_dir" \
+        exec timeout 1200 "$script_interpreter" "${names[next]}") >"$pool_dir/$next.log" 2>&1 &
+      index_of[$!]=$next
+      pool_pids+=("$!")
+      next=$((next + 1)); running=$((running + 1))
+      continue
     fi
-    (
-      start=$SECONDS
-      exec_script "$script" >"$pool_dir/$pool_started.log" 2>&1
-      rc=$?
-      echo "$((SECONDS - start))" >"$pool_dir/$pool_started.seconds"
-      echo "$rc" >"$pool_dir/$pool_started.rc"
-    ) &
-    pool_started=$((pool_started + 1))
-    running=$((running + 1))
+    wait -n -p pid
+    rc=$?
+    k=${index_of[$pid]}
+    rc_of[k]=$rc
+    seconds_of[k]=$((SECONDS - start_of[k]))
+    running=$((running - 1))
+    while [ "$reported" -lt "$next" ] && [ -n "${rc_of[reported]:-}" ]; do
+      echo "== ${names[reported]}"
+      cat "$pool_dir/$reported.log"
+      count_script "${rc_of[reported]}" "${seconds_of[reported]}" "${names[reported]}"
+      reported=$((reported + 1))
+    done
   done
-  wait
-  report_finished
 }
 
 while IFS= read -r prog; do
@@ -124,9 +139,11 @@ while IFS= read -r script; do
   run_script "$script"
 done < <(cd "$root" && find tests -type f \( -name 'test_*.sh' -o -name 'test_*.py' \) | sort)
 
-case_jobs=${NC_TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
-[[ $case_jobs =~ ^[1-9][0-9]*$ ]] || { echo "NC_TEST_JOBS: expected a count >= 1, got '$case_jobs'"; exit 2; }
-[ ${#case_scripts[@]} -gt 0 ] && run_pool "$case_jobs" "${case_scripts[@]}"
+if [ "$case_jobs" -gt 1 ]; then
+  [ ${#case_scripts[@]} -gt 0 ] && run_pool "$case_jobs" "${case_scripts[@]}"
+else
+  for script in "${case_scripts[@]}"; do run_script "$script"; done
+fi
 
 echo
 echo "slowest tests (seconds):"

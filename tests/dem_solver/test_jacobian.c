@@ -97,7 +97,8 @@ static void build(dem_sim *s, const scenario *c)
         n_edges = 4;
     }
     nc_error err;
-    assert_int_equal(dem_sim_set_interface(s, (size_t)c->n_nodes, NULL, xyz, n_edges, edges, &err), 0);
+    assert_int_equal(dem_sim_set_interface(s, (size_t)c->n_nodes, NULL, xyz, n_edges, edges, &err),
+                     0);
 }
 
 /* Runs the warm-up steps (net at rest) and begins the tested step. */

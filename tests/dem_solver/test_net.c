@@ -1,6 +1,7 @@
 /* test_net — the coupled net wall (eqs. (13)–(15), consistent nodal loads): a sphere resting on
  * an edge loads both nodes with the lever rule and in total its weight; a shared vertex is one
- * contact; two crossing ropes are touched once each, with the force continuous over the node; the rebound on an edge returns the requested restitution; a small sphere passes
+ * contact; two crossing ropes are touched once each, with the force continuous over the
+ * node; the rebound on an edge returns the requested restitution; a small sphere passes
  * between two edges and a large one does not; nodal forces are impulse-consistent; an edge that
  * sweeps from far away into a sphere within one coupling step is found in the sub-step it
  * reaches it; the free-flight check does not trust a net gap beyond near_distance_m. */
@@ -112,8 +113,9 @@ static void test_shared_vertex_counted_once(void **state)
     }
 }
 
-/* The vertical force (N) of one short coupling step (the sphere at rest, no gravity, no
- * damping: it moves by 1e-11 m, and what the force does not depend on its speed) on a net of n nodes xyz and m edges, and the number of contacts. */
+/* The vertical force (N) of one short coupling step on a net of n nodes xyz and m edges, and
+ * the number of contacts. The sphere starts at rest, without gravity or damping: it moves by
+ * about 1e-11 m in the step, and its force depends on its position alone. */
 static double static_press(double x, double y, double z, size_t n, const double *xyz, size_t m,
                            const int32_t *edges, long *contacts)
 {
