@@ -18,13 +18,15 @@
 #include "dem_model.h"
 #include "nc_error.h"
 
-/* Contact kinds (the key of a contact is (sphere i, kind, j), plus aux for meshes). */
+/* Contact kinds (the key of a contact is (sphere i, kind, j, aux); aux is 0 but for meshes and
+ * net nodes). */
 enum {
     DEM_CONTACT_SPHERE = 0, /* j: other sphere (j > i) */
     DEM_CONTACT_PLANE = 1,  /* j: plane index */
     DEM_CONTACT_MESH = 2,   /* j: global mesh feature id (face, edge or vertex) */
     DEM_CONTACT_NET_EDGE = 3, /* j: net edge (interior point) */
-    DEM_CONTACT_NET_NODE = 4  /* j: net node (vertex) */
+    DEM_CONTACT_NET_NODE = 4  /* j: net node (vertex), aux: the rope through it
+                                 (dem_net_strands.h), one contact per rope */
 };
 
 /* A list of contacts, ordered by sphere i (then by discovery order, which is deterministic).
@@ -34,7 +36,7 @@ enum {
 typedef struct dem_contacts {
     size_t n, cap;
     int32_t *i, *kind, *j;
-    int32_t *aux;          /* mesh index for mesh contacts */
+    int32_t *aux;          /* mesh index for mesh contacts, the rope for net node contacts */
     double *ft;            /* 3n: elastic tangential force on i (history) */
     double *kt_prev;       /* tangential stiffness of the previous step */
     double *fn_prev;       /* normal force of the previous step */

@@ -29,9 +29,9 @@ export NC_ROOT=$root
 export PYTHON
 tmp_root=$(mktemp -d "${TMPDIR:-/tmp}/netcouple-tests.XXXXXX")
 trap 'rm -rf "$tmp_root"' EXIT
-pool_pids=()   # the case tests running in the background (run_pool)
+declare -A pool_running=()   # the pids of the case tests running in the background (run_pool)
 # Ctrl-C or a kill: the case tests running in the background go too, before their files do
-trap '[ ${#pool_pids[@]} -gt 0 ] && kill "${pool_pids[@]}" 2>/dev/null; wait; exit 130' INT TERM
+trap '[ ${#pool_running[@]} -gt 0 ] && kill "${!pool_running[@]}" 2>/dev/null; wait; exit 130' INT TERM
 passed=0; failed=0; skipped=0
 failed_names=()
 timings="$tmp_root/timings"   # "seconds name" per test file, for the slowest-tests list
@@ -90,7 +90,7 @@ run_script() {
 }
 
 # Runs the given script tests up to max_jobs at a time. Each one's output is printed whole, in
-# start order, once it and those started before it have ended. pool_pids: the running tests'
+# start order, once it and those started before it have ended. pool_running: the running tests'
 # timeout(1) processes, which the INT/TERM trap stops.
 pool_dir="$tmp_root/pool"
 run_pool() {
@@ -108,13 +108,14 @@ run_pool() {
       (cd "$root" && NC_TMP="$script_dir" \
         exec timeout 1200 "$script_interpreter" "${names[next]}") >"$pool_dir/$next.log" 2>&1 &
       index_of[$!]=$next
-      pool_pids+=("$!")
+      pool_running[$!]=1
       next=$((next + 1)); running=$((running + 1))
       continue
     fi
     wait -n -p pid
     rc=$?
     k=${index_of[$pid]}
+    unset "pool_running[$pid]"
     rc_of[k]=$rc
     seconds_of[k]=$((SECONDS - start_of[k]))
     running=$((running - 1))
