@@ -1211,6 +1211,7 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
      * (coupler/README.md, "Interface Jacobian") */
     L->use_jacobian = cpl_loop_settings_jacobian_applies(&L->s) && fem->can_jacobian &&
                       dem->can_jacobian;
+    if (L->relax) cpl_relax_set_linearised(L->relax, L->use_jacobian);
     int rc = 0;
     if (L->resume_pending) {
         cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};

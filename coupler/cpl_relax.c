@@ -175,6 +175,11 @@ void cpl_relax_begin_step(cpl_relax *r)
     if (r->ops->begin_step) r->ops->begin_step(r->state);
 }
 
+void cpl_relax_set_linearised(cpl_relax *r, int on)
+{
+    if (r->ops->linearised) r->ops->linearised(r->state, on);
+}
+
 int cpl_relax_update(cpl_relax *r, const double *x_in, const double *x_out, double *x_next,
                      double *alpha, nc_error *err)
 {

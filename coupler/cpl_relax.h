@@ -86,6 +86,11 @@ typedef enum {
 } cpl_relax_forget_level;
 void cpl_relax_forget(cpl_relax *r, cpl_relax_forget_level level);
 
+/* Whether the FEM solves with the DEM's contact linearisation (the interface Jacobian), so
+ * that the produced value is Newton's step from the input (Aitken's newton_contraction acts
+ * only then). Off until set. */
+void cpl_relax_set_linearised(cpl_relax *r, int on);
+
 /* The step is accepted. x_in/x_out: the last pair when it was not passed to update (IQN
  * keeps its columns for the next steps), or NULL. Aitken keeps its last α regardless. */
 void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out);
@@ -95,8 +100,8 @@ void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out);
 struct nc_ckpt_table;
 void cpl_relax_checkpoint_entries(cpl_relax *r, struct nc_ckpt_table *t, const char *prefix);
 
-/* A method's diagnostic counter by name ("restarts" of Aitken; "columns",
- * "dropped_columns" of IQN-ILS); -1 when the method has no such counter. */
+/* A method's diagnostic counter by name ("restarts" and "newton_iterations" of Aitken;
+ * "columns", "dropped_columns" of IQN-ILS); -1 when the method has no such counter. */
 int cpl_relax_counter(const cpl_relax *r, const char *name, double *value);
 
 #endif

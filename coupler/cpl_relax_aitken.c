@@ -17,7 +17,16 @@
  * is locally constant on one side, eq. (34) gives α = 1 there whether or not the residual
  * grew, and the iteration would evaluate a point whose answer it already knows.
  *
- * Keys: first_iteration_cap, alpha_min, alpha_max, restart_growth. Counter: "restarts".
+ * Newton's regime (newton_contraction θ > 0, only while the FEM solves with the DEM's
+ * linearisation, cpl_relax_set_linearised): the produced value is then Newton's step from
+ * the input, and α = 1 is taken in the first iteration of a step (capped by first_cap) and
+ * whenever ‖r^k‖ ≤ θ ‖r^{k−1}‖; eq. (34) and the safeguard act otherwise. With α ≠ 1 a
+ * quadratically converging iteration keeps |1 − α| of each residual (eq. (34) gives
+ * α − 1 of the order of the last contraction), i.e. it converges linearly
+ * (docs/notes/interface_jacobian.md "Newton's regime").
+ *
+ * Keys: first_iteration_cap, alpha_min, alpha_max, restart_growth, newton_contraction.
+ * Counters: "restarts", "newton_iterations".
  */
 #include "cpl_relax_ops.h"
 
@@ -36,6 +45,7 @@ typedef struct aitken_settings {
     double alpha_max;
     double restart_growth;   /* back to the step's best iterate with half its α when the
                                 residual exceeds this × the best residual (0 = off) */
+    double newton_contraction; /* linearised: α = 1 while the residual contracts by this */
 } aitken_settings;
 _Static_assert(sizeof(aitken_settings) <= CPL_RELAX_PARAMS_SIZE,
                "aitken settings too large");
@@ -49,6 +59,10 @@ typedef struct aitken_state {
     int have_alpha;              /* α of a previous step exists */
     /* safeguard (restart_growth > 0): the iterate of the step with the smallest residual */
     double restart_growth;       /* back to the best iterate when ‖r‖ > this × ‖r_best‖; 0 off */
+    double newton_contraction;   /* linearised: α = 1 when ‖r^k‖ ≤ this × ‖r^{k−1}‖ */
+    int linearised;              /* the FEM solves with the DEM's linearisation */
+    long n_newton;               /* iterations relaxed with α = 1 by that rule since this
+                                    process started (diagnostics, not checkpointed) */
     double *x_best, *r_best;     /* [n] best input of this step and its residual */
     double *alpha_best;          /* [n_blocks] α applied from the best iterate */
     double best_norm2;           /* ‖r_best‖² */
@@ -60,7 +74,7 @@ typedef struct aitken_state {
 } aitken_state;
 
 static const char *const aitken_keys[] = {"first_iteration_cap", "alpha_min", "alpha_max",
-                                          "restart_growth", NULL};
+                                          "restart_growth", "newton_contraction", NULL};
 
 static aitken_settings settings_of(const cpl_relax_settings *s)
 {
@@ -72,7 +86,8 @@ static aitken_settings settings_of(const cpl_relax_settings *s)
 static void aitken_defaults(cpl_relax_settings *s)
 {
     const aitken_settings p = {.first_cap = 0.5, .alpha_min = 1e-6, .alpha_max = 2.0,
-                               .restart_growth = 4.0};   /* safeguard on (see above) */
+                               .restart_growth = 4.0,   /* safeguard on (see above) */
+                               .newton_contraction = 0.5};
     memcpy(s->params, &p, sizeof p);
 }
 
@@ -87,7 +102,9 @@ static int aitken_parse(cpl_relax_settings *s, const cJSON *obj, const char *whe
         nc_json_number_range_opt(obj, where, "alpha_max", p.alpha_max, -2.0, 10.0,
                                  &p.alpha_max, err) ||
         nc_json_number_range_opt(obj, where, "restart_growth", p.restart_growth, 0.0, 1e6,
-                                 &p.restart_growth, err))
+                                 &p.restart_growth, err) ||
+        nc_json_number_range_opt(obj, where, "newton_contraction", p.newton_contraction, 0.0,
+                                 0.999, &p.newton_contraction, err))
         return -1;
     memcpy(s->params, &p, sizeof p);
     return 0;
@@ -113,7 +130,8 @@ static int aitken_check(const cpl_relax_settings *s, const char *where, nc_error
 static int aitken_get(const cpl_relax_settings *s, const char *key, double *value)
 {
     const aitken_settings p = settings_of(s);
-    const double values[] = {p.first_cap, p.alpha_min, p.alpha_max, p.restart_growth};
+    const double values[] = {p.first_cap, p.alpha_min, p.alpha_max, p.restart_growth,
+                             p.newton_contraction};
     for (size_t i = 0; aitken_keys[i]; i++)
         if (strcmp(key, aitken_keys[i]) == 0) {
             *value = values[i];
@@ -152,6 +170,7 @@ static int aitken_create(void **state, const cpl_relax_settings *s, size_t n, si
     a->alpha_min = p.alpha_min;
     a->alpha_max = p.alpha_max;
     a->restart_growth = p.restart_growth;
+    a->newton_contraction = p.newton_contraction;
     a->alpha = calloc(n_blocks, sizeof *a->alpha);
     a->r_prev = calloc(n + 1, sizeof *a->r_prev);
     a->x_best = calloc(n + 1, sizeof *a->x_best);
@@ -240,10 +259,22 @@ static double aitken_update(void *state, const double *x_in, const double *x_out
         a->best_norm2 = norm2;
         a->have_best = 1;
     }
+    /* Newton's regime: with the linearisation the map's slope vanishes at its fixed point,
+     * and eq. (34)'s secant measures only its curvature there; an α ≠ 1 would leave
+     * |1 − α| of the residual instead of a multiple of its square */
+    const int rule = a->linearised && a->newton_contraction > 0.0;
+    double prev2 = 0.0;
+    if (rule && a->have_prev)
+        for (size_t i = 0; i < a->n; i++) prev2 += a->r_prev[i] * a->r_prev[i];
+    const int newton = rule && (!a->have_prev ||
+                                norm2 <= a->newton_contraction * a->newton_contraction * prev2);
+    if (newton) a->n_newton++;
     for (size_t b = 0; b < a->n_blocks; b++) {
         const size_t o = b * a->block, m = a->block;
         double alpha;
-        if (!a->have_prev) {
+        if (newton) {
+            alpha = a->have_prev ? 1.0 : fmin(1.0, a->first_cap);
+        } else if (!a->have_prev) {
             /* first iteration of a step: no previous residual in this step */
             if (!a->have_alpha) {
                 alpha = a->alpha0;
@@ -292,11 +323,18 @@ static void aitken_forget(void *state, cpl_relax_forget_level level)
     if (level == CPL_RELAX_FORGET_HISTORY) a->have_alpha = 0;   /* next step starts from α0 */
 }
 
+static void aitken_linearised(void *state, int on)
+{
+    aitken_state *a = state;
+    a->linearised = on;
+}
+
 static int aitken_counter(const void *state, const char *name, double *value)
 {
     const aitken_state *a = state;
-    if (strcmp(name, "restarts") != 0) return -1;
-    *value = (double)a->n_restarts;
+    if (strcmp(name, "restarts") == 0) *value = (double)a->n_restarts;
+    else if (strcmp(name, "newton_iterations") == 0) *value = (double)a->n_newton;
+    else return -1;
     return 0;
 }
 
@@ -327,6 +365,7 @@ const cpl_relax_ops cpl_relax_aitken = {
     .begin_step = aitken_begin_step,
     .update = aitken_update,
     .forget = aitken_forget,
+    .linearised = aitken_linearised,
     .counter = aitken_counter,
     .checkpoint = aitken_checkpoint,
     .free = aitken_free,

@@ -36,6 +36,9 @@ struct cpl_relax_ops {
      * x_out); returns the α applied (block 0) or NAN. The caller checks finiteness. */
     double (*update)(void *state, const double *x_in, const double *x_out, double *x_next);
     void (*forget)(void *state, cpl_relax_forget_level level);   /* optional */
+    /* on: the FEM solves with the DEM's linearisation, so an iteration is Newton's step on
+     * the interface (set before the first step; optional) */
+    void (*linearised)(void *state, int on);
     /* step accepted; x_in/x_out the last pair not passed to update, or both NULL (optional) */
     void (*end_step)(void *state, const double *x_in, const double *x_out);
     int (*counter)(const void *state, const char *name, double *value);   /* optional */

@@ -1065,29 +1065,33 @@ def interface_mismatch_pct(run_dir):
         return float(np.array(f["/energy/interface_created"]).sum() / inp.max() * 100) if inp.max() > 0 else float("nan")
 
 
-def study_work(out, jobs, end_time):
-    """Jacobian + Aitken with eq. (35) against the work test (work_tolerance), 8 cases x COR x dt."""
+def compare_variants(out, jobs, end_time, variants, table_name):
+    """Jacobian + Aitken as in the Jacobian study, each of `variants` (name, label, --set list)
+    on top, 8 cases x COR x dt; a table of the iteration counts, the interface mismatch and
+    each variant's peak against the first's, written to out/table_name."""
     rows = {}
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         end = end_time or end
         dt0 = case_dt_of(case)
-        variants = cor_dt_variants(dt0, end, cor_keys, five, extra, WORK_VARIANTS, JACOBIAN_VARIANTS[2][2])
-        print("  %s: %d runs to %g s, cap %d s" % (case, len(variants), end, cap))
-        for label, (run_dir, seconds, ok) in run_all(case, variants, os.path.join(out, case), jobs, None, cap).items():
+        runs = cor_dt_variants(dt0, end, cor_keys, five, extra, variants, JACOBIAN_VARIANTS[2][2])
+        print("  %s: %d runs to %g s, cap %d s" % (case, len(runs), end, cap))
+        for label, (run_dir, seconds, ok) in run_all(case, runs, os.path.join(out, case), jobs, None, cap).items():
             r = jacobian_metrics(run_dir, seconds, node, comp)
             if "error" not in r:
                 r["mismatch_pct"] = interface_mismatch_pct(run_dir)
             rows[(case, label)] = r
-    lines = ["| case | COR | Δt | " + " | ".join(v[1] for v in WORK_VARIANTS) + " | peak: work against eq. (35) |",
-             "|---|---|---|" + "---|" * (len(WORK_VARIANTS) + 1)]
-    meets, reliable = ({v[0]: 0 for v in WORK_VARIANTS} for _ in range(2))
-    averages = {v[0]: [] for v in WORK_VARIANTS}
-    all_averages = {v[0]: [] for v in WORK_VARIANTS}
+    first = variants[0]
+    lines = ["| case | COR | Δt | " + " | ".join(v[1] for v in variants) + " | " +
+             " | ".join("peak: %s against %s" % (v[1], first[1]) for v in variants[1:]) + " |",
+             "|---|---|---|" + "---|" * (2 * len(variants) - 1)]
+    meets, reliable = ({v[0]: 0 for v in variants} for _ in range(2))
+    averages = {v[0]: [] for v in variants}
+    all_averages = {v[0]: [] for v in variants}
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         for cor in JACOBIAN_CORS:
             for factor in ((1, 5) if five else (1,)):
                 cells, runs = [], {}
-                for name, _, _ in WORK_VARIANTS:
+                for name, _, _ in variants:
                     r = runs[name] = rows.get((case, "%s_cor%s_dt%dx" % (name, cor, factor)), {"error": "missing"})
                     if "error" in r:
                         cells.append("no results")
@@ -1100,11 +1104,12 @@ def study_work(out, jobs, end_time):
                     cell = "%s %.2f/%d r%d%s mismatch %+.2f %%" % (jacobian_status(r), r["it_avg"], r["it_max"],
                                                                    r["rejected"], tries_note(r), r["mismatch_pct"])
                     cells.append("**%s**" % cell if ok else cell)
-                p, w = runs["paper"], runs["work"]
-                peak = ("%+.2f %%" % ((w["peak"] - p["peak"]) / p["peak"] * 100)
-                        if "error" not in p and "error" not in w and p.get("peak", 0) > 0 else "-")
-                lines.append("| %s | %s | %s | %s | %s |" % (case, cor, "case" if factor == 1 else "5×",
-                                                             " | ".join(cells), peak))
+                p = runs[first[0]]
+                for name, _, _ in variants[1:]:
+                    w = runs[name]
+                    cells.append("%+.2f %%" % ((w["peak"] - p["peak"]) / p["peak"] * 100)
+                                 if "error" not in p and "error" not in w and p.get("peak", 0) > 0 else "-")
+                lines.append("| %s | %s | %s | %s |" % (case, cor, "case" if factor == 1 else "5×", " | ".join(cells)))
     lines.append("")
     lines.append("Cell: exit status · iterations per contact step, average/largest, of the accepted tries · "
                  "r rejected tries, and the average/largest with their iterations counted too · "
@@ -1112,7 +1117,7 @@ def study_work(out, jobs, end_time):
                  "**bold**: ≤ %g and ≤ %d counting every try."
                  % (TARGET_AVG, TARGET_MAX))
     lines.append("")
-    for name, label, _ in WORK_VARIANTS:
+    for name, label, _ in variants:
         n = len(averages[name])
         lines.append("- %s: %d of %d runs reliable; %d of %d within ≤ %g on average and ≤ %d at most; "
                      "%.2f iterations per contact step (%.2f counting every try), the mean of the runs' averages"
@@ -1121,9 +1126,35 @@ def study_work(out, jobs, end_time):
                         float(np.mean(all_averages[name])) if n else float("nan")))
     text = "\n".join(lines) + "\n"
     print(text)
-    with open(os.path.join(out, "work_table.md"), "w") as f:
+    with open(os.path.join(out, table_name), "w") as f:
         f.write(text)
-    print("  wrote", os.path.join(out, "work_table.md"))
+    print("  wrote", os.path.join(out, table_name))
+
+
+def study_work(out, jobs, end_time):
+    """Jacobian + Aitken with eq. (35) against the work test (work_tolerance), 8 cases x COR x dt."""
+    compare_variants(out, jobs, end_time, WORK_VARIANTS, "work_table.md")
+
+
+NEWTON_VARIANTS = [("secant", "eq. (34) throughout", ["coupler.relaxation.newton_contraction=0"]),
+                   ("theta0.2", "newton_contraction 0.2", ["coupler.relaxation.newton_contraction=0.2"]),
+                   ("theta0.5", "newton_contraction 0.5", ["coupler.relaxation.newton_contraction=0.5"]),
+                   ("newton", "plain Newton", ["coupler.relaxation.method=none"])]
+
+
+def study_newton(out, jobs, end_time):
+    """Jacobian + Aitken: eq. (34) throughout, newton_contraction 0.2 and 0.5, plain Newton; 8 cases x COR x dt."""
+    compare_variants(out, jobs, end_time, NEWTON_VARIANTS, "newton_table.md")
+
+
+TOLERANCE_VARIANTS = [("tol1e-6", "tolerance 1e-6", ["coupler.tolerance=1e-6"]),
+                      ("tol1e-5", "tolerance 1e-5", ["coupler.tolerance=1e-5"]),
+                      ("tol1e-4", "tolerance 1e-4", ["coupler.tolerance=1e-4"])]
+
+
+def study_tolerance(out, jobs, end_time):
+    """Jacobian + Aitken with eq. (35) at the interface tolerance 1e-6, 1e-5 and 1e-4; 8 cases x COR x dt."""
+    compare_variants(out, jobs, end_time, TOLERANCE_VARIANTS, "tolerance_table.md")
 
 
 STUDIES = {
@@ -1138,6 +1169,8 @@ STUDIES = {
     "jacobian": study_jacobian,
     "speed": study_speed,
     "work": study_work,
+    "newton": study_newton,
+    "tolerance": study_tolerance,
 }
 
 

@@ -148,6 +148,10 @@ static void test_bad_input_messages(void **state)
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"relaxation\": {\"method\": \"aitken\", \"restart_growth\": 0.5}}",
                  "restart_growth");
+    /* a contraction of 1 or more would take α = 1 on a residual that does not shrink */
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxation\": {\"method\": \"aitken\", \"newton_contraction\": 1}}",
+                 "newton_contraction");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"fem\": {\"endpoint\": \"a\", \"endpoint_file\": \"b\"}}", "not both");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1, \"max_iterations\": 0}",

@@ -1,6 +1,7 @@
 /* Unit tests of the relaxation methods on fixed-point problems x = H(x) with known answers:
  * constant (31)–(33), Aitken (34) with first-iteration cap, clipping and zero-denominator
- * guard, IQN-ILS (exact for an affine map after at most n + 1 updates), QR filter, reuse. */
+ * guard, its safeguard and Newton's regime, IQN-ILS (exact for an affine map after at most
+ * n + 1 updates), QR filter, reuse. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -262,6 +263,84 @@ static void test_aitken_restart_inactive_when_converging(void **state)
     }
 }
 
+/* Aitken from the full step (α 1, first_iteration_cap 1) with newton_contraction θ. */
+static cpl_relax *make_aitken_newton(double theta)
+{
+    cpl_relax_settings s;
+    nc_error err;
+    cpl_relax_settings_default(&s);
+    assert_int_equal(cpl_relax_settings_select(&s, "aitken", &err), 0);
+    s.alpha = 1.0;
+    set(&s, "first_iteration_cap", 1.0);
+    set(&s, "newton_contraction", theta);
+    return create(&s, 1, 1);
+}
+
+/* Newton's map of f(x) = x³ + x − 10 (root 2): H(x) = x − f(x)/f'(x), what the FEM's answer
+ * is with the interface Jacobian. Aitken from the full step with contraction θ, the
+ * linearisation flagged or not; the number of updates until |r| < 1e-12, the ratio
+ * |r_k| / |r_{k−1}|² of the last update and the updates the rule relaxed with α = 1. */
+static int newton_map_updates(double theta, int linearised, double *last_ratio, long *newton)
+{
+    cpl_relax *r = make_aitken_newton(theta);
+    cpl_relax_set_linearised(r, linearised);
+    cpl_relax_begin_step(r);
+    double x = 3.0, r_prev = NAN;
+    int k = 0;
+    for (; k < 50; k++) {
+        const double out = x - (x * x * x + x - 10.0) / (3.0 * x * x + 1.0);
+        const double res = fabs(out - x);
+        if (res < 1e-12) break;
+        if (k > 0) *last_ratio = res / (r_prev * r_prev);
+        r_prev = res;
+        update(r, &x, &out, &x);
+    }
+    *newton = (long)counter(r, "newton_iterations");
+    cpl_relax_free(r);
+    return k;
+}
+
+/* Newton's regime: on Newton's map eq. (34) makes the convergence merely superlinear (each
+ * α − 1 is of the order of the last contraction and keeps that share of the residual);
+ * with the linearisation flagged and newton_contraction 0.5 every update takes α = 1 and the
+ * convergence is quadratic: |r_k| ≤ |r_{k−1}|² (Newton's constant f''/2f' is 0.46 at the
+ * root). Without the flag (the plain exchange) the rule does not act: the same as θ = 0. */
+static void test_aitken_newton_regime(void **state)
+{
+    (void)state;
+    double ratio_newton = NAN, ratio_secant = NAN, ratio_off = NAN;
+    long newton_on, newton_zero, newton_off;
+    const int on = newton_map_updates(0.5, 1, &ratio_newton, &newton_on);
+    const int zero = newton_map_updates(0.0, 1, &ratio_secant, &newton_zero);
+    const int off = newton_map_updates(0.5, 0, &ratio_off, &newton_off);
+    print_message("Newton's map x^3 + x - 10: %d updates with the rule (last |r_k|/|r_k-1|^2 "
+                  "%.3g), %d with eq. (34) (%.3g)\n", on, ratio_newton, zero, ratio_secant);
+    assert_true(on < zero);
+    assert_true(ratio_newton <= 1.0);
+    assert_int_equal(newton_on, on);      /* every update took α = 1 */
+    assert_int_equal(newton_zero, 0);
+    assert_int_equal(off, zero);
+    assert_int_equal(newton_off, 0);
+}
+
+/* Where the residual does not contract by θ the rule steps aside: on the affine map
+ * H(x) = −0.9 x + 1.9 (x* = 1; the plain iteration's residual shrinks by only 0.9), the
+ * first update takes α = 1, the second eq. (34)'s exact α = 1/1.9, which lands on x*. */
+static void test_aitken_newton_rule_steps_aside(void **state)
+{
+    (void)state;
+    cpl_relax *r = make_aitken_newton(0.5);
+    cpl_relax_set_linearised(r, 1);
+    cpl_relax_begin_step(r);
+    double x = 0.0, out = -0.9 * x + 1.9;
+    assert_near(update(r, &x, &out, &x), 1.0, 0.0);
+    out = -0.9 * x + 1.9;
+    assert_near(update(r, &x, &out, &x), 1.0 / 1.9, 1e-14);
+    assert_near(x, 1.0, 1e-14);
+    assert_int_equal((long)counter(r, "newton_iterations"), 1);
+    cpl_relax_free(r);
+}
+
 /* Affine map H(x) = A x + b with a non-symmetric A of spectral radius > 1 (plain iteration
  * diverges). IQN-ILS is exact for affine maps once it has n independent columns: the
  * (n+1)-th update (evaluation n + 2 checks it) gives x* to round-off (1e-9 relative). */
@@ -405,6 +484,8 @@ int main(void)
         cmocka_unit_test(test_aitken_restart_breaks_onoff_cycle),
         cmocka_unit_test(test_aitken_restart_inactive_when_converging),
         cmocka_unit_test(test_aitken_restart_on_repeated_input),
+        cmocka_unit_test(test_aitken_newton_regime),
+        cmocka_unit_test(test_aitken_newton_rule_steps_aside),
         cmocka_unit_test(test_iqn_linear_in_n_plus_1_updates),
         cmocka_unit_test(test_iqn_filter_drops_dependent_columns),
         cmocka_unit_test(test_iqn_reuse_previous_steps),
