@@ -100,7 +100,7 @@ void cpl_relax_end_step(cpl_relax *r, const double *x_in, const double *x_out);
 struct nc_ckpt_table;
 void cpl_relax_checkpoint_entries(cpl_relax *r, struct nc_ckpt_table *t, const char *prefix);
 
-/* A method's diagnostic counter by name ("restarts" and "newton_iterations" of Aitken;
+/* A method's diagnostic counter by name ("restarts" and "full_steps" of Aitken;
  * "columns", "dropped_columns" of IQN-ILS); -1 when the method has no such counter. */
 int cpl_relax_counter(const cpl_relax *r, const char *name, double *value);
 

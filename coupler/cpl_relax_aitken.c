@@ -19,14 +19,16 @@
  *
  * Newton's regime (newton_contraction θ > 0, only while the FEM solves with the DEM's
  * linearisation, cpl_relax_set_linearised): the produced value is then Newton's step from
- * the input, and α = 1 is taken in the first iteration of a step (capped by first_cap) and
- * whenever ‖r^k‖ ≤ θ ‖r^{k−1}‖; eq. (34) and the safeguard act otherwise. With α ≠ 1 a
- * quadratically converging iteration keeps |1 − α| of each residual (eq. (34) gives
- * α − 1 of the order of the last contraction), i.e. it converges linearly
+ * the input, and α = 1 is taken whenever ‖r^k‖ ≤ θ ‖r^{k−1}‖, and min(1, first_cap) in an
+ * iteration without a previous residual (a step's first, or the first after the loop made
+ * the relaxation forget its pair: contact backtracking) instead of α0 or the previous α;
+ * eq. (34) and the safeguard act otherwise (after a restart r^{k−1} is the best residual).
+ * With α ≠ 1 a quadratically converging iteration keeps |1 − α| of each residual (eq. (34)
+ * gives α − 1 of the order of the last contraction), i.e. it converges linearly
  * (docs/notes/interface_jacobian.md "Newton's regime").
  *
  * Keys: first_iteration_cap, alpha_min, alpha_max, restart_growth, newton_contraction.
- * Counters: "restarts", "newton_iterations".
+ * Counters: "restarts", "full_steps".
  */
 #include "cpl_relax_ops.h"
 
@@ -61,8 +63,9 @@ typedef struct aitken_state {
     double restart_growth;       /* back to the best iterate when ‖r‖ > this × ‖r_best‖; 0 off */
     double newton_contraction;   /* linearised: α = 1 when ‖r^k‖ ≤ this × ‖r^{k−1}‖ */
     int linearised;              /* the FEM solves with the DEM's linearisation */
-    long n_newton;               /* iterations relaxed with α = 1 by that rule since this
-                                    process started (diagnostics, not checkpointed) */
+    long n_full;                 /* iterations whose α that rule chose, before clipping and
+                                    the repeat test, since this process started
+                                    (diagnostics, not checkpointed) */
     double *x_best, *r_best;     /* [n] best input of this step and its residual */
     double *alpha_best;          /* [n_blocks] α applied from the best iterate */
     double best_norm2;           /* ‖r_best‖² */
@@ -104,7 +107,7 @@ static int aitken_parse(cpl_relax_settings *s, const cJSON *obj, const char *whe
         nc_json_number_range_opt(obj, where, "restart_growth", p.restart_growth, 0.0, 1e6,
                                  &p.restart_growth, err) ||
         nc_json_number_range_opt(obj, where, "newton_contraction", p.newton_contraction, 0.0,
-                                 0.999, &p.newton_contraction, err))
+                                 1.0, &p.newton_contraction, err))
         return -1;
     memcpy(s->params, &p, sizeof p);
     return 0;
@@ -121,6 +124,10 @@ static int aitken_check(const cpl_relax_settings *s, const char *where, nc_error
     if (!(p.alpha_min < p.alpha_max))
         return nc_error_set(err, 1, "%s: alpha_min (%g) must be smaller than alpha_max (%g)",
                             where, p.alpha_min, p.alpha_max);
+    /* at 1 or more it would take α = 1 on a residual that does not shrink */
+    if (!(p.newton_contraction < 1.0))
+        return nc_error_set(err, 1, "%s: newton_contraction: expected a number in [0, 1), got %g",
+                            where, p.newton_contraction);
     if (!(p.first_cap > 0.0))
         return nc_error_set(err, 1, "%s: first_iteration_cap must be > 0, got %g", where,
                             p.first_cap);
@@ -268,7 +275,7 @@ static double aitken_update(void *state, const double *x_in, const double *x_out
         for (size_t i = 0; i < a->n; i++) prev2 += a->r_prev[i] * a->r_prev[i];
     const int newton = rule && (!a->have_prev ||
                                 norm2 <= a->newton_contraction * a->newton_contraction * prev2);
-    if (newton) a->n_newton++;
+    if (newton) a->n_full++;
     for (size_t b = 0; b < a->n_blocks; b++) {
         const size_t o = b * a->block, m = a->block;
         double alpha;
@@ -333,7 +340,7 @@ static int aitken_counter(const void *state, const char *name, double *value)
 {
     const aitken_state *a = state;
     if (strcmp(name, "restarts") == 0) *value = (double)a->n_restarts;
-    else if (strcmp(name, "newton_iterations") == 0) *value = (double)a->n_newton;
+    else if (strcmp(name, "full_steps") == 0) *value = (double)a->n_full;
     else return -1;
     return 0;
 }

@@ -43,9 +43,9 @@ struct cpl_relax_ops {
     void (*end_step)(void *state, const double *x_in, const double *x_out);
     int (*counter)(const void *state, const char *name, double *value);   /* optional */
     /* checkpoint/resume: adds every part of the state the next steps depend on (history
-     * carried across steps, counters) to the table under `prefix`; the same entries are
-     * saved and loaded, so a resumed run continues bit for bit (optional: no state kept
-     * between steps) */
+     * carried across steps, the counters a run reports) to the table under `prefix`; the
+     * same entries are saved and loaded, so a resumed run continues bit for bit (optional:
+     * no state kept between steps) */
     void (*checkpoint)(void *state, cpl_ckpt_table *t, const char *prefix);
     void (*free)(void *state);
 };

@@ -295,7 +295,7 @@ static int newton_map_updates(double theta, int linearised, double *last_ratio, 
         r_prev = res;
         update(r, &x, &out, &x);
     }
-    *newton = (long)counter(r, "newton_iterations");
+    *newton = (long)counter(r, "full_steps");
     cpl_relax_free(r);
     return k;
 }
@@ -317,28 +317,39 @@ static void test_aitken_newton_regime(void **state)
                   "%.3g), %d with eq. (34) (%.3g)\n", on, ratio_newton, zero, ratio_secant);
     assert_true(on < zero);
     assert_true(ratio_newton <= 1.0);
-    assert_int_equal(newton_on, on);      /* every update took α = 1 */
+    assert_int_equal(newton_on, on);      /* the rule chose every update's α */
     assert_int_equal(newton_zero, 0);
     assert_int_equal(off, zero);
     assert_int_equal(newton_off, 0);
 }
 
-/* Where the residual does not contract by θ the rule steps aside: on the affine map
- * H(x) = −0.9 x + 1.9 (x* = 1; the plain iteration's residual shrinks by only 0.9), the
- * first update takes α = 1, the second eq. (34)'s exact α = 1/1.9, which lands on x*. */
+/* The rule against θ = 0.5 on the affine maps H(x) = s x + 1 − s (x* = 1): the first update
+ * takes α = 1 (from x = 0 to 1 − s), whose residual is then s times the first. Where |s| > θ (0.9,
+ * 0.6: a θ compared without its square, 0.71, would take 0.6 for a contraction) the rule
+ * steps aside and eq. (34)'s exact α = 1/(1 − s) lands on x*; where |s| ≤ θ (0.4) α = 1. */
 static void test_aitken_newton_rule_steps_aside(void **state)
 {
     (void)state;
-    cpl_relax *r = make_aitken_newton(0.5);
-    cpl_relax_set_linearised(r, 1);
-    cpl_relax_begin_step(r);
-    double x = 0.0, out = -0.9 * x + 1.9;
-    assert_near(update(r, &x, &out, &x), 1.0, 0.0);
-    out = -0.9 * x + 1.9;
-    assert_near(update(r, &x, &out, &x), 1.0 / 1.9, 1e-14);
-    assert_near(x, 1.0, 1e-14);
-    assert_int_equal((long)counter(r, "newton_iterations"), 1);
-    cpl_relax_free(r);
+    const double slopes[] = {-0.9, -0.6, -0.4};
+    for (size_t i = 0; i < sizeof slopes / sizeof *slopes; i++) {
+        const double s = slopes[i];
+        cpl_relax *r = make_aitken_newton(0.5);
+        cpl_relax_set_linearised(r, 1);
+        cpl_relax_begin_step(r);
+        double x = 0.0, out = s * x + 1.0 - s;
+        assert_near(update(r, &x, &out, &x), 1.0, 0.0);
+        out = s * x + 1.0 - s;
+        const double alpha = update(r, &x, &out, &x);
+        if (fabs(s) > 0.5) {
+            assert_near(alpha, 1.0 / (1.0 - s), 1e-14);
+            assert_near(x, 1.0, 1e-14);
+            assert_int_equal((long)counter(r, "full_steps"), 1);
+        } else {
+            assert_near(alpha, 1.0, 0.0);
+            assert_int_equal((long)counter(r, "full_steps"), 2);
+        }
+        cpl_relax_free(r);
+    }
 }
 
 /* Affine map H(x) = A x + b with a non-symmetric A of spectral radius > 1 (plain iteration
