@@ -8,7 +8,8 @@
  * The methods (one file each, see cpl_relax_ops.h; the list is cpl_relax_methods.c):
  *   none      x^{k+1} = x̃^k                                        (cpl_relax_none.c)
  *   constant  x^{k+1} = x^k + α r^k,  r^k = x̃^k − x^k, eqs. (31)–(33) (cpl_relax_constant.c)
- *   aitken    as constant with α^k of eq. (34), one α per block      (cpl_relax_aitken.c)
+ *   aitken    as constant with α^k of eq. (34), one α per block; α = 1 while the residual
+ *             contracts when the FEM solves with the interface Jacobian (cpl_relax_aitken.c)
  *   iqn-ils   x^{k+1} = x̃^k + W c,  c = argmin ‖V c + r^k‖           (cpl_relax_iqn.c)
  * Lifecycle per step: begin_step, update for each non-final iteration, end_step.
  *

@@ -42,9 +42,9 @@ static cpl_relax *make(const char *method, double alpha, size_t n, size_t blocks
     return create(&s, n, blocks);
 }
 
-/* Aitken with α0, first-iteration cap, clipping range and safeguard. */
-static cpl_relax *make_aitken(double alpha0, double first_cap, double alpha_min,
-                              double alpha_max, double restart_growth, size_t n, size_t blocks)
+/* Aitken's settings with α0, first-iteration cap, clipping range and safeguard. */
+static cpl_relax_settings aitken_settings(double alpha0, double first_cap, double alpha_min,
+                                          double alpha_max, double restart_growth)
 {
     cpl_relax_settings s;
     nc_error err;
@@ -55,6 +55,14 @@ static cpl_relax *make_aitken(double alpha0, double first_cap, double alpha_min,
     set(&s, "alpha_min", alpha_min);
     set(&s, "alpha_max", alpha_max);
     set(&s, "restart_growth", restart_growth);
+    return s;
+}
+
+static cpl_relax *make_aitken(double alpha0, double first_cap, double alpha_min,
+                              double alpha_max, double restart_growth, size_t n, size_t blocks)
+{
+    const cpl_relax_settings s = aitken_settings(alpha0, first_cap, alpha_min, alpha_max,
+                                                 restart_growth);
     return create(&s, n, blocks);
 }
 
@@ -263,15 +271,11 @@ static void test_aitken_restart_inactive_when_converging(void **state)
     }
 }
 
-/* Aitken from the full step (α 1, first_iteration_cap 1) with newton_contraction θ. */
+/* Aitken from the full step (α 1, first_iteration_cap 1, defaults otherwise) with
+ * newton_contraction θ. */
 static cpl_relax *make_aitken_newton(double theta)
 {
-    cpl_relax_settings s;
-    nc_error err;
-    cpl_relax_settings_default(&s);
-    assert_int_equal(cpl_relax_settings_select(&s, "aitken", &err), 0);
-    s.alpha = 1.0;
-    set(&s, "first_iteration_cap", 1.0);
+    cpl_relax_settings s = aitken_settings(1.0, 1.0, 1e-6, 2.0, 4.0);
     set(&s, "newton_contraction", theta);
     return create(&s, 1, 1);
 }
