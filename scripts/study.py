@@ -7,11 +7,15 @@
 Each study runs a case several times through scripts/run_case.sh with --set overrides (no
 copied case folders), at most N runs at a time (default 2, one per core), then draws the
 paper's figure(s) as PNG into DIR/STUDY/ and prints a summary table. Runs already finished
-in DIR are reused, so an interrupted study continues where it stopped (delete DIR/STUDY to
-start afresh). --end-time shortens every run (quick looks, tests).
+in DIR are reused, so an interrupted study continues where it stopped; a run is reused only
+when its stamp (the programs' and the case folder's contents, the --set list) is the one it
+would have now, else it is run again (delete DIR/STUDY to start afresh). --end-time shortens
+every run (quick looks, tests).
 """
 import argparse
 import concurrent.futures
+import functools
+import hashlib
 import json
 import os
 import shutil
@@ -32,20 +36,65 @@ sys.path.insert(0, HERE)
 import nc_results  # noqa: E402
 
 POINT_A = 1  # node at x = 1 m in the cable cases
+PROGRAMS = ("coupler", "fem_solver", "dem_solver", "netcouple-set")  # what run_case.sh runs
+
+
+def _digest_files(paths):
+    h = hashlib.sha256()
+    for path in paths:
+        h.update(os.path.relpath(path, ROOT).encode() + b"\0")
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def code_digest(case):
+    """Digest of what a run of `case` computes with: the programs (from $NC_BIN, as
+    run_case.sh takes them), the launcher and every file of the case folder."""
+    bin_dir = os.environ.get("NC_BIN", os.path.join(ROOT, "bin"))
+    paths = [os.path.join(bin_dir, p) for p in PROGRAMS] + [os.path.join(HERE, "run_case.sh")]
+    case_dir = os.path.join(ROOT, "cases", case)
+    for folder, dirs, files in os.walk(case_dir):
+        dirs.sort()
+        paths += [os.path.join(folder, name) for name in sorted(files)]
+    return _digest_files(p for p in paths if os.path.isfile(p))
+
+
+def stale_reason(info, stamp):
+    """Why finished results with done.json `info` may not be reused for `stamp`, or None."""
+    old = info.get("stamp")
+    if not old:
+        return "no stamp (results of an older study script)"
+    if old.get("sets") != stamp["sets"]:
+        return "other --set options"
+    if old.get("code") != stamp["code"]:
+        return "the programs or the case folder changed"
+    if info.get("timed_out") and old.get("timeout_s") != stamp["timeout_s"]:
+        return "it was stopped at another wall-time cap"
+    return None
 
 
 def run(case, label, sets, out_dir, end_time=None, timeout_s=None):
-    """Runs one case variant unless its results are complete; returns (label, dir, seconds, ok).
+    """Runs one case variant unless its results are complete and stamped with the same
+    programs, case folder and --set options; returns (label, dir, seconds, ok).
     timeout_s: wall-time cap; a run still going then is stopped like Ctrl-C (the coupler shuts
     the solvers down, coupling.h5 keeps the steps done) and recorded as timed out."""
     run_dir = os.path.join(out_dir, label)
     done = os.path.join(run_dir, "done.json")
+    all_sets = sets + (["coupler.end_time=%g" % end_time] if end_time else [])
+    stamp = {"sets": all_sets, "timeout_s": timeout_s, "code": code_digest(case)}
     if os.path.exists(done):
         with open(done) as f:
             info = json.load(f)
-        return label, run_dir, info["seconds"], info["ok"]
+        reason = stale_reason(info, stamp)
+        if reason is None:
+            return label, run_dir, info["seconds"], info["ok"]
+        print("  %-28s run again: %s" % (label, reason))
+        shutil.rmtree(run_dir)
     args = [os.path.join(HERE, "run_case.sh"), os.path.join(ROOT, "cases", case), "--out", run_dir, "--quiet"]
-    for s in sets + ([("coupler.end_time=%g" % end_time)] if end_time else []):
+    for s in all_sets:
         args += ["--set", s]
     start = time.monotonic()
     timed_out = False
@@ -69,7 +118,7 @@ def run(case, label, sets, out_dir, end_time=None, timeout_s=None):
         f.write(output)
     with open(done, "w") as f:
         json.dump({"seconds": seconds, "ok": ok, "sets": sets, "returncode": proc.returncode,
-                   "timed_out": timed_out}, f)
+                   "timed_out": timed_out, "stamp": stamp}, f)
     return label, run_dir, seconds, ok
 
 
@@ -94,11 +143,21 @@ def run_all(case, variants, out_dir, jobs, end_time, timeout_s=None):
 def static_solution(case, out_dir):
     """Point A of the FEM static solve for the particle's weight (eq. (43))."""
     static_dir = os.path.join(out_dir, "static")
-    if not os.path.exists(os.path.join(static_dir, "fem.h5")):
+    stamp_path = os.path.join(static_dir, "stamp.json")
+    stamp = {"code": code_digest(case)}
+    try:
+        with open(stamp_path) as f:
+            fresh = json.load(f) == stamp and os.path.exists(os.path.join(static_dir, "fem.h5"))
+    except (OSError, ValueError):
+        fresh = False
+    if not fresh:
+        shutil.rmtree(static_dir, ignore_errors=True)
         os.makedirs(static_dir, exist_ok=True)
         binary = os.path.join(os.environ.get("NC_BIN", os.path.join(ROOT, "bin")), "fem_solver")
         subprocess.run([binary, os.path.join(ROOT, "cases", case, "static.json"), "--output", static_dir],
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with open(stamp_path, "w") as f:
+            json.dump(stamp, f)
     return nc_results.load_monitor(static_dir).node(POINT_A)[-1]
 
 
