@@ -6,4 +6,6 @@ $(BUILD)/bench/fem_bench: $(BUILD)/fem_solver/bench/fem_bench.o $(LINK_fem_solve
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 bench-fem: $(BUILD)/bench/fem_bench
-	$< cases/barrier_mel/fem.json
+	fem_solver/bench/run_bench.sh $< cases/barrier_mel/fem.json
+# tests/fem_solver/test_calculix.sh writes its CalculiX input with fem_bench
+tests: $(BUILD)/bench/fem_bench

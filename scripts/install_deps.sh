@@ -20,8 +20,9 @@ PACKAGES=(
   python3 python3-zmq python3-h5py python3-numpy python3-matplotlib
 )
 
-# only for `make bench`: LIGGGHTS, the reference DEM code the DEM benchmark compares with
-BENCH_PACKAGES=(liggghts)
+# only for `make bench`: LIGGGHTS and CalculiX, the reference DEM and FEM codes the
+# benchmarks compare with
+BENCH_PACKAGES=(liggghts calculix-ccx)
 
 list=0
 for arg in "$@"; do
