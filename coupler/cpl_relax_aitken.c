@@ -3,7 +3,8 @@
  * computed per block (α_u, α_u̇ or α_F as in the paper), then x^{k+1} = x^k + α^k r^k,
  * eqs. (31)–(33). The first iteration of a step uses α^1 = sign(α_prev)·min(first_cap,
  * |α_prev|) of the previous step's last α (the common α in the very first step); α is
- * clipped to [alpha_min, alpha_max]; a vanishing denominator keeps the previous α.
+ * clipped to [alpha_min, alpha_max]; a vanishing denominator keeps the previous α. Without a
+ * given first_iteration_cap it is 1 while Newton's regime acts (below) and 0.5 otherwise.
  *
  * Safeguard (restart_growth > 0): when ‖x_out − x_in‖ exceeds restart_growth × the smallest
  * residual seen in this step, the iteration goes back to that best iterate and relaxes it
@@ -19,8 +20,9 @@
  *
  * Newton's regime (newton_contraction θ > 0, only while the FEM solves with the DEM's
  * linearisation, cpl_relax_set_linearised): the produced value is then Newton's step from
- * the input, and α = 1 is taken whenever ‖r^k‖ ≤ θ ‖r^{k−1}‖, and min(1, first_cap) in an
- * iteration without a previous residual (a step's first, or the first after the loop made
+ * the input, and α = 1 is taken whenever ‖r^k‖ ≤ θ ‖r^{k−1}‖, and min(1, first_cap) (1
+ * without a given cap: Newton's full step from the predictor) in an iteration without a
+ * previous residual (a step's first, or the first after the loop made
  * the relaxation forget its pair: contact backtracking) instead of α0 or the previous α;
  * eq. (34) and the safeguard act otherwise (after a restart r^{k−1} is the best residual).
  * With α ≠ 1 a quadratically converging iteration keeps |1 − α| of each residual (eq. (34)
@@ -41,8 +43,14 @@
 
 #define AITKEN_RECENT 4   /* inputs of the step remembered for the repeat test */
 
+/* first_iteration_cap when none is given: Newton's full step under the linearisation (a
+ * half step leaves half of the predictor's error for the next iteration), else half */
+#define AITKEN_FIRST_CAP_LINEARISED 1.0
+#define AITKEN_FIRST_CAP_PLAIN 0.5
+
 typedef struct aitken_settings {
-    double first_cap;        /* cap of |α| in the first iteration of a step */
+    double first_cap;        /* cap of |α| in the first iteration of a step; 0: not given
+                                (AITKEN_FIRST_CAP_*) */
     double alpha_min;        /* clipping range of α */
     double alpha_max;
     double restart_growth;   /* back to the step's best iterate with half its α when the
@@ -54,7 +62,7 @@ _Static_assert(sizeof(aitken_settings) <= CPL_RELAX_PARAMS_SIZE,
 
 typedef struct aitken_state {
     size_t n, n_blocks, block;   /* block = n / n_blocks */
-    double alpha0, first_cap, alpha_min, alpha_max;
+    double alpha0, first_cap, alpha_min, alpha_max;   /* first_cap 0: not given */
     double *alpha;               /* [n_blocks] α of the last iteration */
     double *r_prev;              /* [n] residual of the previous iteration in this step */
     int have_prev;               /* r_prev valid (not the first iteration of the step) */
@@ -79,6 +87,14 @@ typedef struct aitken_state {
 static const char *const aitken_keys[] = {"first_iteration_cap", "alpha_min", "alpha_max",
                                           "restart_growth", "newton_contraction", NULL};
 
+/* The cap of the first iteration's |α|: the given one, else by the regime. */
+static double first_iteration_cap(const aitken_state *a)
+{
+    if (a->first_cap > 0.0) return a->first_cap;
+    return a->linearised && a->newton_contraction > 0.0 ? AITKEN_FIRST_CAP_LINEARISED
+                                                        : AITKEN_FIRST_CAP_PLAIN;
+}
+
 static aitken_settings settings_of(const cpl_relax_settings *s)
 {
     aitken_settings p;
@@ -88,7 +104,7 @@ static aitken_settings settings_of(const cpl_relax_settings *s)
 
 static void aitken_defaults(cpl_relax_settings *s)
 {
-    const aitken_settings p = {.first_cap = 0.5, .alpha_min = 1e-6, .alpha_max = 2.0,
+    const aitken_settings p = {.first_cap = 0.0, .alpha_min = 1e-6, .alpha_max = 2.0,
                                .restart_growth = 4.0,   /* safeguard on (see above) */
                                .newton_contraction = 0.5};
     memcpy(s->params, &p, sizeof p);
@@ -128,7 +144,7 @@ static int aitken_check(const cpl_relax_settings *s, const char *where, nc_error
     if (!(p.newton_contraction < 1.0))
         return nc_error_set(err, 1, "%s: newton_contraction: expected a number in [0, 1), got %g",
                             where, p.newton_contraction);
-    if (!(p.first_cap > 0.0))
+    if (!(p.first_cap >= 0.0))   /* 0: not given (the parser refuses it from a file) */
         return nc_error_set(err, 1, "%s: first_iteration_cap must be > 0, got %g", where,
                             p.first_cap);
     return 0;
@@ -280,14 +296,14 @@ static double aitken_update(void *state, const double *x_in, const double *x_out
         const size_t o = b * a->block, m = a->block;
         double alpha;
         if (newton) {
-            alpha = a->have_prev ? 1.0 : fmin(1.0, a->first_cap);
+            alpha = a->have_prev ? 1.0 : fmin(1.0, first_iteration_cap(a));
         } else if (!a->have_prev) {
             /* first iteration of a step: no previous residual in this step */
             if (!a->have_alpha) {
                 alpha = a->alpha0;
             } else {
                 double prev = a->alpha[b];
-                alpha = copysign(fmin(a->first_cap, fabs(prev)), prev);
+                alpha = copysign(fmin(first_iteration_cap(a), fabs(prev)), prev);
             }
         } else {
             double num = 0.0, den = 0.0, scale = 0.0;

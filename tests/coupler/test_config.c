@@ -42,7 +42,11 @@ static void test_minimal_and_defaults(void **state)
     assert_near(c.loop.tol_abs, 1e-6, 0.0);
     assert_near(c.loop.work_tol, 0.0, 0.0);   /* eq. (35) as the paper has it */
     assert_int_equal(c.loop.max_iterations, 50);
-    assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "none");
+    /* Aitken with its Newton rule, the first iteration's cap left to the regime (0) */
+    assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "aitken");
+    assert_near(relax_key(&c, "alpha"), 0.5, 0.0);
+    assert_near(relax_key(&c, "first_iteration_cap"), 0.0, 0.0);
+    assert_near(relax_key(&c, "newton_contraction"), 0.5, 0.0);
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_ACCEPT);
     assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);   /* weak: the linear guess */
     assert_string_equal(c.fem.endpoint, "");

@@ -121,6 +121,37 @@ static void test_aitken_exact_on_scalar_affine_map(void **state)
     cpl_relax_free(r);
 }
 
+/* first_iteration_cap not given: 1 in a step's first iteration while Newton's rule acts
+ * (the FEM solves with the linearisation: its answer is Newton's full step from the
+ * predictor), 0.5 in the plain exchange; a given cap acts in both */
+static void test_aitken_first_iteration_cap_by_regime(void **state)
+{
+    (void)state;
+    for (int given = 0; given < 2; given++)
+        for (int linearised = 0; linearised < 2; linearised++) {
+            cpl_relax_settings s;
+            nc_error err;
+            cpl_relax_settings_default(&s);
+            assert_int_equal(cpl_relax_settings_select(&s, "aitken", &err), 0);
+            s.alpha = 0.9;
+            if (given) set(&s, "first_iteration_cap", 0.7);
+            cpl_relax *r = create(&s, 1, 1);
+            cpl_relax_set_linearised(r, linearised);
+            double x = 0.0, out = 1.0;
+            cpl_relax_begin_step(r);
+            const double first = update(r, &x, &out, &x);
+            x = 0.0;
+            cpl_relax_begin_step(r);
+            const double second = update(r, &x, &out, &x);
+            const double cap = given ? 0.7 : linearised ? 1.0 : 0.5;
+            /* the run's very first iteration: α0 in the plain exchange, min(1, cap) with the
+             * rule; a later step's first: min(cap, |α_prev|), or min(1, cap) */
+            assert_near(first, linearised ? cap : 0.9, 0.0);
+            assert_near(second, linearised ? cap : fmin(cap, 0.9), 0.0);
+            cpl_relax_free(r);
+        }
+}
+
 static void test_aitken_first_iteration_cap_and_sign(void **state)
 {
     (void)state;
@@ -495,6 +526,7 @@ int main(void)
         cmocka_unit_test(test_constant_and_none),
         cmocka_unit_test(test_aitken_exact_on_scalar_affine_map),
         cmocka_unit_test(test_aitken_first_iteration_cap_and_sign),
+        cmocka_unit_test(test_aitken_first_iteration_cap_by_regime),
         cmocka_unit_test(test_aitken_clipping_and_zero_denominator),
         cmocka_unit_test(test_aitken_restart_breaks_onoff_cycle),
         cmocka_unit_test(test_aitken_restart_inactive_when_converging),
