@@ -131,7 +131,10 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
          series(h, &h->i_jacobian_miss, "/iterations/jacobian_miss", NC_H5_F64, 1, "1", err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
-        nc_h5_attr_string(&h->h5, "/", "relaxation", cpl_relax_settings_method(&s->relax), err) ||
+        /* a weak step is not iterated: nothing is relaxed whatever the settings say */
+        nc_h5_attr_string(&h->h5, "/", "relaxation",
+                          s->scheme == CPL_SCHEME_STRONG ? cpl_relax_settings_method(&s->relax)
+                                                         : "none", err) ||
         nc_h5_attr_string(&h->h5, "/", "relaxed_quantity",
                           s->relaxed == CPL_RELAXED_FORCE ? "force" : "displacement_velocity", err) ||
         nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||

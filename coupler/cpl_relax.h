@@ -52,7 +52,9 @@ int cpl_relax_settings_parse(cpl_relax_settings *s, const cJSON *obj, const char
  * for programs and tests. A key of another method is checked and ignored. */
 int cpl_relax_settings_set(cpl_relax_settings *s, const char *key, double value,
                            nc_error *err);
-/* The value of one key of the chosen method (or "alpha"); -1 when it has no such key. */
+/* The value of one key of the chosen method (or "alpha"); -1 when it has no such key. A key
+ * whose default depends on the regime reads 0 while not given (Aitken's
+ * first_iteration_cap: 1 with the interface Jacobian's Newton rule, else 0.5). */
 int cpl_relax_settings_get(const cpl_relax_settings *s, const char *key, double *value);
 /* Consistency of the chosen method's settings (ranges, α_min < α_max, ...). */
 int cpl_relax_settings_check(const cpl_relax_settings *s, const char *where, nc_error *err);

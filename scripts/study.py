@@ -8,9 +8,9 @@ Each study runs a case several times through scripts/run_case.sh with --set over
 copied case folders), at most N runs at a time (default 2, one per core), then draws the
 paper's figure(s) as PNG into DIR/STUDY/ and prints a summary table. Runs already finished
 in DIR are reused, so an interrupted study continues where it stopped; a run is reused only
-when its stamp (the programs' and the case folder's contents, the --set list) is the one it
-would have now, else it is run again (delete DIR/STUDY to start afresh). --end-time shortens
-every run (quick looks, tests).
+when its stamp (the contents of the programs, the launcher and the case's input files, and
+the --set list) is the one it would have now, else it is run again (delete DIR/STUDY to
+start afresh). --end-time shortens every run (quick looks, tests).
 """
 import argparse
 import concurrent.futures
@@ -39,10 +39,16 @@ POINT_A = 1  # node at x = 1 m in the cable cases
 PROGRAMS = ("coupler", "fem_solver", "dem_solver", "netcouple-set")  # what run_case.sh runs
 
 
+# what a case folder holds besides its inputs: documentation changes no result
+CASE_DOCS = (".md", ".png")
+
+
 def _digest_files(paths):
+    """sha256 over (name, contents) of each (name, path): names, not paths, so the same
+    programs in another folder ($NC_BIN) give the same digest."""
     h = hashlib.sha256()
-    for path in paths:
-        h.update(os.path.relpath(path, ROOT).encode() + b"\0")
+    for name, path in paths:
+        h.update(name.encode() + b"\0")
         with open(path, "rb") as f:
             for block in iter(lambda: f.read(1 << 20), b""):
                 h.update(block)
@@ -52,14 +58,19 @@ def _digest_files(paths):
 @functools.lru_cache(maxsize=None)
 def code_digest(case):
     """Digest of what a run of `case` computes with: the programs (from $NC_BIN, as
-    run_case.sh takes them), the launcher and every file of the case folder."""
+    run_case.sh takes them), the launcher and the case folder's input files."""
     bin_dir = os.environ.get("NC_BIN", os.path.join(ROOT, "bin"))
-    paths = [os.path.join(bin_dir, p) for p in PROGRAMS] + [os.path.join(HERE, "run_case.sh")]
+    paths = [(p, os.path.join(bin_dir, p)) for p in PROGRAMS]
+    paths.append(("run_case.sh", os.path.join(HERE, "run_case.sh")))
     case_dir = os.path.join(ROOT, "cases", case)
     for folder, dirs, files in os.walk(case_dir):
         dirs.sort()
-        paths += [os.path.join(folder, name) for name in sorted(files)]
-    return _digest_files(p for p in paths if os.path.isfile(p))
+        paths += [(os.path.relpath(os.path.join(folder, name), case_dir), os.path.join(folder, name))
+                  for name in sorted(files) if not name.endswith(CASE_DOCS)]
+    missing = [path for _, path in paths if not os.path.isfile(path)]
+    if missing:
+        sys.exit("study: %s not found (build with make, or set NC_BIN)" % missing[0])
+    return _digest_files(paths)
 
 
 def stale_reason(info, stamp):
@@ -70,7 +81,7 @@ def stale_reason(info, stamp):
     if old.get("sets") != stamp["sets"]:
         return "other --set options"
     if old.get("code") != stamp["code"]:
-        return "the programs or the case folder changed"
+        return "the programs, the launcher or the case's inputs changed"
     if info.get("timed_out") and old.get("timeout_s") != stamp["timeout_s"]:
         return "it was stopped at another wall-time cap"
     return None

@@ -36,8 +36,9 @@ static int build_net(fem_model *m, int count, nc_error *err)
     return fem_model_finalize(m, err);
 }
 
-/* Axial force of a cable element at elongation dl (m), as fem_cable_response computes it:
- * N = A (E ε_GL + S_pre) l / L0, zero where that is negative (slack). */
+/* Axial force of a cable element at elongation dl (m): N = A (E ε_GL + S_pre) l / L0, zero
+ * where that is negative (slack). The law of fem_cable_response, written out again here on
+ * purpose: the CalculiX comparison checks the solver against the law, not against itself. */
 static double cable_axial_force(double L0, double EA, double AS_pre, double dl)
 {
     const double l = L0 + dl;
@@ -101,9 +102,9 @@ static int write_calculix(int count, const char *path, nc_error *err)
     for (int i = 0; i < 3 * m.n_nodes; i++)
         if (m.fixed[i]) fprintf(f, "%d, %d, %d\n", i / 3 + 1, i % 3 + 1, i % 3 + 1);
     /* CalculiX's own load stepping from a tenth of the load (from the full load its Newton
-     * iteration diverges); residual and correction tolerances 1e-7 of the mean force and
-     * displacement instead of its default 5e-3 and 2e-2, so that both solvers converge far
-     * below the difference compared */
+     * iteration diverges); residual and correction tolerances (*CONTROLS R_n, C_n) 1e-7 of
+     * the mean force and displacement instead of its defaults 5e-3 and 1e-2, so that both
+     * solvers converge far below the difference compared */
     fprintf(f, "*NSET, NSET=CENTRE\n%d\n*STEP, NLGEOM, INC=1000\n*STATIC\n0.1, 1.\n"
             "*CONTROLS, PARAMETERS=FIELD\n1.e-7, 1.e-7\n*CLOAD\n", centre_node(count) + 1);
     for (int i = 0; i < 3 * m.n_nodes; i++)
@@ -238,6 +239,13 @@ int main(int argc, char **argv)
     result r[3];
     nc_error err;
     int count;
+    if (argc > 1 && strncmp(argv[1], "--", 2) == 0 &&
+        !((argc == 3 && strcmp(argv[1], "--static") == 0) ||
+          (argc == 4 && strcmp(argv[1], "--write-calculix") == 0))) {
+        fprintf(stderr, "usage: fem_bench [BARRIER_FEM_JSON] | --static N | "
+                        "--write-calculix N FILE\n");
+        return 2;
+    }
     if (argc == 3 && strcmp(argv[1], "--static") == 0) {
         if (parse_count(argv[2], &count)) return 2;
         if (run(count, 0, &r[0], &err)) {

@@ -10,8 +10,8 @@ a run whose stamp differs is run again.
 Runs cases/rest_position for 0.06 s (two steps of 3e-2 s; about 1 s each) with:
   - the same stamp twice: the second call reuses the results (coupling.h5 not rewritten);
   - another --set list: run again;
-  - programs from another folder with one byte more in the coupler (an ELF file runs with
-    trailing bytes): run again, then reused with those programs;
+  - the same programs from another folder: reused; with one byte more in the coupler (an
+    ELF file runs with trailing bytes): run again, then reused with those programs;
   - a done.json of the former script (no stamp): run again;
   - a timed-out run asked again with another wall-time cap: run again.
 """
@@ -63,17 +63,22 @@ ok, text, other = call("a", SETS + ["dem.materials.0.restitution=0.3"])
 check(ok and other != first and "other --set options" in text,
       "another --set list runs again and says why (%r)" % text.strip())
 
-# the same programs with one byte more in the coupler: another build
+# the same programs copied to another folder: the same stamp (names and contents count, not
+# where they are); then one byte more in the coupler: another build
 bin_copy = os.path.join(tmp, "bin_copy")
 os.makedirs(bin_copy)
 for program in study.PROGRAMS:
     shutil.copy2(os.path.join(os.environ.get("NC_BIN", os.path.join(root, "bin")), program), bin_copy)
-with open(os.path.join(bin_copy, "coupler"), "ab") as f:
-    f.write(b"\0")
 os.environ["NC_BIN"] = bin_copy
 study.code_digest.cache_clear()
+ok, text, copied = call("a", SETS + ["dem.materials.0.restitution=0.3"])
+check(ok and copied == other and "run again" not in text,
+      "the same programs from another folder reuse the results (%r)" % text.strip())
+with open(os.path.join(bin_copy, "coupler"), "ab") as f:
+    f.write(b"\0")
+study.code_digest.cache_clear()
 ok, text, rebuilt = call("a", SETS + ["dem.materials.0.restitution=0.3"])
-check(ok and rebuilt != other and "programs or the case folder changed" in text,
+check(ok and rebuilt != other and "the programs, the launcher or the case's inputs changed" in text,
       "changed programs run again and say why (%r)" % text.strip())
 ok, text, kept = call("a", SETS + ["dem.materials.0.restitution=0.3"])
 check(ok and kept == rebuilt and "run again" not in text, "and are reused with those programs")

@@ -152,6 +152,10 @@ static void test_bad_input_messages(void **state)
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"relaxation\": {\"method\": \"aitken\", \"restart_growth\": 0.5}}",
                  "restart_growth");
+    /* 0 is the internal "not given" of the cap, not a value a file may set */
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"relaxation\": {\"method\": \"aitken\", \"first_iteration_cap\": 0}}",
+                 "first_iteration_cap");
     /* a contraction of 1 or more would take α = 1 on a residual that does not shrink */
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"relaxation\": {\"method\": \"aitken\", \"newton_contraction\": 1}}",

@@ -5,7 +5,7 @@
 # Checks:
 #  - with the check on every step, the summary counts the checks (2 extra DEM solves each)
 #    and none above 1e-3, and the largest recorded miss is below 1e-4: dem_solver's K is the
-#    derivative of its own step (measured: 1.1e-6 to 0.6 s, 1.7e-6 over 1.5 s,
+#    derivative of its own step (measured: 1.1e-6 to 0.6 s, 1.4e-6 over 1.5 s,
 #    docs/notes/interface_jacobian.md);
 #  - /iterations/jacobian_miss holds one finite value per check, NaN elsewhere, and is NaN
 #    throughout with the check off (no summary line then);
