@@ -66,7 +66,9 @@ or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged
 the others stopped) or stalled; 2 bad arguments or case, or --resume DIR without a complete
 checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all three programs stopped, the
 results so far readable. A finished run whose ropes exceeded their fem.json breaking_load_n
-lists the FEM's warnings before "done" (the model has no rope failure; exit status 0).
+lists the FEM's warnings before "done" (the model has no rope failure; exit status 0), or,
+with fem.json "analysis": {"fail_on_overload": true}, ends NOT reliable with exit status 3
+(a solver's own exit status 3 after a finished coupling is such a verdict).
 EOF
 }
 
@@ -271,18 +273,22 @@ report() {
     fi
     exit 1
   fi
-  # the coupler's verdict (the last line of its summary) also when an accept_* key let it
-  # exit 0: such a run is never reported as done
-  if [ "${rc[coupler]:-}" -eq 3 ] || grep -q "results are NOT reliable" coupler.log; then
-    echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
-    grep "results are NOT reliable" coupler.log >&2
-    exit "${rc[coupler]:-}"
-  fi
   # the structure's ropes above their breaking load: a right answer for ropes that do not
   # break, which real ones would; the FEM's warnings say which sets, how far and when
   if [ -f fem.log ] && grep -q "exceeded breaking_load_n" fem.log; then
     echo "run_case: ropes above their breaking load (the model has no rope failure):" >&2
     grep "exceeded breaking_load_n" fem.log | sed 's/^fem_solver: warning: /  /' >&2
+  fi
+  # the coupler's verdict (the last line of its summary) also when an accept_* key let it
+  # exit 0: such a run is never reported as done
+  if [ "${rc[coupler]:-}" -eq 3 ] || grep -q "results are NOT reliable" coupler.log || [ -n "$unreliable" ]; then
+    echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
+    grep "results are NOT reliable" coupler.log >&2
+    for p in $unreliable; do   # the solver's last line says why
+      echo "run_case: $p exited with 3: $(tail -n 1 "$p.log")" >&2
+    done
+    [ -n "$unreliable" ] && exit 3
+    exit "${rc[coupler]:-}"
   fi
   echo "run_case: done, results in $out"
   exit 0
@@ -529,7 +535,14 @@ else
   [ "${rc[coupler]:-}" -gt 128 ] || wait_all_exit "$grace_ms"
 fi
 reap
+unreliable=""   # solvers that finished the coupled run and judged its results NOT reliable
 for p in fem dem; do
+  # exit 3 after the coupler finished: the solver's own verdict (fem_solver: a rope above its
+  # breaking load with analysis.fail_on_overload), not a failure of the program
+  if [ "${rc[$p]:-}" = 3 ] && { [ "${rc[coupler]:-}" -eq 0 ] || [ "${rc[coupler]:-}" -eq 3 ]; }; then
+    unreliable="$unreliable $p"
+    continue
+  fi
   [ -n "${rc[$p]:-}" ] && [ "${rc[$p]:-}" -ne 0 ] && fail_first "$p" "$(how "$p")"
 done
 if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.05 s of the coupler)

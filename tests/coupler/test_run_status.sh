@@ -10,7 +10,12 @@
 #    rejected_attempts, min_dt_used = dt_min) and iterations.log has a "# rejected" line per
 #    rejected try;
 #  - the same with "accept_unconverged": true -> exit 0, the NOT reliable line still last,
-#    still no "done".
+#    still no "done";
+#  - the cable given a breaking load of 2 kN, which it exceeds (measured 8.7 kN, 3 elements):
+#    run_case.sh lists the FEM's warning and says "done", exit 0 (the model has no rope
+#    failure); with fem.json analysis.fail_on_overload the FEM exits 3 after a finished
+#    coupling, and run_case.sh says the results are NOT reliable, names the FEM's reason and
+#    exits 3 (not "failed", not 1: no program failed).
 . tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
@@ -45,6 +50,18 @@ last_line opted_in | grep -q "^coupler: results are NOT reliable: .*accepted bec
   || fail "opted_in: last line is '$(last_line opted_in)'"
 grep -q "done" "$NC_TMP/opted_in.out" && fail "opted_in: run_case.sh said done"
 grep -q "NOT reliable" "$NC_TMP/opted_in.out" || fail "opted_in: run_case.sh did not say NOT reliable"
+
+overload=(--set fem.element_sets.0.breaking_load_n=2000)
+status_run overload 0 "${overload[@]}"
+grep -q "^  set cable: [0-9]* elements exceeded breaking_load_n 2000 N" "$NC_TMP/overload.out" \
+  || fail "overload: run_case.sh did not list the FEM's warning"
+tail -n 1 "$NC_TMP/overload.out" | grep -q "^run_case: done" || fail "overload: not done"
+status_run overload_fails 3 "${overload[@]}" --set fem.analysis.fail_on_overload=true
+grep -q "^run_case: finished, but the results are NOT reliable" "$NC_TMP/overload_fails.out" \
+  || fail "overload_fails: run_case.sh did not say NOT reliable"
+grep -q "^run_case: fem exited with 3: fem_solver: [0-9]* elements* exceeded the breaking load" \
+  "$NC_TMP/overload_fails.out" || fail "overload_fails: the FEM's reason is not named"
+grep -q "done\|failed" "$NC_TMP/overload_fails.out" && fail "overload_fails: said done or failed"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
