@@ -484,22 +484,40 @@ static double *wait_of(run_ctx *c, const cpl_participant *p)
     return p == c->fem ? &c->L->timing.wait_fem_s : &c->L->timing.wait_dem_s;
 }
 
-static int do_begin(run_ctx *c, const cpl_participant *p, const cpl_call *call)
+/* BEGIN_STEP or ACCEPT_STEP to the participants ps[0..n): each that can post gets the
+ * command before any answer is awaited, so that their round trips overlap; the others are
+ * called in turn. The wait is booked to each participant until its answer came. */
+static int command_participants(run_ctx *c, cpl_command command, const cpl_call *call,
+                                const cpl_participant *const *ps, int n)
 {
+    const char *what = command == CPL_COMMAND_BEGIN_STEP ? "begin_step" : "accept_step";
+    int posted[2] = {0, 0};
     if (check_stop(c, call)) return -1;
     double t0 = nc_clock_now_s();
-    int rc = p->begin_step(p->ctx, call, c->err);
-    *wait_of(c, p) += nc_clock_now_s() - t0;
-    return rc ? fail(c, p, call, "begin_step") : 0;
+    for (int i = 0; i < n; i++)
+        if (ps[i]->post && ps[i]->await) {
+            if (ps[i]->post(ps[i]->ctx, command, call, c->err)) return fail(c, ps[i], call, what);
+            posted[i] = 1;
+        }
+    for (int i = 0; i < n; i++) {
+        const cpl_participant *p = ps[i];
+        int rc = posted[i]                              ? p->await(p->ctx, c->err)
+                 : command == CPL_COMMAND_BEGIN_STEP ? p->begin_step(p->ctx, call, c->err)
+                                                     : p->accept(p->ctx, call, c->err);
+        double t1 = nc_clock_now_s();
+        *wait_of(c, p) += t1 - t0;
+        t0 = t1;
+        if (rc) return fail(c, p, call, what);
+    }
+    return 0;
 }
 
-static int do_accept(run_ctx *c, const cpl_participant *p, const cpl_call *call)
+/* The command to the DEM, and to the FEM too when with_fem. */
+static int command_both(run_ctx *c, cpl_command command, const cpl_call *call, int with_fem)
 {
-    if (check_stop(c, call)) return -1;
-    double t0 = nc_clock_now_s();
-    int rc = p->accept(p->ctx, call, c->err);
-    *wait_of(c, p) += nc_clock_now_s() - t0;
-    return rc ? fail(c, p, call, "accept_step") : 0;
+    const cpl_participant *both[2] = {c->fem, c->dem};
+    return with_fem ? command_participants(c, command, call, both, 2)
+                    : command_participants(c, command, call, both + 1, 1);
 }
 
 static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *call,
@@ -643,7 +661,9 @@ static int fem_solve_or_skip(run_ctx *c, const cpl_call *call, const double *for
         }
         /* with this option the FEM's step begins only when it is first solved: a skipped
          * step is not a step for it at all (no BEGIN_STEP, no ACCEPT_STEP) */
-        if (!solved_before && do_begin(c, c->fem, call)) return -1;
+        if (!solved_before &&
+            command_participants(c, CPL_COMMAND_BEGIN_STEP, call, &c->fem, 1))
+            return -1;
     }
     if (do_solve(c, c->fem, call, force, NULL, L->u_out, L->v_out, info)) return -1;
     return 1;
@@ -922,7 +942,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     t->by_work_test = 0;
 
     const int lazy_fem = L->s.skip_fem_without_contact;
-    if ((!lazy_fem && do_begin(c, c->fem, call)) || do_begin(c, c->dem, call)) return -1;
+    if (command_both(c, CPL_COMMAND_BEGIN_STEP, call, !lazy_fem)) return -1;
     if (strong) cpl_relax_begin_step(L->relax);
 
     predict(L, call->dt_s);
@@ -1149,7 +1169,7 @@ static int advance_step(run_ctx *c)
     }
     call.iteration = 0;
     const int lazy_fem = L->s.skip_fem_without_contact;
-    if (((!lazy_fem || t.fem_solved) && do_accept(c, c->fem, &call)) || do_accept(c, c->dem, &call))
+    if (command_both(c, CPL_COMMAND_ACCEPT_STEP, &call, !lazy_fem || t.fem_solved))
         return -1;
 
     /* the structure's end state is the start of the next step */

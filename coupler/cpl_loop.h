@@ -92,6 +92,9 @@ typedef struct cpl_solve_info {
     double jacobian_dropped;    /* DEM: particles its linearisation left out (0 when unknown) */
 } cpl_solve_info;
 
+/* The commands the loop may send to both participants at once (cpl_participant.post). */
+typedef enum { CPL_COMMAND_BEGIN_STEP = 0, CPL_COMMAND_ACCEPT_STEP } cpl_command;
+
 /* A participant: `ctx` is passed back to every function; all return 0 / -1 (+ err). */
 typedef struct cpl_participant {
     const char *name;       /* "fem", "dem": used in messages */
@@ -110,6 +113,12 @@ typedef struct cpl_participant {
      * step. */
     int (*checkpoint)(void *ctx, const cpl_call *call, const char *name, nc_error *err);
     int (*resume)(void *ctx, const cpl_call *call, const char *name, nc_error *err);
+    /* optional, both or neither: begin_step or accept in two halves, `post` sending the
+     * command and `await` taking its answer, so that the loop sends it to both participants
+     * before it waits for either and their round trips overlap. NULL: the loop calls
+     * begin_step and accept. */
+    int (*post)(void *ctx, cpl_command command, const cpl_call *call, nc_error *err);
+    int (*await)(void *ctx, nc_error *err);
 } cpl_participant;
 
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
@@ -253,8 +262,9 @@ typedef struct cpl_observer {
     int (*on_checkpoint)(void *ctx, long step, double time_s, const char *name, nc_error *err);
 } cpl_observer;
 
-/* Wall-clock split of a run (seconds). wait_* include transport; solver_* are what the
- * participants reported themselves (NAN when they did not). */
+/* Wall-clock split of a run (seconds). wait_* include transport (a command posted to both
+ * participants counts for the first awaited until its answer, for the second only beyond
+ * that); solver_* are what the participants reported themselves (NAN when they did not). */
 typedef struct cpl_timing {
     double total_s;
     double wait_fem_s, wait_dem_s;

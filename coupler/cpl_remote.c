@@ -52,16 +52,22 @@ int cpl_remote_open(cpl_remote *r, cpl_remote_kind kind, const char *endpoint,
     return 0;
 }
 
-/* Sends r->request; records whether the peer is still there after a failure. */
-static int request(cpl_remote *r, nc_error *err)
+/* After a failed request: records whether the peer is still there. */
+static int request_failed(cpl_remote *r, nc_error *err)
 {
-    if (proto_peer_request(r->peer, &r->request, &r->reply, err) == 0) return 0;
     /* an error reply or a malformed reply means it is there and answering (so it gets
      * SHUTDOWN); a timeout or a closed connection means it cannot be trusted to answer */
     int code = err ? err->code : 0;
     r->alive = code == PROTO_ERR_PEER || code == PROTO_ERR_STEP_FAILED || code == PROTO_ERR_DECODE;
     if (code == PROTO_ERR_STEP_FAILED) err->code = CPL_ERR_STEP_FAILED;   /* the loop retries */
     return -1;
+}
+
+/* Sends r->request and waits for its reply in r->reply. */
+static int request(cpl_remote *r, nc_error *err)
+{
+    if (proto_peer_request(r->peer, &r->request, &r->reply, err) == 0) return 0;
+    return request_failed(r, err);
 }
 
 int cpl_remote_interface_fem(cpl_remote *fem, cpl_mesh *mesh, double **u0, double **v0,
@@ -134,6 +140,23 @@ static int remote_accept(void *ctx, const cpl_call *call, nc_error *err)
     cpl_remote *r = ctx;
     command(r, PROTO_MSG_ACCEPT_STEP, call);
     return request(r, err);
+}
+
+/* BEGIN_STEP / ACCEPT_STEP in two halves (cpl_participant.post, .await) */
+static int remote_post(void *ctx, cpl_command which, const cpl_call *call, nc_error *err)
+{
+    cpl_remote *r = ctx;
+    command(r, which == CPL_COMMAND_BEGIN_STEP ? PROTO_MSG_BEGIN_STEP : PROTO_MSG_ACCEPT_STEP,
+            call);
+    if (proto_peer_send(r->peer, &r->request, err) == 0) return 0;
+    return request_failed(r, err);
+}
+
+static int remote_await(void *ctx, nc_error *err)
+{
+    cpl_remote *r = ctx;
+    if (proto_peer_receive(r->peer, &r->reply, err) == 0) return 0;
+    return request_failed(r, err);
 }
 
 static int copy_array(cpl_remote *r, const char *name, double *out, nc_error *err)
@@ -260,7 +283,8 @@ cpl_participant cpl_remote_participant(cpl_remote *r)
     const int ckpt = cpl_remote_can_checkpoint(r);
     cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept,
                          r->version >= 2 && proto_has_capability(r->capabilities, "jacobian"),
-                         ckpt ? remote_checkpoint : NULL, ckpt ? remote_resume : NULL};
+                         ckpt ? remote_checkpoint : NULL, ckpt ? remote_resume : NULL,
+                         remote_post, remote_await};
     return p;
 }
 

@@ -177,13 +177,33 @@ static int watched_resume(void *ctx, const cpl_call *call, const char *name, nc_
     return rc;
 }
 
+static int watched_post(void *ctx, cpl_command command, const cpl_call *call, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.post(w->inner.ctx, command, call, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
+static int watched_await(void *ctx, nc_error *err)
+{
+    watched *w = ctx;
+    cpl_heartbeat_wait_begin(w->a->heartbeat, w->inner.name, w->a->cfg.reply_timeout_s);
+    int rc = w->inner.await(w->inner.ctx, err);
+    cpl_heartbeat_wait_end(w->a->heartbeat);
+    return rc;
+}
+
 static cpl_participant watch_participant(app *a, watched *w, cpl_remote *r)
 {
     *w = (watched){cpl_remote_participant(r), a, r};
+    const int two_halves = w->inner.post && w->inner.await;
     cpl_participant p = {w->inner.name, w, watched_begin, watched_solve, watched_accept,
                          w->inner.can_jacobian,
                          w->inner.checkpoint ? watched_checkpoint : NULL,
-                         w->inner.resume ? watched_resume : NULL};
+                         w->inner.resume ? watched_resume : NULL,
+                         two_halves ? watched_post : NULL, two_halves ? watched_await : NULL};
     return p;
 }
 

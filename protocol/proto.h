@@ -213,6 +213,12 @@ void proto_peer_set_timeout(proto_peer *peer, int timeout_ms);
  * connection closed (before or during the request) returns PROTO_ERR_DISCONNECTED at once. */
 int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
                        nc_error *err);
+/* proto_peer_request in two halves, so that requests to several peers overlap: send
+ * (the errors of the request before the wait), then receive its reply (the errors of the
+ * wait and of the reply). One request at a time per peer; a new send drops the reply of an
+ * unreceived one. */
+int proto_peer_send(proto_peer *peer, const proto_message *request, nc_error *err);
+int proto_peer_receive(proto_peer *peer, proto_message *reply, nc_error *err);
 const char *proto_peer_name(const proto_peer *peer);
 const char *proto_peer_endpoint(const proto_peer *peer);
 void proto_peer_close(proto_peer *peer);

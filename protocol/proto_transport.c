@@ -48,6 +48,10 @@ struct proto_peer {
     char name[PROTO_NAME_MAX];
     char endpoint[256];
     char last_sent[160];
+    int pending;          /* a request was sent and its reply not yet received */
+    proto_msg_type pending_type;   /* ... and what the reply must answer */
+    long pending_step;
+    int pending_iteration;
     int version;          /* agreed in hello; 0 before it */
     char session[PROTO_NAME_MAX];
     proto_options options;
@@ -533,20 +537,21 @@ static int peer_lost(proto_peer *peer)
 
 /* A reply must answer the request: marked as a reply, of its type (or an error); in version
  * 2 also of its step, iteration and session, so a stale or foreign reply is caught. */
-static int check_reply(const proto_peer *peer, const char *label, const proto_message *request,
-                       const proto_message *reply, nc_error *err)
+static int check_reply(const proto_peer *peer, const char *label, const proto_message *reply,
+                       nc_error *err)
 {
     if (!reply->is_reply)
         return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: not marked as a "
                             "reply (\"reply\": true)", label, peer->last_sent);
-    int v2 = peer->version >= 2 && request->type != PROTO_MSG_HELLO;
+    int v2 = peer->version >= 2 && peer->pending_type != PROTO_MSG_HELLO;
     if (v2 && strcmp(reply->session, peer->session) != 0)
         return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: session '%s' "
                             "instead of %s", label, peer->last_sent, reply->session, peer->session);
     /* an error reply of step -1, iteration 0 answers a command the participant could not read
      * (malformed): its reason matters more than the echo */
     int unread = reply->type == PROTO_MSG_ERROR && reply->step == -1 && reply->iteration == 0;
-    if (v2 && !unread && (reply->step != request->step || reply->iteration != request->iteration))
+    if (v2 && !unread &&
+        (reply->step != peer->pending_step || reply->iteration != peer->pending_iteration))
         return nc_error_set(err, PROTO_ERR_DECODE, "%s sent a bad reply to %s: it answers step "
                             "%ld, iteration %d (a stale reply?)", label, peer->last_sent,
                             reply->step, reply->iteration);
@@ -554,18 +559,23 @@ static int check_reply(const proto_peer *peer, const char *label, const proto_me
         return nc_error_set(err, reply->retryable ? PROTO_ERR_STEP_FAILED : PROTO_ERR_PEER,
                             "%s reported an error for %s: %s", label, peer->last_sent,
                             reply->text[0] ? reply->text : "(no reason given)");
-    if (reply->type != request->type)
+    if (reply->type != peer->pending_type)
         return nc_error_set(err, PROTO_ERR_DECODE, "%s answered %s with '%s'", label,
                             peer->last_sent, proto_type_name(reply->type));
     return 0;
 }
 
-int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
-                       nc_error *err)
+static void peer_label(const proto_peer *peer, char *label, size_t size)
+{
+    snprintf(label, size, "participant '%s' at %s", peer->name, peer->endpoint);
+}
+
+int proto_peer_send(proto_peer *peer, const proto_message *request, nc_error *err)
 {
     char label[PROTO_NAME_MAX + 300];
-    snprintf(label, sizeof label, "participant '%s' at %s", peer->name, peer->endpoint);
+    peer_label(peer, label, sizeof label);
     describe(request, peer->last_sent, sizeof peer->last_sent);
+    peer->pending = 0;
     /* a peer that went away between two requests is reported now, not after the timeout */
     if (peer->monitor && (peer_lost(peer) || (peer->ever_connected && !peer->connected)))
         return nc_error_set(err, PROTO_ERR_DISCONNECTED,
@@ -589,6 +599,20 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
                                 label, peer->options.timeout_ms / 1000.0, peer->last_sent);
         return -1;
     }
+    peer->pending = 1;
+    peer->pending_type = request->type;
+    peer->pending_step = request->step;
+    peer->pending_iteration = request->iteration;
+    return 0;
+}
+
+int proto_peer_receive(proto_peer *peer, proto_message *reply, nc_error *err)
+{
+    char label[PROTO_NAME_MAX + 300];
+    peer_label(peer, label, sizeof label);
+    if (!peer->pending)
+        return nc_error_set(err, PROTO_ERR_TRANSPORT, "%s: no request awaits a reply", label);
+    peer->pending = 0;
     /* wait in slices of the socket's receive timeout, looking at the monitor in between, so a
      * peer that dies is reported at once rather than after the whole timeout */
     double started_ms = now_ms();
@@ -611,7 +635,14 @@ int proto_peer_request(proto_peer *peer, const proto_message *request, proto_mes
             return nc_error_set(err, PROTO_ERR_TIMEOUT, "%s did not answer within %.1f s; last message: %s",
                                 label, peer->options.timeout_ms / 1000.0, peer->last_sent);
     }
-    return check_reply(peer, label, request, reply, err);
+    return check_reply(peer, label, reply, err);
+}
+
+int proto_peer_request(proto_peer *peer, const proto_message *request, proto_message *reply,
+                       nc_error *err)
+{
+    if (proto_peer_send(peer, request, err)) return -1;
+    return proto_peer_receive(peer, reply, err);
 }
 
 int proto_peer_hello(proto_peer *peer, proto_message *reply, nc_error *err)

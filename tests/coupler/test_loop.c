@@ -3,7 +3,7 @@
  * exactly where |J| > 1, Aitken beats constant α, IQN-ILS bound, force vs displacement
  * relaxation, the quadratic predictor, efficiency options, max-iteration policy, participant
  * errors, interruption, step rejection (failed solve, divergence, dt_min and the policy, with
- * the efficiency options). */
+ * the efficiency options), BEGIN_STEP and ACCEPT_STEP sent to both participants at once. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -12,6 +12,7 @@
 #include "../nc_test_assert.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -174,8 +175,8 @@ static void test_quadratic_predictor(void **state)
     const double a = -9.81, dt = 0.01;
     for (int quadratic = 0; quadratic <= 1; quadratic++) {
         guess_recorder g = {.accel = a};
-        cpl_participant fem = {"fem", &g, no_op, prescribed_solve, no_op, 0, NULL, NULL};
-        cpl_participant dem = {"dem", &g, no_op, recording_solve, no_op, 0, NULL, NULL};
+        cpl_participant fem = {"fem", &g, no_op, prescribed_solve, no_op, 0, NULL, NULL, NULL, NULL};
+        cpl_participant dem = {"dem", &g, no_op, recording_solve, no_op, 0, NULL, NULL, NULL, NULL};
         /* 20 steps of dt, then one of 0.4 dt to end on end_time: too short for the parabola
          * (less than half the last step), so the linear guess again */
         cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, dt, 0.204);
@@ -195,6 +196,121 @@ static void test_quadratic_predictor(void **state)
             assert_near(g.guess[n], exact + miss, 1e-12);
         }
         assert_near(g.time[20] - g.time[19], 0.4 * dt, 1e-12);
+    }
+}
+
+/* A participant that can send BEGIN_STEP and ACCEPT_STEP in two halves: every call goes
+ * to a log shared by both, "P<b|a>:<name>" for a post, "W:<name>" for an await, "B:" and
+ * "A:" for begin_step and accept called whole, "S:" for a solve. */
+typedef struct posting {
+    const char *name;
+    char *log;
+    size_t size;
+    int can_post;
+    long fail_await_step;   /* its await fails in this step (-1: never) */
+    long step;
+} posting;
+
+static void log_call(posting *p, const char *what)
+{
+    size_t used = strlen(p->log);
+    snprintf(p->log + used, p->size - used, "%s:%s ", what, p->name);
+}
+
+static int posting_begin(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    log_call(ctx, "B");
+    return 0;
+}
+
+static int posting_accept(void *ctx, const cpl_call *call, nc_error *err)
+{
+    (void)call; (void)err;
+    log_call(ctx, "A");
+    return 0;
+}
+
+static int posting_post(void *ctx, cpl_command command, const cpl_call *call, nc_error *err)
+{
+    (void)err;
+    posting *p = ctx;
+    p->step = call->step;
+    log_call(p, command == CPL_COMMAND_BEGIN_STEP ? "Pb" : "Pa");
+    return 0;
+}
+
+static int posting_await(void *ctx, nc_error *err)
+{
+    posting *p = ctx;
+    log_call(p, "W");
+    if (p->step == p->fail_await_step)
+        return nc_error_set(err, CPL_ERR_PARTICIPANT, "%s did not answer", p->name);
+    return 0;
+}
+
+static int posting_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
+                         double *out0, double *out1, cpl_solve_info *info, nc_error *err)
+{
+    (void)call; (void)in0; (void)in1; (void)info; (void)err;
+    log_call(ctx, "S");
+    memset(out0, 0, 3 * sizeof *out0);
+    if (out1) memset(out1, 0, 3 * sizeof *out1);
+    return 0;
+}
+
+static cpl_participant posting_participant(posting *p)
+{
+    cpl_participant q = {p->name, p, posting_begin, posting_solve, posting_accept, 0,
+                         NULL, NULL, p->can_post ? posting_post : NULL,
+                         p->can_post ? posting_await : NULL};
+    return q;
+}
+
+/* BEGIN_STEP and ACCEPT_STEP go to both participants before the loop waits for either (their
+ * round trips overlap); a participant without the two halves is called whole in between; a
+ * failed await names its participant and the command. */
+static void test_commands_overlap(void **state)
+{
+    (void)state;
+    static const struct {
+        int fem_posts, dem_posts;
+        long fail_fem, fail_dem;
+        const char *first_step;
+    } cases[] = {
+        {1, 1, -1, -1, "Pb:fem Pb:dem W:fem W:dem S:dem S:fem Pa:fem Pa:dem W:fem W:dem "},
+        {0, 1, -1, -1, "Pb:dem B:fem W:dem S:dem S:fem Pa:dem A:fem W:dem "},
+        {0, 0, -1, -1, "B:fem B:dem S:dem S:fem A:fem A:dem "},
+        {1, 1, -1, 1, NULL},   /* the DEM's await fails in step 1 */
+        {1, 1, 2, -1, NULL},   /* the FEM's in step 2 */
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char log[4096] = "";
+        posting f = {"fem", log, sizeof log, cases[k].fem_posts, cases[k].fail_fem, 0};
+        posting d = {"dem", log, sizeof log, cases[k].dem_posts, cases[k].fail_dem, 0};
+        cpl_participant fem = posting_participant(&f), dem = posting_participant(&d);
+        cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, 0.01, 0.03);
+        cpl_loop *loop;
+        nc_error err;
+        cpl_failure failure;
+        assert_int_equal(cpl_loop_create(&loop, &s, 1, NULL, NULL, &err), 0);
+        int rc = cpl_loop_run(loop, &fem, &dem, NULL, NULL, &failure, &err);
+        cpl_loop_free(loop);
+        if (cases[k].first_step) {
+            assert_int_equal(rc, 0);
+            /* three steps, each the same sequence */
+            size_t n = strlen(cases[k].first_step);
+            assert_int_equal(strlen(log), 3 * n);
+            for (int step = 0; step < 3; step++)
+                assert_memory_equal(log + step * n, cases[k].first_step, n);
+        } else {
+            const int dem_fails = cases[k].fail_dem >= 0;
+            assert_int_not_equal(rc, 0);
+            assert_ptr_equal(failure.participant, dem_fails ? &dem : &fem);
+            assert_int_equal(failure.step, dem_fails ? 1 : 2);
+            assert_string_equal(failure.command, "begin_step");
+            assert_non_null(strstr(err.message, dem_fails ? "dem did not answer" : "fem did not answer"));
+        }
     }
 }
 
@@ -857,6 +973,7 @@ int main(void)
         cmocka_unit_test(test_strong_matches_monolithic),
         cmocka_unit_test(test_weak_lags_first_order),
         cmocka_unit_test(test_quadratic_predictor),
+        cmocka_unit_test(test_commands_overlap),
         cmocka_unit_test(test_alpha_one_diverges_where_theory_says),
         cmocka_unit_test(test_aitken_fewer_iterations_than_constant),
         cmocka_unit_test(test_iqn_bound_on_linear_problem),

@@ -1,6 +1,7 @@
 /* Tests of the protocol over real sockets: a forked participant and the coupler side talk over
  * tcp and ipc; a peer that never answers, dies, sends garbage or speaks another version gives
- * the documented error; a participant with no coupler leaves after its idle time. */
+ * the documented error; a participant with no coupler leaves after its idle time; requests to
+ * two peers overlap. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -9,6 +10,7 @@
 #include "../nc_test_assert.h"
 
 #include <math.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -194,6 +196,114 @@ static void test_ipc_exchange_participant_starts_late(void **state)
     exchange_full_sequence(endpoint);
     assert_int_equal(wait_child(child), 0);
     unlink(path);
+}
+
+/* Child of the overlap test: answers every command; on BEGIN_STEP it first writes a byte to
+ * signal_fd (when >= 0) and waits up to 5 s for one on wait_fd (when >= 0), so that one
+ * participant answers only once the other has its BEGIN_STEP. */
+static int serve_gated(const char *endpoint, int endpoint_pipe, int signal_fd, int wait_fd)
+{
+    proto_options options;
+    proto_options_default(&options);
+    options.idle_timeout_ms = 10000;
+    proto_participant *p;
+    nc_error err;
+    if (proto_participant_open(&p, endpoint, "fem", "gated participant", "", &options, &err))
+        return 2;
+    const char *bound = proto_participant_endpoint(p);
+    if (write(endpoint_pipe, bound, strlen(bound) + 1) < 0) return 2;
+    close(endpoint_pipe);
+    proto_message command, reply;
+    memset(&command, 0, sizeof command);
+    memset(&reply, 0, sizeof reply);
+    int rc = 0;
+    while (proto_participant_receive(p, &command, &err) == 0) {
+        if (command.type == PROTO_MSG_BEGIN_STEP) {
+            char byte = 1;
+            if (signal_fd >= 0 && write(signal_fd, &byte, 1) != 1) rc = 4;
+            if (wait_fd >= 0) {
+                struct pollfd pfd = {wait_fd, POLLIN, 0};
+                if (poll(&pfd, 1, 5000) != 1 || read(wait_fd, &byte, 1) != 1) {
+                    proto_participant_reply_error(p, "the other participant never began", &err);
+                    continue;
+                }
+            }
+        }
+        proto_message_init(&reply, command.type);
+        proto_participant_reply(p, &reply, &err);
+        if (command.type == PROTO_MSG_SHUTDOWN) break;
+    }
+    proto_message_free(&command);
+    proto_participant_close(p);
+    return rc;
+}
+
+static pid_t start_gated(char *bound, size_t size, int signal_fd, int wait_fd)
+{
+    int fds[2];
+    if (pipe(fds) != 0) fail_msg("pipe");
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fds[0]);
+        _exit(serve_gated("tcp://127.0.0.1:*", fds[1], signal_fd, wait_fd));
+    }
+    close(fds[1]);
+    ssize_t got = read(fds[0], bound, size - 1);
+    assert_true(got > 0);
+    bound[got] = '\0';
+    close(fds[0]);
+    return pid;
+}
+
+/* proto_peer_send and proto_peer_receive let requests to two peers overlap: the first peer
+ * answers its BEGIN_STEP only after the second has received its own, which a request that
+ * waits for the first answer before sending the second could never see (the first would
+ * answer with an error after 5 s). A receive without a send is an error. */
+static void test_requests_overlap(void **state)
+{
+    (void)state;
+    int gate[2];
+    assert_int_equal(pipe(gate), 0);
+    char bound[2][256];
+    pid_t child[2] = {start_gated(bound[0], sizeof bound[0], -1, gate[0]),
+                      start_gated(bound[1], sizeof bound[1], gate[1], -1)};
+    close(gate[0]);
+    close(gate[1]);
+    proto_peer *peer[2];
+    proto_options options;
+    proto_options_default(&options);
+    options.timeout_ms = 10000;
+    nc_error err;
+    proto_message request, reply;
+    memset(&request, 0, sizeof request);
+    memset(&reply, 0, sizeof reply);
+    const char *names[2] = {"fem", "dem"};
+    for (int i = 0; i < 2; i++) {
+        assert_int_equal(proto_peer_open(&peer[i], names[i], bound[i], &options, &err), 0);
+        if (proto_peer_hello(peer[i], &reply, &err)) fail_msg("%s", err.message);
+    }
+    assert_int_equal(proto_peer_receive(peer[0], &reply, &err), -1);
+    assert_non_null(strstr(err.message, "participant 'fem'"));
+    assert_non_null(strstr(err.message, "no request awaits a reply"));
+    for (long step = 0; step < 3; step++) {
+        proto_message_init(&request, PROTO_MSG_BEGIN_STEP);
+        request.step = step;
+        request.dt_s = 1e-3;
+        for (int i = 0; i < 2; i++)
+            if (proto_peer_send(peer[i], &request, &err)) fail_msg("%s", err.message);
+        for (int i = 0; i < 2; i++) {
+            if (proto_peer_receive(peer[i], &reply, &err)) fail_msg("%s", err.message);
+            assert_int_equal(reply.type, PROTO_MSG_BEGIN_STEP);
+            assert_int_equal(reply.step, step);
+        }
+    }
+    proto_message_init(&request, PROTO_MSG_SHUTDOWN);
+    for (int i = 0; i < 2; i++) {
+        assert_int_equal(proto_peer_request(peer[i], &request, &reply, &err), 0);
+        proto_peer_close(peer[i]);
+        assert_int_equal(wait_child(child[i]), 0);
+    }
+    proto_message_free(&reply);
 }
 
 /* Sends one solve to a participant in `mode` and returns the error. */
@@ -421,6 +531,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tcp_exchange),
         cmocka_unit_test(test_ipc_exchange_participant_starts_late),
+        cmocka_unit_test(test_requests_overlap),
         cmocka_unit_test(test_peer_never_answers_times_out),
         cmocka_unit_test(test_peer_dies_is_reported_before_timeout),
         cmocka_unit_test(test_peer_gone_between_requests_is_reported_at_once),
