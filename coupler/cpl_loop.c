@@ -12,8 +12,8 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
-#define CPL_FINGERPRINT_N 6   /* dt, scheme, relaxed quantity, tolerance, interface size,
-                                 work_tolerance */
+#define CPL_FINGERPRINT_N 7   /* dt, scheme, relaxed quantity, tolerance, interface size,
+                                 work_tolerance, relaxation method */
 
 struct cpl_loop {
     cpl_loop_settings s;
@@ -311,6 +311,31 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     fp[3] = s->tol_abs;
     fp[4] = (double)n3;
     fp[5] = s->work_tol;
+    fp[6] = cpl_relax_method_id(cpl_relax_settings_method(&s->relax));
+}
+
+/* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
+static int check_fingerprint(const cpl_loop *L, const char *path, nc_error *err)
+{
+    double now[CPL_FINGERPRINT_N];
+    fill_fingerprint(&L->s, L->n3, now);
+    const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
+                                           "interface dofs", "work_tolerance",
+                                           "relaxation.method"};
+    for (int i = 0; i < CPL_FINGERPRINT_N; i++) {
+        if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) == 0) continue;
+        if (i == 6) {
+            const char *was = cpl_relax_method_name(L->fingerprint[i]);
+            return nc_error_set(err, 1, "%s: the checkpoint was written with %s \"%s\", this "
+                                "run has \"%s\": a run resumes with the settings it started "
+                                "with", path, what[i], was ? was : "(unknown)",
+                                cpl_relax_settings_method(&L->s.relax));
+        }
+        return nc_error_set(err, 1, "%s: the checkpoint was written with %s = %.17g, this "
+                            "run has %.17g: a run resumes with the settings it started "
+                            "with", path, what[i], L->fingerprint[i], now[i]);
+    }
+    return 0;
 }
 
 static void energy_report_entries(cpl_ckpt_table *t, const char *prefix, cpl_energy_report *r)
@@ -407,6 +432,13 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
 
 int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
 {
+    /* the settings first: with another relaxation method the state's entries differ, and
+     * the load would fail on one of them instead of naming the setting */
+    cpl_ckpt_table settings = {0};
+    cpl_ckpt_f64(&settings, "loop", "settings", L->fingerprint, CPL_FINGERPRINT_N);
+    int loaded = cpl_ckpt_load(&settings, path, err);
+    cpl_ckpt_table_free(&settings);
+    if (loaded || check_fingerprint(L, path, err)) return -1;
     size_t n = 0;
     if (nc_ckpt_read_scalar(path, "/loop/jacobian_blocks", NC_CKPT_SIZE, &n, err)) return -1;
     if (n > 100000000u)
@@ -424,15 +456,7 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
 
 int cpl_loop_resumed(cpl_loop *L, const char *name, const char *path, nc_error *err)
 {
-    double now[CPL_FINGERPRINT_N];
-    fill_fingerprint(&L->s, L->n3, now);
-    const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
-                                           "interface dofs", "work_tolerance"};
-    for (int i = 0; i < CPL_FINGERPRINT_N; i++)
-        if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) != 0)
-            return nc_error_set(err, 1, "%s: the checkpoint was written with %s = %.17g, this "
-                                "run has %.17g: a run resumes with the settings it started "
-                                "with", path, what[i], L->fingerprint[i], now[i]);
+    if (check_fingerprint(L, path, err)) return -1;
     snprintf(L->resume_name, sizeof L->resume_name, "%s", name);
     L->resume_pending = 1;
     return 0;

@@ -5,6 +5,7 @@
 #include "cpl_relax.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +62,23 @@ int cpl_relax_settings_select(cpl_relax_settings *s, const char *method, nc_erro
 const char *cpl_relax_settings_method(const cpl_relax_settings *s)
 {
     return s->method->name;
+}
+
+double cpl_relax_method_id(const char *name)
+{
+    uint32_t h = 2166136261u;
+    for (const unsigned char *c = (const unsigned char *)name; *c; c++) {
+        h ^= *c;
+        h *= 16777619u;
+    }
+    return (double)h;
+}
+
+const char *cpl_relax_method_name(double id)
+{
+    for (const cpl_relax_ops *const *m = cpl_relax_methods(); *m; m++)
+        if (cpl_relax_method_id((*m)->name) == id) return (*m)->name;
+    return NULL;
 }
 
 /* alpha and the keys of every method (unknown keys rejected); the chosen method's values

@@ -42,6 +42,10 @@ void cpl_relax_settings_default(cpl_relax_settings *s);
  * listing the known ones. */
 int cpl_relax_settings_select(cpl_relax_settings *s, const char *method, nc_error *err);
 const char *cpl_relax_settings_method(const cpl_relax_settings *s);
+/* A number naming a method in a checkpoint: FNV-1a (32 bit) of its name, so it stays when
+ * methods are added or reordered; and the method's name back from it (NULL: none). */
+double cpl_relax_method_id(const char *name);
+const char *cpl_relax_method_name(double id);
 /* Reads the `relaxation` object (`where` names it in messages, e.g.
  * "coupler.json.relaxation"): method, alpha, and the keys of every method, each checked
  * (keys of another method than the chosen one are accepted and checked too, so switching
