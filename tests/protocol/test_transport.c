@@ -39,8 +39,12 @@ static void scratch_path(char *out, size_t size, const char *name)
     snprintf(out, size, "%s/%s-%d", dir && dir[0] ? dir : "/tmp", name, (int)getpid());
 }
 
-/* Child: a participant that answers solve with 2 × the input force as displacement. */
-static int serve(const char *endpoint, int endpoint_pipe, serve_mode mode, int delay_ms)
+/* Child: a participant that answers solve with 2 × the input force as displacement. On
+ * BEGIN_STEP it first writes a byte to signal_fd (when >= 0) and waits up to 5 s for one on
+ * wait_fd (when >= 0; an error reply without it): the overlap test's gate, so that one
+ * participant answers only once the other has its BEGIN_STEP. */
+static int serve(const char *endpoint, int endpoint_pipe, serve_mode mode, int delay_ms,
+                 int signal_fd, int wait_fd)
 {
     if (delay_ms) usleep((useconds_t)delay_ms * 1000);
     proto_options options;
@@ -88,6 +92,15 @@ static int serve(const char *endpoint, int endpoint_pipe, serve_mode mode, int d
             proto_participant_reply(p, &reply, &err);
             continue;
         }
+        if (command.type == PROTO_MSG_BEGIN_STEP) {
+            char byte = 1;
+            if (signal_fd >= 0 && write(signal_fd, &byte, 1) != 1) rc = 4;
+            struct pollfd gate = {wait_fd, POLLIN, 0};
+            if (wait_fd >= 0 && (poll(&gate, 1, 5000) != 1 || read(wait_fd, &byte, 1) != 1)) {
+                proto_participant_reply_error(p, "the other participant never began", &err);
+                continue;
+            }
+        }
         proto_message_init(&reply, command.type);
         proto_participant_reply(p, &reply, &err);
         if (command.type == PROTO_MSG_SHUTDOWN) break;
@@ -101,15 +114,15 @@ static int serve(const char *endpoint, int endpoint_pipe, serve_mode mode, int d
     return rc;
 }
 
-static pid_t start_child(const char *endpoint, char *bound, size_t bound_size, serve_mode mode,
-                         int delay_ms)
+static pid_t start_gated_child(const char *endpoint, char *bound, size_t bound_size,
+                               serve_mode mode, int delay_ms, int signal_fd, int wait_fd)
 {
     int fds[2] = {-1, -1};
     if (bound && pipe(fds) != 0) fail_msg("pipe");
     pid_t pid = fork();
     if (pid == 0) {
         if (fds[0] >= 0) close(fds[0]);
-        _exit(serve(endpoint, fds[1], mode, delay_ms));
+        _exit(serve(endpoint, fds[1], mode, delay_ms, signal_fd, wait_fd));
     }
     if (bound) {
         close(fds[1]);
@@ -119,6 +132,12 @@ static pid_t start_child(const char *endpoint, char *bound, size_t bound_size, s
         close(fds[0]);
     }
     return pid;
+}
+
+static pid_t start_child(const char *endpoint, char *bound, size_t bound_size, serve_mode mode,
+                         int delay_ms)
+{
+    return start_gated_child(endpoint, bound, bound_size, mode, delay_ms, -1, -1);
 }
 
 static int wait_child(pid_t pid)
@@ -198,63 +217,6 @@ static void test_ipc_exchange_participant_starts_late(void **state)
     unlink(path);
 }
 
-/* Child of the overlap test: answers every command; on BEGIN_STEP it first writes a byte to
- * signal_fd (when >= 0) and waits up to 5 s for one on wait_fd (when >= 0), so that one
- * participant answers only once the other has its BEGIN_STEP. */
-static int serve_gated(const char *endpoint, int endpoint_pipe, int signal_fd, int wait_fd)
-{
-    proto_options options;
-    proto_options_default(&options);
-    options.idle_timeout_ms = 10000;
-    proto_participant *p;
-    nc_error err;
-    if (proto_participant_open(&p, endpoint, "fem", "gated participant", "", &options, &err))
-        return 2;
-    const char *bound = proto_participant_endpoint(p);
-    if (write(endpoint_pipe, bound, strlen(bound) + 1) < 0) return 2;
-    close(endpoint_pipe);
-    proto_message command, reply;
-    memset(&command, 0, sizeof command);
-    memset(&reply, 0, sizeof reply);
-    int rc = 0;
-    while (proto_participant_receive(p, &command, &err) == 0) {
-        if (command.type == PROTO_MSG_BEGIN_STEP) {
-            char byte = 1;
-            if (signal_fd >= 0 && write(signal_fd, &byte, 1) != 1) rc = 4;
-            if (wait_fd >= 0) {
-                struct pollfd pfd = {wait_fd, POLLIN, 0};
-                if (poll(&pfd, 1, 5000) != 1 || read(wait_fd, &byte, 1) != 1) {
-                    proto_participant_reply_error(p, "the other participant never began", &err);
-                    continue;
-                }
-            }
-        }
-        proto_message_init(&reply, command.type);
-        proto_participant_reply(p, &reply, &err);
-        if (command.type == PROTO_MSG_SHUTDOWN) break;
-    }
-    proto_message_free(&command);
-    proto_participant_close(p);
-    return rc;
-}
-
-static pid_t start_gated(char *bound, size_t size, int signal_fd, int wait_fd)
-{
-    int fds[2];
-    if (pipe(fds) != 0) fail_msg("pipe");
-    pid_t pid = fork();
-    if (pid == 0) {
-        close(fds[0]);
-        _exit(serve_gated("tcp://127.0.0.1:*", fds[1], signal_fd, wait_fd));
-    }
-    close(fds[1]);
-    ssize_t got = read(fds[0], bound, size - 1);
-    assert_true(got > 0);
-    bound[got] = '\0';
-    close(fds[0]);
-    return pid;
-}
-
 /* proto_peer_send and proto_peer_receive let requests to two peers overlap: the first peer
  * answers its BEGIN_STEP only after the second has received its own, which a request that
  * waits for the first answer before sending the second could never see (the first would
@@ -265,8 +227,9 @@ static void test_requests_overlap(void **state)
     int gate[2];
     assert_int_equal(pipe(gate), 0);
     char bound[2][256];
-    pid_t child[2] = {start_gated(bound[0], sizeof bound[0], -1, gate[0]),
-                      start_gated(bound[1], sizeof bound[1], gate[1], -1)};
+    pid_t child[2] = {
+        start_gated_child("tcp://127.0.0.1:*", bound[0], sizeof bound[0], SERVE_ECHO, 0, -1, gate[0]),
+        start_gated_child("tcp://127.0.0.1:*", bound[1], sizeof bound[1], SERVE_ECHO, 0, gate[1], -1)};
     close(gate[0]);
     close(gate[1]);
     proto_peer *peer[2];
