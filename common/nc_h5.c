@@ -2,7 +2,9 @@
 #include "nc_h5.h"
 
 #include <errno.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static hid_t mem_type(nc_h5_type type)
@@ -101,10 +103,20 @@ int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err)
     return 0;
 }
 
+static int write_pending(nc_h5_series *s, nc_error *err);
+static int enlist(nc_h5_file *f, nc_h5_series *s, nc_error *err);
+
+void nc_h5_set_buffered(nc_h5_file *f, int on)
+{
+    f->buffered = on;
+}
+
 int nc_h5_flush(nc_h5_file *f, nc_error *err)
 {
     if (f->file < 0) return 0;
     if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error", f->path);
+    for (int i = 0; i < f->n_series; i++)
+        if (write_pending(f->series[i], err)) return -1;
     errno = 0;
     if (H5Fflush(f->file, H5F_SCOPE_GLOBAL) < 0) return fail(f, err, "cannot flush", "the file");
     return 0;
@@ -112,7 +124,13 @@ int nc_h5_flush(nc_h5_file *f, nc_error *err)
 
 void nc_h5_close(nc_h5_file *f)
 {
-    if (f && f->file > 0) {
+    if (!f) return;
+    for (int i = 0; i < f->n_series && !f->failed; i++)
+        if (write_pending(f->series[i], NULL)) break;
+    free(f->series);
+    f->series = NULL;
+    f->n_series = f->cap_series = 0;
+    if (f->file > 0) {
         /* after a failed write HDF5 cannot flush the file and would fail (or crash) closing
          * it: it is left as the last successful flush wrote it and released by the OS */
         if (!f->failed && H5Fclose(f->file) < 0) f->failed = 1;
@@ -236,7 +254,7 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     H5Pclose(props);
     H5Sclose(space);
     if (s->dataset < 0) return fail(f, err, "cannot create dataset", path);
-    return 0;
+    return enlist(f, s, err);
 }
 
 int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
@@ -281,40 +299,104 @@ int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_ty
     errno = 0;
     if (dims[0] != keep_rows && H5Dset_extent(s->dataset, s->dims) < 0)
         return fail(f, err, "cannot truncate", path);
-    return 0;
+    return enlist(f, s, err);
 }
 
 hsize_t nc_h5_series_rows(const nc_h5_series *s)
 {
-    return s->dataset > 0 ? s->dims[0] : 0;
+    return s->dataset > 0 ? s->dims[0] + s->pending_rows : 0;
+}
+
+static size_t row_bytes(const nc_h5_series *s)
+{
+    size_t n = s->type == NC_H5_F64 ? sizeof(double) : sizeof(int32_t);
+    for (int i = 1; i < s->rank; i++) n *= (size_t)s->dims[i];
+    return n;
+}
+
+/* rows more rows at the end of the dataset */
+static int write_rows(nc_h5_series *s, const void *data, hsize_t rows, nc_error *err)
+{
+    hsize_t new_dims[3] = {s->dims[0] + rows, s->dims[1], s->dims[2]};
+    errno = 0;
+    if (H5Dset_extent(s->dataset, new_dims) < 0) return fail(s->owner, err, "cannot extend", s->name);
+    hid_t file_space = H5Dget_space(s->dataset);
+    hsize_t start[3] = {s->dims[0], 0, 0};
+    hsize_t count[3] = {rows, s->dims[1], s->dims[2]};
+    H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, NULL, count, NULL);
+    hid_t mem_space = H5Screate_simple(s->rank, count, NULL);
+    herr_t rc = H5Dwrite(s->dataset, mem_type(s->type), mem_space, file_space, H5P_DEFAULT, data);
+    H5Sclose(mem_space);
+    H5Sclose(file_space);
+    if (rc < 0) return fail(s->owner, err, "cannot write to", s->name);
+    s->dims[0] += rows;
+    return 0;
+}
+
+static int write_pending(nc_h5_series *s, nc_error *err)
+{
+    if (s->pending_rows == 0 || s->dataset <= 0) return 0;
+    if (s->owner->failed)
+        return nc_error_set(err, 1, "%s: %s not written after an earlier write error", s->owner->path, s->name);
+    int rc = write_rows(s, s->pending, (hsize_t)s->pending_rows, err);
+    s->pending_rows = 0;
+    return rc;
+}
+
+/* A series of a buffered file joins the file's list, which nc_h5_flush writes. */
+static int enlist(nc_h5_file *f, nc_h5_series *s, nc_error *err)
+{
+    if (!f->buffered) return 0;
+    if (f->n_series == f->cap_series) {
+        int cap = f->cap_series ? 2 * f->cap_series : 16;
+        nc_h5_series **list = realloc(f->series, (size_t)cap * sizeof *list);
+        if (!list) return nc_error_set(err, 1, "%s: out of memory for %s", f->path, s->name);
+        f->series = list;
+        f->cap_series = cap;
+    }
+    f->series[f->n_series++] = s;
+    return 0;
+}
+
+static void delist(nc_h5_file *f, const nc_h5_series *s)
+{
+    for (int i = 0; i < f->n_series; i++)
+        if (f->series[i] == s) {
+            f->series[i] = f->series[--f->n_series];
+            return;
+        }
 }
 
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
 {
     if (s->owner->failed)
         return nc_error_set(err, 1, "%s: %s not written after an earlier write error", s->owner->path, s->name);
-    hsize_t new_dims[3] = {s->dims[0] + 1, s->dims[1], s->dims[2]};
-    errno = 0;
-    if (H5Dset_extent(s->dataset, new_dims) < 0) return fail(s->owner, err, "cannot extend", s->name);
-    hid_t file_space = H5Dget_space(s->dataset);
-    hsize_t start[3] = {s->dims[0], 0, 0};
-    hsize_t count[3] = {1, s->dims[1], s->dims[2]};
-    H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, NULL, count, NULL);
-    hid_t mem_space = H5Screate_simple(s->rank, count, NULL);
-    herr_t rc = H5Dwrite(s->dataset, mem_type(s->type), mem_space, file_space, H5P_DEFAULT, row);
-    H5Sclose(mem_space);
-    H5Sclose(file_space);
-    if (rc < 0) return fail(s->owner, err, "cannot write to", s->name);
-    s->dims[0]++;
+    if (!s->owner->buffered) return write_rows(s, row, 1, err);
+    const size_t bytes = row_bytes(s);
+    if (s->pending_rows == s->pending_cap) {
+        size_t cap = s->pending_cap ? 2 * s->pending_cap : 64;
+        unsigned char *grown = realloc(s->pending, cap * bytes);
+        if (!grown) return nc_error_set(err, 1, "%s: out of memory for %s", s->owner->path, s->name);
+        s->pending = grown;
+        s->pending_cap = cap;
+    }
+    memcpy(s->pending + s->pending_rows * bytes, row, bytes);
+    s->pending_rows++;
     return 0;
 }
 
 void nc_h5_series_close(nc_h5_series *s)
 {
-    if (s && s->dataset > 0) {
+    if (!s) return;
+    if (s->dataset > 0) {
+        if (!s->owner->failed) write_pending(s, NULL);
+        delist(s->owner, s);
         H5Dclose(s->dataset);
         s->dataset = H5I_INVALID_HID;
     }
+    free(s->pending);
+    s->pending = NULL;
+    s->pending_rows = s->pending_cap = 0;
 }
 
 int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,

@@ -3,7 +3,8 @@
  * Files are created fresh (truncating) or reopened to append (nc_h5_open), datasets are addressed by absolute paths whose
  * parent groups are created on demand, and time series grow along their first dimension
  * one row at a time. nc_h5_flush() after each output step keeps everything written so far
- * readable if the process is later stopped or killed (the file stays in the default,
+ * readable if the process is later stopped or killed (a file whose rows are buffered in
+ * memory, nc_h5_set_buffered, as the last flush left it) (the file stays in the default,
  * pre-1.10 format, which has no "file open for writing" flag to clear after a crash).
  *
  * Write errors (a full disk): the message names the file, what failed and the operating
@@ -19,10 +20,14 @@
 #include <stddef.h>
 #include "nc_error.h"
 
+struct nc_h5_series;
 typedef struct nc_h5_file {
     hid_t file;
     char path[512];
     int failed;         /* a write or flush failed: nothing more is written (see nc_h5_close) */
+    int buffered;       /* series rows wait in memory for nc_h5_flush (nc_h5_set_buffered) */
+    struct nc_h5_series **series;   /* buffered: the open series, which nc_h5_flush writes */
+    int n_series, cap_series;
 } nc_h5_file;
 
 typedef enum { NC_H5_F64, NC_H5_I32 } nc_h5_type;
@@ -35,6 +40,8 @@ typedef struct nc_h5_series {
     hsize_t dims[3];
     char name[256];
     nc_h5_file *owner;
+    unsigned char *pending;          /* buffered file: rows appended since the last flush */
+    size_t pending_rows, pending_cap;
 } nc_h5_series;
 
 int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
@@ -42,6 +49,13 @@ int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
  * a dataset that exists replaces it, attributes are replaced too. */
 int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err);
 int nc_h5_flush(nc_h5_file *f, nc_error *err);
+/* With on = 1 (before its series are created or opened), the rows appended to the file's
+ * series wait in memory, and nc_h5_flush writes each series' rows in one go before flushing
+ * the file (nc_h5_series_close and nc_h5_close write what waits, too). Between two flushes no
+ * HDF5 call touches the file, so a process killed there leaves it exactly as the last flush
+ * wrote it; a writer that appends rows often flushes only every so often instead of after
+ * each row (coupler/cpl_history.c). */
+void nc_h5_set_buffered(nc_h5_file *f, int on);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
 
 /* Fixed-size datasets: rank 1..3, dims[rank]. */
@@ -56,7 +70,8 @@ int nc_h5_attr_string(nc_h5_file *f, const char *object, const char *name, const
 /* row_dims has rank-1 entries (NULL for rank 1). */
 int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
                         int rank, const hsize_t *row_dims, nc_error *err);
-/* Appends one row of prod(row_dims) values. */
+/* Appends one row of prod(row_dims) values (on a buffered file: in memory, until the next
+ * flush). */
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err);
 void nc_h5_series_close(nc_h5_series *s);
 /* Opens an existing series of an opened file for appending, checking type, rank and row_dims,
@@ -64,7 +79,7 @@ void nc_h5_series_close(nc_h5_series *s);
  * holds fewer). */
 int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_type type,
                       int rank, const hsize_t *row_dims, hsize_t keep_rows, nc_error *err);
-hsize_t nc_h5_series_rows(const nc_h5_series *s);   /* rows written (0 if not open) */
+hsize_t nc_h5_series_rows(const nc_h5_series *s);   /* rows appended (0 if not open) */
 
 /* The same with a "units" string attribute on the dataset ("m", "N", "m/s", "1", ...). */
 int nc_h5_write_units(nc_h5_file *f, const char *path, nc_h5_type type, int rank,

@@ -1,6 +1,8 @@
 /* cpl_history — coupling.h5 and iterations.log, written step by step and flushed. */
 #include "cpl_history.h"
 
+#include "nc_clock.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -60,13 +62,28 @@ int cpl_history_resume(cpl_history *h, const char *dir, const cpl_loop_settings 
     return open_files(h, dir, s, write_iterations, err);
 }
 
-void cpl_history_mark(cpl_history *h)
+/* coupling.h5 is written every CPL_HISTORY_FLUSH_INTERVAL_S of wall time (its rows wait in
+ * memory in between, nc_h5_set_buffered): flushing it after every step took a third of the
+ * coupler's own time in a run of small steps (docs/notes/interface_jacobian.md) */
+static int flush_due(cpl_history *h, nc_error *err)
 {
-    if (!h->open) return;
+    const double now = nc_clock_now_s();
+    if (now - h->flushed_at_s < CPL_HISTORY_FLUSH_INTERVAL_S) return 0;
+    h->flushed_at_s = now;
+    return nc_h5_flush(&h->h5, err);
+}
+
+int cpl_history_mark(cpl_history *h, nc_error *err)
+{
+    if (!h->open) return 0;
+    /* the rows up to the checkpoint are in the file before the checkpoint names them */
+    if (nc_h5_flush(&h->h5, err)) return -1;
+    h->flushed_at_s = nc_clock_now_s();
     h->mark_steps = (long)nc_h5_series_rows(&h->s_time);
     h->mark_iterations = (long)nc_h5_series_rows(&h->i_step);
     h->mark_rejections = (long)nc_h5_series_rows(&h->r_step);
     h->mark_log_bytes = h->log ? ftell(h->log) : 0;
+    return 0;
 }
 
 void cpl_history_checkpoint_entries(cpl_history *h, cpl_ckpt_table *t)
@@ -84,6 +101,8 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
     char path[2048];
     snprintf(path, sizeof path, "%s/coupling.h5", dir);
     if (h->resuming ? nc_h5_open(&h->h5, path, err) : nc_h5_create(&h->h5, path, err)) return -1;
+    nc_h5_set_buffered(&h->h5, 1);
+    h->flushed_at_s = nc_clock_now_s();
     h->open = 1;
     h->write_iterations = write_iterations;
     /* the residual is a scaled norm of the relaxed quantity */
@@ -211,7 +230,7 @@ int cpl_history_step(cpl_history *h, const cpl_step_record *rec, nc_error *err)
     int32_t above = rec->energy.above;
     for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++)
         if (nc_h5_series_append(&h->e_series[k], &ev[k], err)) return -1;
-    if (nc_h5_series_append(&h->e_above, &above, err) || nc_h5_flush(&h->h5, err)) return -1;
+    if (nc_h5_series_append(&h->e_above, &above, err) || flush_due(h, err)) return -1;
     fprintf(h->log, "%ld %.9g %d %d %.6e %.9g %d %.6e %.6e\n", rec->step, rec->time_s,
             rec->iterations, rec->converged, rec->residual, rec->dt_s, rec->rejected,
             rec->energy.created_j, rec->energy.input_j);
@@ -237,8 +256,7 @@ int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *e
         nc_h5_series_append(&h->r_next_dt, &rec->next_dt_s, err) ||
         nc_h5_series_append(&h->r_iterations, &its, err) ||
         nc_h5_series_append(&h->r_residual, &rec->residual, err) ||
-        nc_h5_series_append(&h->r_reason, &reason, err) ||
-        nc_h5_flush(&h->h5, err))
+        nc_h5_series_append(&h->r_reason, &reason, err) || flush_due(h, err))
         return -1;
     fprintf(h->log, "# rejected step %ld (t = %.9g s, dt = %.9g s, try %d): %s after %d "
             "iterations, residual %.6e; retried with dt = %.9g s%s%s\n", rec->step, rec->time_s,

@@ -17,7 +17,10 @@
  *                     rejected created_J input_J", a "# rejected ..." comment line per
  *                     rejected try and one "# energy created ..." line at the first step
  *                     above the energy guard's limit
- * Both are flushed after every step, so they stay readable if the coupler is killed.
+ * iterations.log is flushed after every step; coupling.h5 keeps its rows in memory and is
+ * written every CPL_HISTORY_FLUSH_INTERVAL_S of wall time, at a checkpoint and when closed,
+ * so it stays readable if the coupler is killed (it then lacks at most that last interval's
+ * rows).
  */
 #ifndef CPL_HISTORY_H
 #define CPL_HISTORY_H
@@ -27,6 +30,7 @@
 #include "nc_h5.h"
 
 #define CPL_HISTORY_ENERGY_SERIES 17
+#define CPL_HISTORY_FLUSH_INTERVAL_S 0.25   /* wall time between writes of coupling.h5 */
 
 typedef struct cpl_history {
     nc_h5_file h5;
@@ -47,15 +51,16 @@ typedef struct cpl_history {
     /* resuming: series are opened and cut back to the marks instead of created */
     int resuming;
     hsize_t keep;
+    double flushed_at_s;        /* nc_clock_now_s() of the last write of coupling.h5 */
 } cpl_history;
 
 /* Creates both files in `dir` (which must exist). */
 int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s,
                      int write_iterations, nc_error *err);
-/* Checkpoint: records the rows of each group and the length of the log in the marks
- * (call it after the step's row is written), and adds the marks and energy_warned to a
+/* Checkpoint: writes coupling.h5 and records the rows of each group and the length of the
+ * log in the marks (call it after the step's row is appended), and adds the marks and energy_warned to a
  * checkpoint table (the same entries are loaded into a fresh, zeroed cpl_history). */
-void cpl_history_mark(cpl_history *h);
+int cpl_history_mark(cpl_history *h, nc_error *err);
 void cpl_history_checkpoint_entries(cpl_history *h, cpl_ckpt_table *t);
 /* Resume: reopens both files of `dir` as they were at the checkpoint whose marks h holds
  * (loaded with cpl_history_checkpoint_entries): every series cut back to its rows, the log

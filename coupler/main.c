@@ -240,7 +240,7 @@ static int observe_checkpoint(void *ctx, long step, double time_s, const char *n
     char dir[2048], path[2400], manifest[2400];
     snprintf(dir, sizeof dir, "%s/checkpoint", a->output_dir);
     if (nc_file_make_dirs(dir, err)) return -1;
-    cpl_history_mark(&a->history);
+    if (cpl_history_mark(&a->history, err)) return -1;
     cpl_ckpt_table t = {0};
     app_checkpoint_entries(a, &t);
     cpl_checkpoint_path(a->output_dir, name, path, sizeof path);

@@ -806,7 +806,7 @@ def case_dt_of(case):
 
 
 def jacobian_metrics(run_dir, seconds, node, component):
-    """The study's numbers of one run (partial for a stopped run: coupling.h5 is flushed per step)."""
+    """The study's numbers of one run (partial for a stopped run: the coupler writes coupling.h5 as it stops)."""
     import h5py
     info = {}
     done = os.path.join(run_dir, "done.json")

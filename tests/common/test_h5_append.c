@@ -2,7 +2,7 @@
  * cut back to the rows it held at the checkpoint and grows again from there, the rows before
  * are untouched, a dataset written again is replaced, and a file or series that does not fit
  * (missing, other row size, fewer rows than the checkpoint needs) is refused with a message
- * naming the file and the dataset. */
+ * naming the file and the dataset; a buffered file's rows wait for its flush. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "nc_h5.h"
@@ -138,11 +139,68 @@ static void test_refusals(void **state)
     assert_non_null(strstr(err.message, "not an HDF5 file"));
 }
 
+/* A buffered file: appended rows wait in memory; a flush writes them, and a process that
+ * dies after appending more leaves the file readable as that flush wrote it. After a clean
+ * close every row is there, in order, for a rank-1 int and a rank-2 double series. */
+static void test_buffered_rows_wait_for_flush(void **state)
+{
+    (void)state;
+    hsize_t row_dims[1] = {3};
+    for (int die = 1; die >= 0; die--) {
+        pid_t pid = fork();
+        if (pid == 0) {
+            nc_error err;
+            nc_h5_file f;
+            nc_h5_series s, n;
+            if (nc_h5_create(&f, path, &err)) _exit(2);
+            nc_h5_set_buffered(&f, 1);
+            if (nc_h5_series_create(&f, &s, "/output/u", NC_H5_F64, 2, row_dims, &err) ||
+                nc_h5_series_create(&f, &n, "/output/n", NC_H5_I32, 1, NULL, &err))
+                _exit(3);
+            for (int32_t r = 0; r < 200; r++) {
+                double row[3] = {r, r + 0.25, r + 0.5};
+                if (nc_h5_series_append(&s, row, &err) || nc_h5_series_append(&n, &r, &err)) _exit(4);
+                if (nc_h5_series_rows(&s) != (hsize_t)r + 1) _exit(5);
+                if (r == 149 && nc_h5_flush(&f, &err)) _exit(6);
+            }
+            if (die) _exit(0);   /* 50 rows appended after the flush, never written */
+            nc_h5_series_close(&s);
+            nc_h5_series_close(&n);
+            nc_h5_close(&f);
+            _exit(0);
+        }
+        int status = 0;
+        waitpid(pid, &status, 0);
+        assert_true(WIFEXITED(status));
+        assert_int_equal(WEXITSTATUS(status), 0);
+        const size_t rows = die ? 150 : 200;
+        double got[600];
+        read_all(got, rows);
+        for (size_t r = 0; r < rows; r++) {
+            assert_true(got[3 * r] == (double)r);
+            assert_true(got[3 * r + 2] == (double)r + 0.5);
+        }
+        hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+        hid_t d = H5Dopen2(file, "/output/n", H5P_DEFAULT);
+        int32_t ints[200];
+        hid_t space = H5Dget_space(d);
+        hsize_t dims[1];
+        H5Sget_simple_extent_dims(space, dims, NULL);
+        assert_int_equal(dims[0], rows);
+        assert_true(H5Dread(d, H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, ints) >= 0);
+        for (size_t r = 0; r < rows; r++) assert_int_equal(ints[r], (int32_t)r);
+        H5Sclose(space);
+        H5Dclose(d);
+        H5Fclose(file);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_truncate_and_append, setup, teardown),
         cmocka_unit_test_setup_teardown(test_refusals, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_buffered_rows_wait_for_flush, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
