@@ -199,18 +199,28 @@ any_running() {   # status 0 while one of the programs runs
   done
   return 1
 }
-running() {   # names of the programs still running
+# running and how answer in REPLY: a $(...) costs a process, and the launcher's own time is
+# paid by every run
+running() {   # REPLY = names of the programs still running
   local p out=""
   for p in "${programs[@]}"; do
     [ -n "${pid[$p]:-}" ] && [ -z "${rc[$p]:-}" ] && out="$out $p"
   done
-  echo "${out# }"
+  REPLY=${out# }
 }
-how() {   # P -> "exit 1", "exit 137 = SIGKILL" (killed, or exited so), "running"
-  local r=${rc[$1]:-}
-  if [ -z "$r" ]; then echo "running"
-  elif [ "$r" -gt 128 ] && [ "$r" -lt 160 ]; then echo "exit $r = SIG$(kill -l $((r - 128)))"
-  else echo "exit $r"; fi
+how() {   # P -> REPLY = "exit 1", "exit 137 = SIGKILL" (killed, or exited so), "running"
+  local r=${rc[$1]:-} signals=(HUP INT QUIT ILL TRAP ABRT BUS FPE KILL USR1 SEGV USR2 PIPE ALRM TERM)
+  if [ -z "$r" ]; then REPLY="running"
+  elif [ "$r" -gt 128 ] && [ "$r" -le $((128 + ${#signals[@]})) ]; then
+    REPLY="exit $r = SIG${signals[r - 129]}"
+  elif [ "$r" -gt 128 ] && [ "$r" -lt 160 ]; then REPLY="exit $r = SIG$(kill -l $((r - 128)))"
+  else REPLY="exit $r"; fi
+}
+log_has() {   # FILE TEXT: status 0 when FILE exists and has TEXT in it (without a process)
+  local lines=()
+  [ -f "$1" ] || return 1
+  mapfile -t lines < "$1"
+  [[ "${lines[*]}" == *"$2"* ]]
 }
 fail_first() {   # P WHY: P is the first program that failed (later calls change nothing)
   [ -n "$failed" ] && return 0
@@ -219,12 +229,12 @@ fail_first() {   # P WHY: P is the first program that failed (later calls change
 stop_all() {   # SIGTERM to every running program at once, SIGKILL after the grace time
   local p list
   reap; any_running || return 0
-  list=$(running)
+  running; list=$REPLY
   for p in $list; do kill -TERM "${pid[$p]}" 2>/dev/null; kill -CONT "${pid[$p]}" 2>/dev/null; done
   now_ms; local until=$((NOW_MS + grace_ms))
   while any_running && [ "$NOW_MS" -lt "$until" ]; do nap 0.01; reap; now_ms; done
-  for p in $(running); do kill -KILL "${pid[$p]}" 2>/dev/null; done
-  for p in $(running); do wait "${pid[$p]}"; rc[$p]=$?; done
+  running; for p in $REPLY; do kill -KILL "${pid[$p]}" 2>/dev/null; done
+  running; for p in $REPLY; do wait "${pid[$p]}"; rc[$p]=$?; done
 }
 wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS milliseconds
   now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
@@ -258,7 +268,7 @@ report() {
   trap - EXIT
   for p in "${programs[@]}"; do
     [ -n "${pid[$p]:-}" ] && { [ "$p" != "$failed" ] || [ -n "$interrupted" ]; } \
-      && others="$others, $p ($(how "$p"))"
+      && how "$p" && others="$others, $p ($REPLY)"
   done
   others=${others#, }
   if [ -n "$interrupted" ]; then
@@ -275,13 +285,13 @@ report() {
   fi
   # the structure's ropes above their breaking load: a right answer for ropes that do not
   # break, which real ones would; the FEM's warnings say which sets, how far and when
-  if [ -f fem.log ] && grep -q "exceeded breaking_load_n" fem.log; then
+  if log_has fem.log "exceeded breaking_load_n"; then
     echo "run_case: ropes above their breaking load (the model has no rope failure):" >&2
     grep "exceeded breaking_load_n" fem.log | sed 's/^fem_solver: warning: /  /' >&2
   fi
   # the coupler's verdict (the last line of its summary) also when an accept_* key let it
   # exit 0: such a run is never reported as done
-  if [ "${rc[coupler]:-}" -eq 3 ] || grep -q "results are NOT reliable" coupler.log || [ -n "$unreliable" ]; then
+  if [ "${rc[coupler]:-}" -eq 3 ] || log_has coupler.log "results are NOT reliable" || [ -n "$unreliable" ]; then
     echo "run_case: finished, but the results are NOT reliable; results in $out" >&2
     grep "results are NOT reliable" coupler.log >&2
     for p in $unreliable; do   # the solver's last line says why
@@ -363,8 +373,9 @@ while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   reap
   for p in fem dem; do
     if [ -n "${rc[$p]:-}" ]; then
-      if [ -s "$p.endpoint" ]; then fail_first "$p" "$(how "$p") before the handshake"
-      else fail_first "$p" "$(how "$p") before publishing its endpoint"; fi
+      how "$p"
+      if [ -s "$p.endpoint" ]; then fail_first "$p" "$REPLY before the handshake"
+      else fail_first "$p" "$REPLY before publishing its endpoint"; fi
     fi
   done
   [ -n "$failed" ] || [ -n "$interrupted" ] && report
@@ -479,7 +490,7 @@ while :; do
       if [ "$cpl_state" = connecting ] || [ "$cpl_state" = running ] || [ -z "$cpl_state" ]; then
         noticed_ms[$p]=$NOW_MS
         if [ "${rc[$p]:-}" -eq 0 ]; then fail_first "$p" "exit 0 before the coupler told it to stop"
-        else fail_first "$p" "$(how "$p") while the coupler was ${cpl_state:-starting}"; fi
+        else how "$p"; fail_first "$p" "$REPLY while the coupler was ${cpl_state:-starting}"; fi
       fi
     fi
     # running, the coupler gets the grace time to notice by itself (its message names step
@@ -511,7 +522,7 @@ done
 if [ "${rc[coupler]:-}" -eq 0 ] || [ "${rc[coupler]:-}" -eq 3 ]; then
   # after SHUTDOWN they close their files; a solver still running after 30 s has hung
   wait_all_exit 30000
-  for p in $(running); do fail_first "$p" "did not exit within 30 s after SHUTDOWN"; done
+  running; for p in $REPLY; do fail_first "$p" "did not exit within 30 s after SHUTDOWN"; done
 else
   error=$(grep -m 1 "^coupler: error: " coupler.log)
   # a Ctrl-C on the terminal reaches the coupler too, maybe before run_case.sh notices
@@ -522,14 +533,15 @@ else
     wait_all_exit "$grace_ms" any
     report
   fi
+  how coupler
   if [ "${rc[coupler]:-}" -gt 128 ]; then
-    fail_first coupler "$(how coupler)"   # it could tell no one: stop the solvers now
+    fail_first coupler "$REPLY"   # it could tell no one: stop the solvers now
   elif [[ $error =~ ^coupler:\ error:\ (fem|dem)[:\ ] ]]; then
     fail_first "${BASH_REMATCH[1]}" "named by the coupler's error"   # printed below
   elif [[ $error =~ ^coupler:\ error:\ (.*) ]]; then
-    fail_first coupler "$(how coupler): ${BASH_REMATCH[1]}"
+    fail_first coupler "$REPLY: ${BASH_REMATCH[1]}"
   else
-    fail_first coupler "$(how coupler)"
+    fail_first coupler "$REPLY"
   fi
   # the healthy solvers were told to shut down; they get the grace time
   [ "${rc[coupler]:-}" -gt 128 ] || wait_all_exit "$grace_ms"
@@ -543,7 +555,7 @@ for p in fem dem; do
     unreliable="$unreliable $p"
     continue
   fi
-  [ -n "${rc[$p]:-}" ] && [ "${rc[$p]:-}" -ne 0 ] && fail_first "$p" "$(how "$p")"
+  [ -n "${rc[$p]:-}" ] && [ "${rc[$p]:-}" -ne 0 ] && how "$p" && fail_first "$p" "$REPLY"
 done
 if [ $live -eq 1 ]; then   # the rest of the log (tail ends within 0.05 s of the coupler)
   [ -n "$log_ended" ] || read_log 1
