@@ -331,7 +331,9 @@ int cpl_read_endpoint_file(const char *path, double timeout_s, char *endpoint, s
         if (nc_clock_now_s() - t0 > timeout_s)
             return nc_error_set(err, 1, "%s: endpoint file did not appear within %.1f s (did "
                                 "the participant start?)", path, timeout_s);
-        struct timespec ts = {0, 50 * 1000 * 1000};
+        /* a participant publishes its endpoint some 50 ms after it starts (its libraries,
+         * its model): looked for often, as the launcher starts all three at once */
+        struct timespec ts = {0, 2 * 1000 * 1000};
         nanosleep(&ts, NULL);
     }
 }

@@ -1,7 +1,8 @@
 /* coupler — drives a FEM and a DEM participant through the netcouple protocol.
  *
- *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP] [--quiet]
- *           [--progress-file PATH] [--resume]
+ *   coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP]
+ *           [--fem-endpoint-file PATH] [--dem-endpoint-file PATH] [--endpoint-wait S]
+ *           [--quiet] [--progress-file PATH] [--resume]
  *
  * Checkpoints (coupler.json "checkpoint", both participants announcing "checkpoint"): after
  * both participants saved theirs, checkpoint/coupler_<name>.h5 (cpl_checkpoint.h) and the
@@ -40,11 +41,17 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP]\n"
-            "               [--quiet] [--progress-file PATH]\n"
+            "               [--fem-endpoint-file PATH] [--dem-endpoint-file PATH]\n"
+            "               [--endpoint-wait S] [--quiet] [--progress-file PATH] [--resume]\n"
             "Couples a FEM and a DEM participant (weak or strong scheme, see coupler/README.md).\n"
             "  --output DIR        results folder (coupling.h5, iterations.log); default '.'\n"
             "  --fem-endpoint EP   override fem.endpoint of coupler.json (e.g. tcp://127.0.0.1:5555)\n"
             "  --dem-endpoint EP   override dem.endpoint\n"
+            "  --fem-endpoint-file PATH, --dem-endpoint-file PATH\n"
+            "                      read the endpoint from the file the participant writes,\n"
+            "                      waiting for it (overrides coupler.json, not --*-endpoint)\n"
+            "  --endpoint-wait S   how long to wait for an endpoint file (default:\n"
+            "                      timeouts.connect of coupler.json)\n"
             "  --quiet             only warnings, errors and the final summary\n"
             "  --progress-file PATH  keep PATH up to date with the run's state and status line\n"
             "                      (a heartbeat: rewritten every step and every second while\n"
@@ -68,6 +75,8 @@ typedef struct watched {
 typedef struct app {
     cpl_config cfg;
     const char *config_path, *output_dir, *fem_ep_arg, *dem_ep_arg, *progress_path;
+    const char *fem_ep_file_arg, *dem_ep_file_arg;   /* --fem-endpoint-file, --dem-... */
+    double endpoint_wait_s;     /* --endpoint-wait; 0: timeouts.connect */
     int quiet;
     cpl_remote fem, dem;
     int fem_open, dem_open;
@@ -376,6 +385,18 @@ static int parse_args(app *a, int argc, char **argv)
             a->fem_ep_arg = argv[++i];
         } else if (!strcmp(arg, "--dem-endpoint") && has_value) {
             a->dem_ep_arg = argv[++i];
+        } else if (!strcmp(arg, "--fem-endpoint-file") && has_value) {
+            a->fem_ep_file_arg = argv[++i];
+        } else if (!strcmp(arg, "--dem-endpoint-file") && has_value) {
+            a->dem_ep_file_arg = argv[++i];
+        } else if (!strcmp(arg, "--endpoint-wait") && has_value) {
+            char *end = NULL;
+            a->endpoint_wait_s = strtod(argv[++i], &end);
+            if (!end || *end || !(a->endpoint_wait_s > 0.0) || a->endpoint_wait_s > 1e6) {
+                fprintf(stderr, "coupler: --endpoint-wait: expected seconds > 0, got '%s'\n",
+                        argv[i]);
+                return -1;
+            }
         } else if (!strcmp(arg, "--progress-file") && has_value) {
             a->progress_path = argv[++i];
         } else if (arg[0] == '-') {
@@ -398,12 +419,17 @@ static int parse_args(app *a, int argc, char **argv)
 }
 
 static int resolve_endpoint(app *a, const cpl_endpoint_config *c, const char *arg,
-                            const char *name, char *out, size_t size, nc_error *err)
+                            const char *file_arg, const char *name, char *out, size_t size,
+                            nc_error *err)
 {
     if (arg) {
         snprintf(out, size, "%s", arg);
         return 0;
     }
+    if (file_arg)
+        return cpl_read_endpoint_file(file_arg, a->endpoint_wait_s > 0.0 ? a->endpoint_wait_s
+                                                                         : a->cfg.connect_timeout_s,
+                                      out, size, a->stop_signal, err);
     if (c->endpoint[0]) {
         snprintf(out, size, "%s", c->endpoint);
         return 0;
@@ -427,13 +453,23 @@ static int shutdown_all(app *a, const cpl_participant *failed)
     cpl_remote *all[2] = {&a->fem, &a->dem};
     int open[2] = {a->fem_open, a->dem_open};
     const char *known[2] = {a->fem_ep, a->dem_ep};
+    const char *files[2] = {a->fem_ep_file_arg, a->dem_ep_file_arg};
     for (int i = 0; i < 2; i++) {
         cpl_remote *r = all[i];
         if (!open[i]) {
-            /* not connected yet (start-up failed): still ask it to go, if we know where */
-            if (!known[i][0]) continue;
+            /* not connected yet (start-up failed): still ask it to go, if we know where; one
+             * started together with the coupler publishes its endpoint file within its own
+             * start-up */
+            char found[sizeof a->fem_ep] = "";
+            const char *endpoint = known[i];
+            nc_error ignored;
+            if (!endpoint[0] && files[i] &&
+                cpl_read_endpoint_file(files[i], timeout_s, found, sizeof found, NULL,
+                                       &ignored) == 0)
+                endpoint = found;
+            if (!endpoint[0]) continue;
             snprintf(r->name, sizeof r->name, "%s", i == 0 ? "fem" : "dem");
-            snprintf(r->endpoint, sizeof r->endpoint, "%s", known[i]);
+            snprintf(r->endpoint, sizeof r->endpoint, "%s", endpoint);
             nc_error err;
             cpl_heartbeat_wait_begin(a->heartbeat, r->name, timeout_s);
             cpl_remote_shutdown(r, timeout_s, &err);
@@ -655,11 +691,13 @@ int main(int argc, char **argv)
     /* start-up waits: each is bounded by the connect or reply timeout */
     const double t_connect = a.cfg.connect_timeout_s, t_reply = a.cfg.reply_timeout_s;
     int bad;
-    cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_connect);
-    bad = resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, "fem", fem_ep, sizeof a.fem_ep, &err);
-    cpl_heartbeat_wait_begin(a.heartbeat, "dem", t_connect);
-    bad = bad || resolve_endpoint(&a, &a.cfg.dem, a.dem_ep_arg, "dem", dem_ep, sizeof a.dem_ep,
-                                  &err);
+    const double t_files = a.endpoint_wait_s > 0.0 ? a.endpoint_wait_s : t_connect;
+    cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_files);
+    bad = resolve_endpoint(&a, &a.cfg.fem, a.fem_ep_arg, a.fem_ep_file_arg, "fem", fem_ep,
+                           sizeof a.fem_ep, &err);
+    cpl_heartbeat_wait_begin(a.heartbeat, "dem", t_files);
+    bad = bad || resolve_endpoint(&a, &a.cfg.dem, a.dem_ep_arg, a.dem_ep_file_arg, "dem",
+                                  dem_ep, sizeof a.dem_ep, &err);
     cpl_heartbeat_wait_begin(a.heartbeat, "fem", t_connect + t_reply);
     bad = bad || cpl_remote_open(&a.fem, CPL_REMOTE_FEM, fem_ep, t_connect, t_reply, &err);
     cpl_heartbeat_wait_end(a.heartbeat);

@@ -57,7 +57,8 @@ Progress: on a terminal one live status line (time, remaining wall time at the r
 contact, rock speed/energy, net deflection, iterations) under the coupler's messages;
 otherwise the coupler's log as it grows, with a plain status line every progress_interval s.
 The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoint, so
-parallel runs never collide. Programs come from $NC_BIN if set, else <repo>/bin.
+parallel runs never collide; the coupler, started with them, reads them from there.
+Programs come from $NC_BIN if set, else <repo>/bin.
 $NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
 $NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their endpoints.
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
@@ -331,7 +332,7 @@ printf 'fem %s\ndem %s\n' "$fem_program" "$dem_program" > run_case.programs
 remove_files coupler.progress coupler.progress.tmp
 status_shown=0; show_pid=""
 
-# ---- start the solvers and wait for their endpoints -------------------------------------
+# ---- start the solvers -------------------------------------------------------------------
 # A run_case.sh killed with SIGKILL cannot stop its programs: each gets SIGTERM from the kernel
 # when run_case.sh dies (setpriv --pdeathsig, util-linux), instead of waiting for a coupler
 # that never comes until its idle timeout.
@@ -368,9 +369,28 @@ exec_closing "$nap_fd $alive_fd $alive_w" "${guard[@]}" $dem_program dem.json \
   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint >dem.log 2>&1 &
 pid[dem]=$!
 
-now_ms; ms endpoint_wait_ms "$endpoint_wait"; endpoint_until=$((NOW_MS + endpoint_wait_ms))
-while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
+# ---- the coupler, started with them: it reads their endpoints as they appear ---------------
+quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
+resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
+: >coupler.log
+# shellcheck disable=SC2206   # the empty arguments vanish
+# (it waits 10 s longer than this script for the endpoints: a solver that never publishes
+# one is reported by this script, naming it)
+ms endpoint_wait_ms "$endpoint_wait"
+printf -v coupler_wait '%d.%03d' $(( (endpoint_wait_ms + 10000) / 1000 )) $(( endpoint_wait_ms % 1000 ))
+coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint-file fem.endpoint
+             --dem-endpoint-file dem.endpoint --endpoint-wait "$coupler_wait"
+             --progress-file coupler.progress $quiet_arg $resume_arg)
+# the coupler inherits the write end of coupler.alive, and this shell closes its own
+exec_closing "$nap_fd $alive_fd" "${coupler_cmd[@]}" >coupler.log 2>&1 &
+pid[coupler]=$!
+[ -z "$alive_w" ] || exec {alive_w}>&-
+
+# ---- the solvers' endpoints (or the coupler ended, e.g. on a bad coupler.json) -------------
+now_ms; endpoint_until=$((NOW_MS + endpoint_wait_ms))
+while { [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; } && [ -z "${rc[coupler]:-}" ]; do
   reap
+  [ -n "${rc[coupler]:-}" ] && break
   for p in fem dem; do
     if [ -n "${rc[$p]:-}" ]; then
       how "$p"
@@ -389,19 +409,7 @@ while [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; do
   nap 0.01
 done
 
-# ---- the coupler, and what the user sees ----------------------------------------------------
-quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
-resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
-: >coupler.log
-fem_endpoint=""; dem_endpoint=""
-read -r fem_endpoint <fem.endpoint; read -r dem_endpoint <dem.endpoint
-# shellcheck disable=SC2206   # the empty arguments vanish
-coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint "$fem_endpoint"
-             --dem-endpoint "$dem_endpoint" --progress-file coupler.progress $quiet_arg $resume_arg)
-# the coupler inherits the write end of coupler.alive, and this shell closes its own
-exec_closing "$nap_fd $alive_fd" "${coupler_cmd[@]}" >coupler.log 2>&1 &
-pid[coupler]=$!
-[ -z "$alive_w" ] || exec {alive_w}>&-
+# ---- what the user sees --------------------------------------------------------------------
 now_ms; cpl_started_ms=$NOW_MS
 
 live=0
