@@ -3,9 +3,9 @@
  * Files are created fresh (truncating) or reopened to append (nc_h5_open), datasets are addressed by absolute paths whose
  * parent groups are created on demand, and time series grow along their first dimension
  * one row at a time. nc_h5_flush() after each output step keeps everything written so far
- * readable if the process is later stopped or killed (a file whose rows are buffered in
- * memory, nc_h5_set_buffered, as the last flush left it) (the file stays in the default,
- * pre-1.10 format, which has no "file open for writing" flag to clear after a crash).
+ * readable if the process is later stopped or killed (the file stays in the default,
+ * pre-1.10 format, which has no "file open for writing" flag to clear after a crash); a file
+ * whose rows wait in memory (nc_h5_set_buffered) is then as its last flush left it.
  *
  * Write errors (a full disk): the message names the file, what failed and the operating
  * system's reason ("No space left on device"); the file is then marked failed, nothing more

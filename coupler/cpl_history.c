@@ -1,4 +1,5 @@
-/* cpl_history — coupling.h5 and iterations.log, written step by step and flushed. */
+/* cpl_history — coupling.h5 and iterations.log, appended step by step (see the header for
+ * when each reaches the disk). */
 #include "cpl_history.h"
 
 #include "nc_clock.h"

@@ -373,11 +373,11 @@ pid[dem]=$!
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
-# shellcheck disable=SC2206   # the empty arguments vanish
-# (it waits 10 s longer than this script for the endpoints: a solver that never publishes
-# one is reported by this script, naming it)
+# it waits 10 s longer than this script for the endpoints: a solver that never publishes
+# one is reported by this script, naming it
 ms endpoint_wait_ms "$endpoint_wait"
 printf -v coupler_wait '%d.%03d' $(( (endpoint_wait_ms + 10000) / 1000 )) $(( endpoint_wait_ms % 1000 ))
+# shellcheck disable=SC2206   # the empty arguments vanish
 coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint-file fem.endpoint
              --dem-endpoint-file dem.endpoint --endpoint-wait "$coupler_wait"
              --progress-file coupler.progress $quiet_arg $resume_arg)
