@@ -387,12 +387,19 @@ pid[coupler]=$!
 [ -z "$alive_w" ] || exec {alive_w}>&-
 
 # ---- the solvers' endpoints (or the coupler ended, e.g. on a bad coupler.json) -------------
-now_ms; endpoint_until=$((NOW_MS + endpoint_wait_ms))
+now_ms; endpoint_until=$((NOW_MS + endpoint_wait_ms)); told_ms=""
 while { [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; } && [ -z "${rc[coupler]:-}" ]; do
   reap
   [ -n "${rc[coupler]:-}" ] && break
+  now_ms
   for p in fem dem; do
     if [ -n "${rc[$p]:-}" ]; then
+      # exit 0: told to go by a coupler that is ending (it refused its coupler.json and is
+      # telling the other solver too); its own verdict is awaited for the grace time
+      if [ "${rc[$p]}" -eq 0 ]; then
+        [ -n "$told_ms" ] || told_ms=$NOW_MS
+        [ $((NOW_MS - told_ms)) -lt "$grace_ms" ] && continue
+      fi
       how "$p"
       if [ -s "$p.endpoint" ]; then fail_first "$p" "$REPLY before the handshake"
       else fail_first "$p" "$REPLY before publishing its endpoint"; fi
