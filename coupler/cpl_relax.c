@@ -95,6 +95,7 @@ static int parse_keys(cpl_relax_settings *s, const cJSON *obj, const char *where
     if (nc_json_check_keys(obj, where, keys, err) ||
         nc_json_number_range_opt(obj, where, "alpha", s->alpha, 1e-12, 2.0, &s->alpha, err))
         return -1;
+    if (cJSON_GetObjectItemCaseSensitive(obj, "alpha")) s->alpha_given = 1;
     /* all methods read their keys first, then all check them: the first error is the same
      * whichever method is chosen */
     cpl_relax_settings each[MAX_METHODS];

@@ -6,8 +6,10 @@
  * modified Gram–Schmidt; a column whose part orthogonal to the newer ones is smaller than
  * `filter` × its norm is dropped (near-dependent, a QR2-type filter), then
  * x^{k+1} = x̃^k + W c. Without any column the update is a plain relaxation
- * x^{k+1} = x^k + α r^k (the common α). Columns made in the last `reuse_steps` steps are
- * kept. For an affine problem with n unknowns x^{n+1} is exact.
+ * x^{k+1} = x^k + α r^k (the common α; when none is given, 1 while the FEM solves with the
+ * DEM's linearisation, whose answer is then Newton's full step, cpl_relax_set_linearised).
+ * Columns made in the last `reuse_steps` steps are kept. For an affine problem with n
+ * unknowns x^{n+1} is exact.
  *
  * Keys: filter, reuse_steps, max_columns. Counters: "columns", "dropped_columns".
  */
@@ -32,6 +34,8 @@ typedef struct iqn_state {
     size_t max_cols;     /* capacity */
     size_t cols;         /* columns in use, newest first */
     double alpha;        /* plain relaxation factor (no columns) */
+    int alpha_given;     /* ... from the file; else 1 while linearised */
+    int linearised;      /* the FEM solves with the DEM's linearisation */
     double filter;
     int reuse_steps;
     long step;           /* steps begun so far */
@@ -125,6 +129,7 @@ static int iqn_create(void **state, const cpl_relax_settings *s, size_t n, size_
     q->n = n;
     q->max_cols = max_cols;
     q->alpha = s->alpha;
+    q->alpha_given = s->alpha_given;
     q->filter = p.filter;
     q->reuse_steps = p.reuse_steps;
     q->V = calloc(n * max_cols, sizeof(double));
@@ -234,8 +239,9 @@ static double iqn_update(void *state, const double *x_in, const double *x_out,
     add_pair(q, x_next, x_out);   /* r_prev now holds r^k */
     if (q->cols > 0) qr_filtered(q);
     if (q->cols == 0) {
-        for (size_t i = 0; i < n; i++) x_next[i] = x_out[i] - (1.0 - q->alpha) * q->r_prev[i];
-        return q->alpha;   /* x_in + α r = x̃ − (1 − α) r */
+        const double alpha = q->linearised && !q->alpha_given ? 1.0 : q->alpha;
+        for (size_t i = 0; i < n; i++) x_next[i] = x_out[i] - (1.0 - alpha) * q->r_prev[i];
+        return alpha;   /* x_in + α r = x̃ − (1 − α) r */
     }
     /* c = argmin ‖V c + r‖:  R c = −Qᵀ r */
     const size_t m = q->cols;
@@ -305,6 +311,12 @@ static void iqn_checkpoint(void *state, cpl_ckpt_table *t, const char *prefix)
     cpl_ckpt_size(t, prefix, "dropped_columns", &q->dropped);
 }
 
+static void iqn_linearised(void *state, int on)
+{
+    iqn_state *q = state;
+    q->linearised = on;
+}
+
 const cpl_relax_ops cpl_relax_iqn_ils = {
     .name = "iqn-ils",
     .keys = iqn_keys,
@@ -316,6 +328,7 @@ const cpl_relax_ops cpl_relax_iqn_ils = {
     .begin_step = iqn_begin_step,
     .update = iqn_update,
     .forget = iqn_forget,
+    .linearised = iqn_linearised,
     .end_step = iqn_end_step,
     .counter = iqn_counter,
     .checkpoint = iqn_checkpoint,

@@ -429,6 +429,34 @@ static void test_iqn_linear_in_n_plus_1_updates(void **state)
     cpl_relax_free(r);
 }
 
+/* IQN-ILS without columns takes a plain step: with its alpha when coupler.json gives one,
+ * else 1 while the FEM solves with the linearisation (Newton's full step) and 0.5 otherwise. */
+static void test_iqn_plain_step_by_regime(void **state)
+{
+    (void)state;
+    for (int given = 0; given < 2; given++)
+        for (int linearised = 0; linearised < 2; linearised++) {
+            cpl_relax_settings s;
+            nc_error err;
+            cpl_relax_settings_default(&s);
+            cJSON *obj = cJSON_Parse(given ? "{\"method\": \"iqn-ils\", \"alpha\": 0.3}"
+                                           : "{\"method\": \"iqn-ils\"}");
+            assert_non_null(obj);
+            assert_int_equal(cpl_relax_settings_parse(&s, obj, "test", &err), 0);
+            cJSON_Delete(obj);
+            cpl_relax *r = create(&s, 2, 1);
+            cpl_relax_set_linearised(r, linearised);
+            double x[2] = {0.0, 0.0}, out[2] = {1.0, 2.0};
+            cpl_relax_begin_step(r);
+            const double alpha = update(r, x, out, x);
+            const double expected = given ? 0.3 : linearised ? 1.0 : 0.5;
+            assert_near(alpha, expected, 0.0);
+            assert_near(x[0], expected * 1.0, 1e-15);
+            assert_near(x[1], expected * 2.0, 1e-15);
+            cpl_relax_free(r);
+        }
+}
+
 /* The same x evaluated twice gives a zero column: the filter must drop it, no NaN. */
 static void test_iqn_filter_drops_dependent_columns(void **state)
 {
@@ -534,6 +562,7 @@ int main(void)
         cmocka_unit_test(test_aitken_newton_regime),
         cmocka_unit_test(test_aitken_newton_rule_steps_aside),
         cmocka_unit_test(test_iqn_linear_in_n_plus_1_updates),
+        cmocka_unit_test(test_iqn_plain_step_by_regime),
         cmocka_unit_test(test_iqn_filter_drops_dependent_columns),
         cmocka_unit_test(test_iqn_reuse_previous_steps),
         cmocka_unit_test(test_divergence_reported),
