@@ -106,9 +106,9 @@ int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err)
 static int write_pending(nc_h5_series *s, nc_error *err);
 static int enlist(nc_h5_file *f, nc_h5_series *s, nc_error *err);
 
-void nc_h5_set_buffered(nc_h5_file *f, int on)
+void nc_h5_set_buffered(nc_h5_file *f)
 {
-    f->buffered = on;
+    f->buffered = 1;
 }
 
 int nc_h5_flush(nc_h5_file *f, nc_error *err)

@@ -49,13 +49,14 @@ int nc_h5_create(nc_h5_file *f, const char *path, nc_error *err);
  * a dataset that exists replaces it, attributes are replaced too. */
 int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err);
 int nc_h5_flush(nc_h5_file *f, nc_error *err);
-/* With on = 1 (before its series are created or opened), the rows appended to the file's
- * series wait in memory, and nc_h5_flush writes each series' rows in one go before flushing
- * the file (nc_h5_series_close and nc_h5_close write what waits, too). Between two flushes no
- * HDF5 call touches the file, so a process killed there leaves it exactly as the last flush
- * wrote it; a writer that appends rows often flushes only every so often instead of after
- * each row (coupler/cpl_history.c). */
-void nc_h5_set_buffered(nc_h5_file *f, int on);
+/* From now on (call it before the file's series are created or opened) the rows appended
+ * to the file's series wait in memory, and nc_h5_flush writes each series' rows in one go
+ * before flushing the file (nc_h5_series_close and nc_h5_close write what waits, too). No
+ * series row reaches the file between two flushes, so a process killed there leaves its
+ * series as the last flush wrote them; a writer that appends rows often flushes only every
+ * so often instead of after each row (coupler/cpl_history.c). Datasets and attributes
+ * written directly (nc_h5_write, nc_h5_attr_*) still go to the file at once. */
+void nc_h5_set_buffered(nc_h5_file *f);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
 
 /* Fixed-size datasets: rank 1..3, dims[rank]. */

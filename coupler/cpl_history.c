@@ -63,9 +63,10 @@ int cpl_history_resume(cpl_history *h, const char *dir, const cpl_loop_settings 
     return open_files(h, dir, s, write_iterations, err);
 }
 
-/* coupling.h5 is written every CPL_HISTORY_FLUSH_INTERVAL_S of wall time (its rows wait in
- * memory in between, nc_h5_set_buffered): flushing it after every step took a third of the
- * coupler's own time in a run of small steps (docs/notes/interface_jacobian.md) */
+/* coupling.h5 is written when a row comes CPL_HISTORY_FLUSH_INTERVAL_S of wall time after
+ * its last write (its rows wait in memory in between, nc_h5_set_buffered): flushing it after
+ * every step took a third of the coupler's own time in a run of small steps
+ * (docs/notes/interface_jacobian.md) */
 static int flush_due(cpl_history *h, nc_error *err)
 {
     const double now = nc_clock_now_s();
@@ -74,12 +75,18 @@ static int flush_due(cpl_history *h, nc_error *err)
     return nc_h5_flush(&h->h5, err);
 }
 
+int cpl_history_flush(cpl_history *h, nc_error *err)
+{
+    if (!h->open) return 0;
+    h->flushed_at_s = nc_clock_now_s();
+    return nc_h5_flush(&h->h5, err);
+}
+
 int cpl_history_mark(cpl_history *h, nc_error *err)
 {
     if (!h->open) return 0;
     /* the rows up to the checkpoint are in the file before the checkpoint names them */
-    if (nc_h5_flush(&h->h5, err)) return -1;
-    h->flushed_at_s = nc_clock_now_s();
+    if (cpl_history_flush(h, err)) return -1;
     h->mark_steps = (long)nc_h5_series_rows(&h->s_time);
     h->mark_iterations = (long)nc_h5_series_rows(&h->i_step);
     h->mark_rejections = (long)nc_h5_series_rows(&h->r_step);
@@ -102,7 +109,7 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
     char path[2048];
     snprintf(path, sizeof path, "%s/coupling.h5", dir);
     if (h->resuming ? nc_h5_open(&h->h5, path, err) : nc_h5_create(&h->h5, path, err)) return -1;
-    nc_h5_set_buffered(&h->h5, 1);
+    nc_h5_set_buffered(&h->h5);
     h->flushed_at_s = nc_clock_now_s();
     h->open = 1;
     h->write_iterations = write_iterations;
@@ -206,7 +213,8 @@ int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_er
            nc_h5_series_append(&h->i_fem_solved, &solved, err) ||
            nc_h5_series_append(&h->i_attempt, &attempt, err) ||
            nc_h5_series_append(&h->i_dt, &rec->dt_s, err) ||
-           nc_h5_series_append(&h->i_jacobian_miss, &rec->jacobian_miss, err)
+           nc_h5_series_append(&h->i_jacobian_miss, &rec->jacobian_miss, err) ||
+           flush_due(h, err)
                ? -1 : 0;
 }
 

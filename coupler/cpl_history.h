@@ -18,9 +18,9 @@
  *                     rejected try and one "# energy created ..." line at the first step
  *                     above the energy guard's limit
  * iterations.log is flushed after every step; coupling.h5 keeps its rows in memory and is
- * written every CPL_HISTORY_FLUSH_INTERVAL_S of wall time, at a checkpoint and when closed,
- * so it stays readable if the coupler is killed (it then lacks at most that last interval's
- * rows).
+ * written when a row is added CPL_HISTORY_FLUSH_INTERVAL_S or more of wall time after its
+ * last write, at a checkpoint, by cpl_history_flush and when closed, so it stays readable if
+ * the coupler is killed (as its last write left it).
  */
 #ifndef CPL_HISTORY_H
 #define CPL_HISTORY_H
@@ -61,6 +61,8 @@ int cpl_history_open(cpl_history *h, const char *dir, const cpl_loop_settings *s
  * log in the marks (call it after the step's row is appended), and adds the marks and energy_warned to a
  * checkpoint table (the same entries are loaded into a fresh, zeroed cpl_history). */
 int cpl_history_mark(cpl_history *h, nc_error *err);
+/* Writes the rows kept in memory to coupling.h5 now (a full disk is reported here). */
+int cpl_history_flush(cpl_history *h, nc_error *err);
 void cpl_history_checkpoint_entries(cpl_history *h, cpl_ckpt_table *t);
 /* Resume: reopens both files of `dir` as they were at the checkpoint whose marks h holds
  * (loaded with cpl_history_checkpoint_entries): every series cut back to its rows, the log

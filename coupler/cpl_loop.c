@@ -311,7 +311,9 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     fp[3] = s->tol_abs;
     fp[4] = (double)n3;
     fp[5] = s->work_tol;
-    fp[6] = cpl_relax_method_id(cpl_relax_settings_method(&s->relax));
+    /* a weak step relaxes nothing: its method is none whatever the settings say */
+    fp[6] = cpl_relax_method_id(s->scheme == CPL_SCHEME_STRONG
+                                    ? cpl_relax_settings_method(&s->relax) : "none");
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */

@@ -33,7 +33,8 @@ typedef struct cpl_relax_settings {
     const cpl_relax_ops *method;
     double alpha;   /* common key: constant α; Aitken α of the very first iteration; IQN α
                        of a plain relaxation step (no columns yet); unused by none */
-    int alpha_given;   /* alpha came from the file (IQN-ILS: 1 with the Jacobian if not) */
+    int alpha_given;   /* alpha came from the file (IQN-ILS: 1 with the Jacobian if not);
+                          code that sets alpha itself sets this too */
     unsigned char params[CPL_RELAX_PARAMS_SIZE];   /* the method's own keys, private */
 } cpl_relax_settings;
 

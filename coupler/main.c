@@ -805,6 +805,9 @@ int main(int argc, char **argv)
         }
         goto fail;
     }
+    /* the rows still in memory reach coupling.h5 before the participants are told to go
+     * (which may take seconds), and a full disk fails the run */
+    if (cpl_history_flush(&a.history, &err)) goto fail;
     beat(&a, "finishing");   /* first: run_case.sh then shows the final status line */
     cpl_progress_finish(&a.progress);
     rc = shutdown_all(&a, NULL) ? 1 : 0;
@@ -831,6 +834,11 @@ fail:
         failure.participant = NULL;
     }
     fprintf(stderr, "coupler: error: %s\n", err.message);
+    if (history_open) {
+        nc_error history_err;
+        if (cpl_history_flush(&a.history, &history_err))
+            fprintf(stderr, "coupler: warning: %s\n", history_err.message);
+    }
     shutdown_all(&a, failure.participant);
     if (a.loop) print_timing(&a);
     rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;

@@ -210,10 +210,8 @@ running() {   # REPLY = names of the programs still running
   REPLY=${out# }
 }
 how() {   # P -> REPLY = "exit 1", "exit 137 = SIGKILL" (killed, or exited so), "running"
-  local r=${rc[$1]:-} signals=(HUP INT QUIT ILL TRAP ABRT BUS FPE KILL USR1 SEGV USR2 PIPE ALRM TERM)
+  local r=${rc[$1]:-}
   if [ -z "$r" ]; then REPLY="running"
-  elif [ "$r" -gt 128 ] && [ "$r" -le $((128 + ${#signals[@]})) ]; then
-    REPLY="exit $r = SIG${signals[r - 129]}"
   elif [ "$r" -gt 128 ] && [ "$r" -lt 160 ]; then REPLY="exit $r = SIG$(kill -l $((r - 128)))"
   else REPLY="exit $r"; fi
 }
@@ -394,9 +392,12 @@ while { [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; } && [ -z "${rc[coupler]
   now_ms
   for p in fem dem; do
     if [ -n "${rc[$p]:-}" ]; then
-      # exit 0: told to go by a coupler that is ending (it refused its coupler.json and is
-      # telling the other solver too); its own verdict is awaited for the grace time
+      # exit 0: told to go by a coupler that is stopping (it refused its coupler.json and
+      # waits for the other solver's endpoint to tell it too): the coupler's verdict counts;
+      # said before it stops, the solver is blamed after the grace time
       if [ "${rc[$p]}" -eq 0 ]; then
+        read_progress
+        [ "$cpl_state" = stopping ] && continue
         [ -n "$told_ms" ] || told_ms=$NOW_MS
         [ $((NOW_MS - told_ms)) -lt "$grace_ms" ] && continue
       fi

@@ -12,12 +12,12 @@
 #  5. --help prints the usage and nothing else;
 #  6. the FEM replies an error (a Newton failure stand-in) -> the FEM alone is named as failed
 #     (the coupler's error names it), the coupler and the DEM as stopped;
-#  8. run_case.sh itself killed (SIGKILL) while it waits for the endpoints, before the coupler
-#     runs -> the solvers already started do not outlive it (no orphan waiting for a coupler
-#     until its idle timeout): gone within a few seconds;
-#  9. a coupler.json the coupler refuses -> the coupler, started with the solvers, tells them
-#     to go (both exit 0, not stopped after the grace time) and only the coupler is named as
-#     failed;
+#  8. run_case.sh itself killed (SIGKILL) while it waits for the endpoints, before the
+#     coupler connects -> the programs already started do not outlive it (no orphan waiting
+#     for a coupler until its idle timeout): gone within a few seconds;
+#  9. a coupler.json the coupler refuses, a DEM slow to start -> the coupler, started with the
+#     solvers, tells them to go (both exit 0, not stopped after the grace time) and only the
+#     coupler is named as failed;
 #  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
 #     (time, remaining time, contact, deflection) with its messages, the final status line
 #     stays, and coupler.log still holds everything without terminal control characters.
@@ -154,7 +154,7 @@ grep -q "coupler: error: fem: step 50 .*requested failure at step 50" "$out.out"
 no_leftovers
 echo "6 ok: $(failed_line)"
 
-# 8. run_case.sh killed before the coupler starts: its solvers must not outlive it
+# 8. run_case.sh killed before the coupler connects: its programs must not outlive it
 launch orphans --dem-program tests/coupler/participants/never_publishes.sh
 for _ in $(seq 200); do [ -s "$out/fem.endpoint" ] && break; sleep 0.05; done
 [ -s "$out/fem.endpoint" ] || fail "orphans: the FEM published no endpoint"
@@ -174,15 +174,15 @@ echo "8 ok: the solvers ended $took s after run_case.sh was killed"
 
 # 9. a coupler.json the coupler refuses: the coupler, started with the solvers, reads their
 # endpoint files all the same and tells them to go (exit 0), instead of leaving them to be
-# stopped after the grace time (exit 143); a solver gone with exit 0 while the other has not
-# yet published its endpoint is not blamed
-launch bad_config --set coupler.dt=-1
+# stopped after the grace time (exit 143); the FEM, gone with exit 0 while the DEM takes 4 s
+# (more than the grace time) to publish its endpoint, is not blamed
+launch bad_config --set coupler.dt=-1 --dem-program tests/coupler/participants/slow_start.sh
 t0=$start_s
-finish "$t0" 15
+finish "$t0" 20
 [ "$rc" -eq 1 ] || fail "bad coupler.json: exit $rc, expected 1"
 failed_line | grep -Eq "^run_case: failed: coupler \(exit 1: coupler.json: dt: .*; stopped: fem \(exit 0\), dem \(exit 0\)$" \
   || fail "bad coupler.json: '$(failed_line)'"
-awk "BEGIN {exit !($took < 8)}" || fail "bad coupler.json: reported after $took s (limit 8 s)"
+awk "BEGIN {exit !($took < 12)}" || fail "bad coupler.json: reported after $took s (limit 12 s)"
 no_leftovers
 echo "9 ok ($took s): $(failed_line)"
 
