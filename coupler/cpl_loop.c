@@ -53,7 +53,7 @@ struct cpl_loop {
     int resume_pending;     /* loaded from a checkpoint: RESUME before the first step */
     char resume_name[64];
     double fingerprint[CPL_FINGERPRINT_N];  /* checkpoint: settings a resumed run must
-                                               share (see cpl_loop_resumed) */
+                                               share (cpl_loop_checkpoint_prepare) */
 };
 
 void cpl_loop_settings_default(cpl_loop_settings *s)
@@ -456,12 +456,10 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
     return rc;
 }
 
-int cpl_loop_resumed(cpl_loop *L, const char *name, const char *path, nc_error *err)
+void cpl_loop_resumed(cpl_loop *L, const char *name)
 {
-    if (check_fingerprint(L, path, err)) return -1;
     snprintf(L->resume_name, sizeof L->resume_name, "%s", name);
     L->resume_pending = 1;
-    return 0;
 }
 
 /* ---- calls into the participants: timing, interruption, error context ----------------- */

@@ -331,14 +331,15 @@ int cpl_loop_checkpoints_on(const cpl_loop *loop, const cpl_participant *fem,
  * u, u̇, F and the u and Δt of the step before), the interface Jacobian, the restore
  * verification, the energy balance, the counters of the summary, the next checkpoint time. Before loading, call
  * cpl_loop_checkpoint_prepare with the file: it checks the settings the checkpoint was
- * written with (as cpl_loop_resumed) and reads the sizes that vary (the Jacobian's blocks). */
+ * written with against the run's and reads the sizes that vary (the Jacobian's blocks). */
 void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);
 int cpl_loop_checkpoint_prepare(cpl_loop *loop, const char *path, nc_error *err);
-/* The state was loaded from the checkpoint `name` (file `path`, for messages): checks that
- * the run has the settings the checkpoint was written with (dt, scheme, relaxed quantity,
- * tolerance, interface size, work_tolerance, relaxation method); cpl_loop_run then first sends RESUME (step,
- * time, name) to both participants and continues. */
-int cpl_loop_resumed(cpl_loop *loop, const char *name, const char *path, nc_error *err);
+/* The state was loaded from the checkpoint `name` (after cpl_loop_checkpoint_prepare, which
+ * checked that the run has the settings the checkpoint was written with: dt, scheme,
+ * relaxed quantity, tolerance, interface size, work_tolerance, relaxation method):
+ * cpl_loop_run then first sends RESUME (step, time, name) to both participants and
+ * continues. */
+void cpl_loop_resumed(cpl_loop *loop, const char *name);
 /* Steps accepted so far (the index of the next step). */
 long cpl_loop_step(const cpl_loop *loop);
 

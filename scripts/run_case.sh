@@ -280,6 +280,11 @@ report() {
     if [ "$failed" != coupler ] && [ -f "$failed.log" ]; then
       echo "run_case: last lines of $out/$failed.log:" >&2; tail -n 10 "$failed.log" >&2
     fi
+    # a full disk takes the program's own message with it: its log stays empty
+    if [ -f "$failed.log" ] && [ ! -s "$failed.log" ]; then
+      echo "run_case: $out/$failed.log is empty: $failed's messages could not be written" \
+           "($(df -hP . 2>/dev/null | awk 'NR == 2 {print $4 " free on " $6}'); a full disk?)" >&2
+    fi
     exit 1
   fi
   # the structure's ropes above their breaking load: a right answer for ropes that do not

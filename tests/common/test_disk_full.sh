@@ -3,7 +3,10 @@
 # dem_solver stop with exit 1 and a message naming the file and the operating system's reason
 # ("No space left on device"), do not crash closing the HDF5 file, leave no temporary file, and
 # what they wrote before stays readable: the HDF5 file opens, and its XDMF file lists only
-# complete output steps (tests/xdmf_check.py against the HDF5 output times). Needs root (to
+# complete output steps (tests/xdmf_check.py against the HDF5 output times). A coupled run
+# whose coupling.h5 fills the disk (its rows kept in memory between writes): exit 1, the
+# reason said (by the coupler, or by run_case.sh when the full disk took the coupler's log
+# too), coupling.h5 readable with the steps written, every series as long. Needs root (to
 # mount the tmpfs); skipped otherwise.
 . tests/e2e_lib.sh
 [ "$(id -u)" -eq 0 ] || { echo "SKIP: needs root to mount a small tmpfs"; exit 77; }
@@ -45,4 +48,31 @@ json.dump({"materials": [{"name": "rock", "youngs_modulus_pa": 3e10, "poisson_ra
 PY
 "$NC_BIN/dem_solver" "$NC_TMP/rain.json" --output "$mnt/dem" > "$NC_TMP/dem.log" 2>&1
 check $? "$mnt/dem" "$NC_TMP/dem.log" particles.xdmf /time
+
+# coupled: rest_position, weak at 1e-3 s, the solvers' outputs small and written once; the
+# tmpfs holds what a run of 0.01 s leaves plus 400 kB, which coupling.h5 fills within ~0.3 s
+umount "$mnt"
+coupled=(--quiet --set coupler.scheme=weak --set coupler.dt=1e-3 --set fem.analysis.dt_s=1e-3
+         --set fem.output.interval_steps=100000 --set dem.output_interval_s=100)
+scripts/run_case.sh cases/rest_position --out "$NC_TMP/probe" "${coupled[@]}" \
+  --set coupler.end_time=0.01 --set fem.analysis.end_time_s=0.01 > "$NC_TMP/probe.out" 2>&1 \
+  || { cat "$NC_TMP/probe.out"; fail "the probe run failed"; }
+size_k=$(( $(du -sk "$NC_TMP/probe" | cut -f1) + 400 ))
+mount -t tmpfs -o size=${size_k}k tmpfs "$mnt" || fail "cannot mount the third tmpfs"
+scripts/run_case.sh cases/rest_position --out "$mnt/run" "${coupled[@]}" \
+  --set coupler.end_time=20 --set fem.analysis.end_time_s=20 > "$NC_TMP/run.out" 2>&1
+rc=$?
+[ "$rc" -eq 1 ] || { cat "$NC_TMP/run.out"; fail "coupled run on a full disk: exit $rc, expected 1"; }
+cat "$NC_TMP/run.out" "$mnt/run/coupler.log" | grep -Eq "No space left on device|messages could not be written .*a full disk" \
+  || { cat "$NC_TMP/run.out" "$mnt/run/coupler.log"; fail "coupled run: the full disk is not said"; }
+"$PY" - "$mnt/run/coupling.h5" <<'PY' || fail "coupling.h5 not readable after the disk filled up"
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    n = f["/steps/time"].shape[0]
+    lengths = {k: f[g][k].shape[0] for g in ("/steps", "/energy") for k in f[g]}
+    assert n >= 10, "only %d steps" % n
+    assert set(lengths.values()) == {n}, lengths
+    assert f["/iterations/step"].shape[0] >= n
+print("coupling.h5: %d steps readable after the disk filled up" % n)
+PY
 echo PASS
