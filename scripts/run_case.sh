@@ -481,7 +481,7 @@ show() {   # new log lines, then the status line (a terminal); else just a pause
 log_ended=""
 
 # ---- supervision while the coupler runs ---------------------------------------------------
-declare -A noticed_ms=()
+declare -A noticed_ms=() noticed_why=()
 beat_checked_ms=0; beat_ms=$cpl_started_ms
 while :; do
   reap
@@ -510,14 +510,17 @@ while :; do
     if [ -n "${rc[$p]:-}" ] && [ -z "${noticed_ms[$p]:-}" ]; then
       if [ "$cpl_state" = connecting ] || [ "$cpl_state" = running ] || [ -z "$cpl_state" ]; then
         noticed_ms[$p]=$NOW_MS
-        if [ "${rc[$p]:-}" -eq 0 ]; then fail_first "$p" "exit 0 before the coupler told it to stop"
-        else how "$p"; fail_first "$p" "$REPLY while the coupler was ${cpl_state:-starting}"; fi
+        if [ "${rc[$p]:-}" -eq 0 ]; then noticed_why[$p]="exit 0 before the coupler told it to stop"
+        else how "$p"; noticed_why[$p]="$REPLY while the coupler was ${cpl_state:-starting}"; fi
       fi
     fi
     # running, the coupler gets the grace time to notice by itself (its message names step
-    # and iteration); connecting, it would only notice after its connect timeout
+    # and iteration) and to end with its own verdict, which counts if it comes (a coupler
+    # that could not write "stopping", its disk full, may have told the solver to stop);
+    # connecting, it would only notice after its connect timeout
     if [ -n "${noticed_ms[$p]:-}" ] && { [ "$cpl_state" != running ] ||
                                          [ $((NOW_MS - noticed_ms[$p])) -ge "$grace_ms" ]; }; then
+      fail_first "$p" "${noticed_why[$p]}"
       report
     fi
   done
