@@ -1,10 +1,10 @@
-#!/usr/bin/env bash
+#!/bin/bash
 # run_case.sh — run one coupled case: fem_solver + dem_solver + coupler on localhost.
 # `run_case.sh --help` prints the usage below; README.md and coupler/README.md
 # ("scripts/run_case.sh") say more.
 #
-# Supervision: the three programs are polled every 0.1 s, and the coupler's exit is noticed at
-# once (it holds the write end of a pipe whose read end run_case.sh waits on). The first one
+# Supervision: the three programs are polled every 0.1 s, and their end is noticed at once
+# (they hold the write end of a pipe whose read end run_case.sh waits on). The first one
 # that fails is named as failed, the others as stopped: a solver that exits before the
 # coupler told it to stop (also
 # before the handshake), a coupler whose progress file (--progress-file, its heartbeat) is
@@ -143,11 +143,19 @@ bin=$REPLY
 abs_dir "$case_dir" || die "$case_dir: cannot enter the case folder"
 case_abs=$REPLY
 [ -n "$out" ] || printf -v out 'runs/%s-%(%Y%m%d-%H%M%S)T' "${case_abs##*/}" -1
-[ -d "$out" ] || mkdir -p "$out" || die "$out: cannot create the output folder"
-abs_dir "$out" || die "$out: cannot enter the output folder"
-out=$REPLY
-if [ -z "$resume_dir" ] && [ "$case_abs" != "$out" ]; then
-  cp -R "$case_abs"/. "$out"/ || die "cannot copy $case_dir into $out"
+parent=.; [[ $out == */* ]] && parent=${out%/*}
+if [ -z "$resume_dir" ] && [ ! -e "$out" ] && [ -d "${parent:-/}" ]; then
+  # a new folder in an existing one: cp makes it as the copy (one process instead of two)
+  cp -R "$case_abs" "$out" || die "cannot copy $case_dir into $out"
+  abs_dir "$out" || die "$out: cannot enter the output folder"
+  out=$REPLY
+else
+  [ -d "$out" ] || mkdir -p "$out" || die "$out: cannot create the output folder"
+  abs_dir "$out" || die "$out: cannot enter the output folder"
+  out=$REPLY
+  if [ -z "$resume_dir" ] && [ "$case_abs" != "$out" ]; then
+    cp -R "$case_abs"/. "$out"/ || die "cannot copy $case_dir into $out"
+  fi
 fi
 remove_files() {   # FILE...: rm -f, run only when one of them exists
   local f
@@ -177,7 +185,7 @@ ms() {   # VAR SECONDS: VAR = SECONDS in milliseconds
 ms grace_ms "$grace"; ms stall_ms "$stall_limit"
 # the heartbeat's age is looked at (a `stat`) every tenth of the stall limit, at most every 1 s
 beat_every_ms=$((stall_ms / 10)); [ $beat_every_ms -le 1000 ] || beat_every_ms=1000
-# nap SECONDS: a pause without a process, a read with a timeout on a FIFO that never has data
+# nap SECONDS: a pause without a process, a read with a timeout on a pipe that never has data
 # (nap_fd, held open read-write by this shell from the start of the programs); sleep without it
 nap_fd=""
 nap() {
@@ -239,7 +247,7 @@ wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS 
   now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
   reap
   while any_running && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
-    nap 0.01; reap; now_ms
+    pause 0.01; reap; now_ms
   done
 }
 on_signal() { interrupted=$1; }
@@ -340,22 +348,19 @@ status_shown=0; show_pid=""
 # when run_case.sh dies (setpriv --pdeathsig, util-linux), instead of waiting for a coupler
 # that never comes until its idle timeout.
 guard=()
-setpriv --pdeathsig TERM true 2>/dev/null && guard=(setpriv --pdeathsig TERM)
-# Two FIFOs, made with one mkfifo and their names removed with one rm once open:
-# - run_case.nap, held open read-write by this shell: it never has data (nap);
-# - coupler.alive: the coupler alone will hold its write end, so a read of it returns at once
-#   when the coupler has ended, instead of at the next poll. Both ends are opened now (the
-#   FIFO held open read-write meanwhile, so that no open waits for the other end).
-# The solvers get none of these; the coupler gets only the write end of coupler.alive.
+# (looked up, not tried: util-linux has had --pdeathsig since 2.33, Debian 10)
+type -P setpriv >/dev/null 2>&1 && guard=(setpriv --pdeathsig TERM)
+# Two pipes, each from a process substitution (a fork without an exec, and no file to make or
+# remove), opened again through /dev/fd for the ends wanted:
+# - nap_fd, held open read-write by this shell: it never has data (nap);
+# - alive_fd: the three programs alone will hold its write end (alive_w), so a read of alive_fd
+#   returns at once when all three have ended (a coupler that finished tells the solvers to
+#   stop, and they end with it), instead of at the next poll.
+# The programs get only alive_w.
 alive_fd=""; alive_w=""
-remove_files coupler.alive run_case.nap
-if mkfifo coupler.alive run_case.nap 2>/dev/null &&
-   exec {nap_fd}<>run_case.nap {hold_fd}<>coupler.alive {alive_w}>coupler.alive \
-        {alive_fd}<coupler.alive {hold_fd}>&-; then
-  remove_files coupler.alive run_case.nap
-else   # no FIFO here (a file system without them): polled, and pauses with sleep
+if ! { exec {nap_fd}<> <(:) {pipe_fd}<> <(:) {alive_w}>"/dev/fd/$pipe_fd" {alive_fd}<"/dev/fd/$pipe_fd" \
+         {pipe_fd}>&-; } 2>/dev/null; then   # no /dev/fd: polled, and pauses with sleep
   nap_fd=""; alive_fd=""; alive_w=""
-  remove_files coupler.alive run_case.nap
 fi
 exec_closing() {   # "FD ..." CMD...: execs CMD with this shell's file descriptors FD closed
   local fd
@@ -364,11 +369,11 @@ exec_closing() {   # "FD ..." CMD...: execs CMD with this shell's file descripto
   exec "$@"
 }
 # shellcheck disable=SC2086   # the program may be a command with arguments
-exec_closing "$nap_fd $alive_fd $alive_w" "${guard[@]}" $fem_program fem.json \
+exec_closing "$nap_fd $alive_fd" "${guard[@]}" $fem_program fem.json \
   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint >fem.log 2>&1 &
 pid[fem]=$!
 # shellcheck disable=SC2086
-exec_closing "$nap_fd $alive_fd $alive_w" "${guard[@]}" $dem_program dem.json \
+exec_closing "$nap_fd $alive_fd" "${guard[@]}" $dem_program dem.json \
   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint >dem.log 2>&1 &
 pid[dem]=$!
 
@@ -384,7 +389,7 @@ printf -v coupler_wait '%d.%03d' $(( (endpoint_wait_ms + 10000) / 1000 )) $(( en
 coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint-file fem.endpoint
              --dem-endpoint-file dem.endpoint --endpoint-wait "$coupler_wait"
              --progress-file coupler.progress $quiet_arg $resume_arg)
-# the coupler inherits the write end of coupler.alive, and this shell closes its own
+# the coupler inherits alive_w too, and this shell closes its own
 exec_closing "$nap_fd $alive_fd" "${coupler_cmd[@]}" >coupler.log 2>&1 &
 pid[coupler]=$!
 [ -z "$alive_w" ] || exec {alive_w}>&-
@@ -461,12 +466,13 @@ read_log() {   # TIMEOUT: the log lines that arrived; 1 at the end of the log
     return 1
   done
 }
-pause() {   # 0.1 s, or less once the coupler has ended
+pause() {   # [SECONDS]: a pause (0.1 s), cut short when the last program ends; 0.01 s after
   if [ -n "$alive_fd" ]; then
     local byte
-    read -r -t 0.1 -u "$alive_fd" byte
+    read -r -t "${1:-0.1}" -u "$alive_fd" byte
     [ $? -gt 128 ] && return 0
-    exec {alive_fd}<&-; alive_fd=""   # the coupler has ended (it never writes)
+    exec {alive_fd}<&-; alive_fd=""   # all three have ended (they never write)
+    return 0
   fi
   nap 0.01
 }
@@ -482,7 +488,9 @@ log_ended=""
 
 # ---- supervision while the coupler runs ---------------------------------------------------
 declare -A noticed_ms=() noticed_why=()
-beat_checked_ms=0; beat_ms=$cpl_started_ms
+# (first looked at after beat_every_ms: a `stat` at once would take a core from the programs'
+# start, and the heartbeat cannot be older than the stall limit yet)
+beat_checked_ms=$((cpl_started_ms + beat_every_ms)); beat_ms=$cpl_started_ms
 while :; do
   reap
   [ -n "${rc[coupler]:-}" ] && break
