@@ -1,6 +1,8 @@
 /* nc_h5 — HDF5 helpers: create file, groups on demand, fixed datasets, growing series. */
 #include "nc_h5.h"
 
+#include "nc_clock.h"
+
 #include <errno.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -109,12 +111,20 @@ static int enlist(nc_h5_file *f, nc_h5_series *s, nc_error *err);
 void nc_h5_set_buffered(nc_h5_file *f)
 {
     f->buffered = 1;
+    f->flushed_at_s = nc_clock_now_s();
+}
+
+int nc_h5_flush_due(nc_h5_file *f, nc_error *err)
+{
+    if (nc_clock_now_s() - f->flushed_at_s < NC_H5_FLUSH_INTERVAL_S) return 0;
+    return nc_h5_flush(f, err) ? -1 : 1;
 }
 
 int nc_h5_flush(nc_h5_file *f, nc_error *err)
 {
     if (f->file < 0) return 0;
     if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error", f->path);
+    f->flushed_at_s = nc_clock_now_s();
     for (int i = 0; i < f->n_series; i++)
         if (write_pending(f->series[i], err)) return -1;
     errno = 0;

@@ -26,6 +26,7 @@ typedef struct nc_h5_file {
     char path[512];
     int failed;         /* a write or flush failed: nothing more is written (see nc_h5_close) */
     int buffered;       /* series rows wait in memory for nc_h5_flush (nc_h5_set_buffered) */
+    double flushed_at_s;   /* nc_clock_now_s() at the last flush (or when opened) */
     struct nc_h5_series **series;   /* buffered: the open series, which nc_h5_flush writes */
     int n_series, cap_series;
 } nc_h5_file;
@@ -57,6 +58,13 @@ int nc_h5_flush(nc_h5_file *f, nc_error *err);
  * so often instead of after each row (coupler/cpl_history.c). Datasets and attributes
  * written directly (nc_h5_write, nc_h5_attr_*) still go to the file at once. */
 void nc_h5_set_buffered(nc_h5_file *f);
+/* The buffered files' write policy: nc_h5_flush once NC_H5_FLUSH_INTERVAL_S or more of wall
+ * time passed since the file's last flush (or its opening). 1 when it wrote, 0 when not due
+ * yet, -1 on a write error. Writing after every output step took a third of the coupler's
+ * own time, and a sixth of a solver's, in runs of small steps (docs/notes/interface_jacobian.md,
+ * "Speed"); what a killed process leaves unwritten is the last fraction of a second. */
+#define NC_H5_FLUSH_INTERVAL_S 0.25
+int nc_h5_flush_due(nc_h5_file *f, nc_error *err);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
 
 /* Fixed-size datasets: rank 1..3, dims[rank]. */

@@ -2,7 +2,6 @@
  * when each reaches the disk). */
 #include "cpl_history.h"
 
-#include "nc_clock.h"
 
 #include <errno.h>
 #include <math.h>
@@ -63,22 +62,16 @@ int cpl_history_resume(cpl_history *h, const char *dir, const cpl_loop_settings 
     return open_files(h, dir, s, write_iterations, err);
 }
 
-/* coupling.h5 is written when a row comes CPL_HISTORY_FLUSH_INTERVAL_S of wall time after
- * its last write (its rows wait in memory in between, nc_h5_set_buffered): flushing it after
- * every step took a third of the coupler's own time in a run of small steps
- * (docs/notes/interface_jacobian.md) */
+/* coupling.h5 is written when a row comes NC_H5_FLUSH_INTERVAL_S of wall time after its last
+ * write (its rows wait in memory in between, nc_h5_set_buffered) */
 static int flush_due(cpl_history *h, nc_error *err)
 {
-    const double now = nc_clock_now_s();
-    if (now - h->flushed_at_s < CPL_HISTORY_FLUSH_INTERVAL_S) return 0;
-    h->flushed_at_s = now;
-    return nc_h5_flush(&h->h5, err);
+    return nc_h5_flush_due(&h->h5, err) < 0 ? -1 : 0;
 }
 
 int cpl_history_flush(cpl_history *h, nc_error *err)
 {
     if (!h->open) return 0;
-    h->flushed_at_s = nc_clock_now_s();
     return nc_h5_flush(&h->h5, err);
 }
 
@@ -110,7 +103,6 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
     snprintf(path, sizeof path, "%s/coupling.h5", dir);
     if (h->resuming ? nc_h5_open(&h->h5, path, err) : nc_h5_create(&h->h5, path, err)) return -1;
     nc_h5_set_buffered(&h->h5);
-    h->flushed_at_s = nc_clock_now_s();
     h->open = 1;
     h->write_iterations = write_iterations;
     /* the residual is a scaled norm of the relaxed quantity */

@@ -18,7 +18,7 @@
  *                     rejected try and one "# energy created ..." line at the first step
  *                     above the energy guard's limit
  * iterations.log is flushed after every step; coupling.h5 keeps its rows in memory and is
- * written when a row is added CPL_HISTORY_FLUSH_INTERVAL_S or more of wall time after its
+ * written when a row is added NC_H5_FLUSH_INTERVAL_S (nc_h5.h) or more of wall time after its
  * last write, at a checkpoint, by cpl_history_flush and when closed, so it stays readable if
  * the coupler is killed (as its last write left it).
  */
@@ -30,7 +30,6 @@
 #include "nc_h5.h"
 
 #define CPL_HISTORY_ENERGY_SERIES 17
-#define CPL_HISTORY_FLUSH_INTERVAL_S 0.25   /* wall time between writes of coupling.h5 */
 
 typedef struct cpl_history {
     nc_h5_file h5;
@@ -51,7 +50,6 @@ typedef struct cpl_history {
     /* resuming: series are opened and cut back to the marks instead of created */
     int resuming;
     hsize_t keep;
-    double flushed_at_s;        /* nc_clock_now_s() of the last write of coupling.h5 */
 } cpl_history;
 
 /* Creates both files in `dir` (which must exist). */

@@ -31,6 +31,7 @@ static int create_files(dem_output *o, const dem_sim *s, nc_error *err)
     char path[1100];
     snprintf(path, sizeof path, "%s/dem.h5", dir);
     if (nc_h5_create(&o->h5, path, err)) return -1;
+    nc_h5_set_buffered(&o->h5);
     o->created = 1;
     /* index files of an earlier run in this folder would show stale or missing data */
     static const char *const stale[] = {"dem.xdmf", "particles.xdmf", "dem_net.xdmf"};
@@ -179,16 +180,38 @@ static int format_step(dem_output *o, const dem_sim *s, long k, double time_s, l
 
 static const char XDMF_TAIL[] = "    </Grid>\n  </Domain>\n</Xdmf>\n";
 
-/* Adds the grids formatted in text to name (created with them when x holds no file yet). */
+/* Adds the grids formatted in text to name (created with them when x holds no file yet) and
+ * empties text. */
 static int add_xdmf(dem_output *o, nc_xdmf_file *x, const char *name, const char *grid,
                     dem_text *text, nc_error *err)
 {
-    if (x->open) return nc_xdmf_append(x, text->data, text->len, err);
     char path[1100], head[300];
     snprintf(path, sizeof path, "%s/%s", o->dir, name);
     snprintf(head, sizeof head, "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
              "    <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", grid);
-    return nc_xdmf_create(x, path, head, text->data, text->len, XDMF_TAIL, err);
+    int rc = x->open ? nc_xdmf_append(x, text->data, text->len, err)
+                     : nc_xdmf_create(x, path, head, text->data, text->len, XDMF_TAIL, err);
+    if (rc == 0) text->len = 0;
+    return rc;
+}
+
+/* The XDMF grids of the steps whose rows the last flush wrote (an XDMF file names only rows
+ * that are on the disk). */
+static int add_pending_xdmf(dem_output *o, nc_error *err)
+{
+    if (o->xdmf_particles.len > 0 &&
+        add_xdmf(o, &o->particles_xdmf, "particles.xdmf", "particles", &o->xdmf_particles, err))
+        return -1;
+    if (o->xdmf_net.len > 0 && add_xdmf(o, &o->net_xdmf, "dem_net.xdmf", "net", &o->xdmf_net, err))
+        return -1;
+    return 0;
+}
+
+int dem_output_flush(dem_output *o, nc_error *err)
+{
+    if (!o->created) return 0;
+    if (nc_h5_flush(&o->h5, err)) return -1;
+    return add_pending_xdmf(o, err);
 }
 
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err)
@@ -245,14 +268,12 @@ int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, n
         nc_h5_series_append(&o->kinetic, &ke, err))
         return -1;
     o->n_out++;
-    if (nc_h5_flush(&o->h5, err)) return -1;
-    o->xdmf_particles.len = 0;
-    o->xdmf_net.len = 0;
     if (format_step(o, s, k, s->time_s, net_row, err)) return -1;
-    if (n > 0 && add_xdmf(o, &o->particles_xdmf, "particles.xdmf", "particles", &o->xdmf_particles, err))
-        return -1;
-    if (net_row >= 0 && add_xdmf(o, &o->net_xdmf, "dem_net.xdmf", "net", &o->xdmf_net, err)) return -1;
-    return 0;
+    /* the rows wait in memory (nc_h5_set_buffered) and are written every fraction of a second;
+     * the first output step at once, so that the XDMF files exist from the start */
+    int written = o->n_out == 1 ? (nc_h5_flush(&o->h5, err) ? -1 : 1) : nc_h5_flush_due(&o->h5, err);
+    if (written < 0) return -1;
+    return written ? add_pending_xdmf(o, err) : 0;
 }
 
 static int reopen_files(dem_output *o, const dem_sim *s, nc_error *err)
@@ -268,6 +289,7 @@ static int reopen_files(dem_output *o, const dem_sim *s, nc_error *err)
         return nc_error_set(err, 1, "%s: the checkpoint's output counters do not fit (%ld steps, "
                             "%ld net rows)", path, o->n_out, o->net_rows);
     if (nc_h5_open(&o->h5, path, err)) return -1;
+    nc_h5_set_buffered(&o->h5);
     o->created = 1;
     nc_h5_file *h = &o->h5;
     hsize_t keep = (hsize_t)o->n_out, n = s->model.sph.n;
@@ -311,10 +333,8 @@ static int reopen_files(dem_output *o, const dem_sim *s, nc_error *err)
     for (long k = 0; k < o->n_out && rc == 0; k++)
         rc = format_step(o, s, k, times[k], o->net_written && k >= first_net ? k - first_net : -1, err);
     free(times);
-    if (rc || nc_h5_flush(h, err)) return -1;
-    if (n > 0 && add_xdmf(o, &o->particles_xdmf, "particles.xdmf", "particles", &o->xdmf_particles, err))
-        return -1;
-    if (o->net_rows > 0) return add_xdmf(o, &o->net_xdmf, "dem_net.xdmf", "net", &o->xdmf_net, err);
+    if (rc || nc_h5_flush(h, err) || add_pending_xdmf(o, err)) return -1;
+    if (o->net_rows > 0) return 0;
     char old[1100]; /* a later run's net grids (the net was not written at the checkpoint) */
     snprintf(old, sizeof old, "%s/dem_net.xdmf", o->dir);
     remove(old);
@@ -342,7 +362,7 @@ int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err)
 int dem_output_sync(dem_output *o, nc_error *err)
 {
     if (!o->created) return 0;
-    if (nc_h5_flush(&o->h5, err)) return -1;
+    if (dem_output_flush(o, err)) return -1;
     void *handle = NULL;
     if (H5Fget_vfd_handle(o->h5.file, H5P_DEFAULT, &handle) >= 0 && handle &&
         fsync(*(int *)handle) != 0)
@@ -352,6 +372,8 @@ int dem_output_sync(dem_output *o, nc_error *err)
 
 void dem_output_close(dem_output *o)
 {
+    nc_error ignored;   /* the runs flush with dem_output_flush first, and report its error */
+    dem_output_flush(o, &ignored);
     close_files(o);
     free(o->scratch);
     free(o->xdmf_particles.data);

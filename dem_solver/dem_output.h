@@ -14,9 +14,12 @@
  *   an attribute of /net).
  * particles.xdmf holds the spheres (Polyvertex, attributes radius, id, velocity,
  * angular_velocity), dem_net.xdmf the net wall (Polyline, contact_force); both are XDMF 3
- * temporal collections read by ParaView's default reader. The file is flushed after every
- * output step and the XDMF files grow in place by that step's grids (nc_xdmf.h), so all stay
- * valid if the run is stopped.
+ * temporal collections read by ParaView's default reader. The series' rows wait in memory and
+ * dem.h5 is written at the first output step, then at an output step a fraction of a second
+ * of wall time after its last write (nc_h5_flush_due), at a checkpoint (dem_output_sync) and
+ * by dem_output_flush; only then do the XDMF files grow in place by the grids of the steps
+ * written (nc_xdmf.h), so all stay valid if the run is stopped or killed, holding the steps
+ * of the last write.
  *
  * dem_output_open() only prepares the writer: dem.h5 is created (truncating) by the first
  * dem_output_write(), so a coupled participant touches no result file before its first
@@ -48,8 +51,8 @@ typedef struct dem_output {
     int net_written;       /* /net/edges written */
     size_t net_nodes, net_edges;
     double *scratch;       /* max(4 per body, 3 per sphere) */
-    dem_text xdmf_particles, xdmf_net; /* the grids being added (one step, or on resume all
-                                          * the checkpoint's steps) */
+    dem_text xdmf_particles, xdmf_net; /* the grids of the steps not yet written (on resume
+                                          * all the checkpoint's steps) */
     nc_xdmf_file particles_xdmf, net_xdmf;
 } dem_output;
 
@@ -58,7 +61,11 @@ int dem_output_open(dem_output *o, const dem_sim *s, const char *dir, nc_error *
 /* Reopens dir/dem.h5 as it was at a checkpoint whose counters o->n_out, o->net_rows and
  * o->net_written were loaded (dem_checkpoint_load); nothing to open when n_out is 0. */
 int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err);
-/* Flushes dem.h5 to the disk (fsync): the rows a checkpoint counts survive a crash. */
+/* Writes the rows waiting in memory to dem.h5 and their grids to the XDMF files (a run calls
+ * it before its verdict, so that a full disk fails the run). */
+int dem_output_flush(dem_output *o, nc_error *err);
+/* dem_output_flush, then dem.h5 to the disk (fsync): the rows a checkpoint counts survive a
+ * crash. */
 int dem_output_sync(dem_output *o, nc_error *err);
 /* net_force: the nodal forces of the last coupling step (3 per node) or NULL. */
 int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, nc_error *err);

@@ -96,7 +96,7 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
     long steps = 0, next_out = 1;
     while (s->time_s < end) {
         if (*stop) {
-            if (dem_output_write(out, s, NULL, err)) return -1;
+            if (dem_output_write(out, s, NULL, err) || dem_output_flush(out, err)) return -1;
             fprintf(stderr, "dem_solver: interrupted at t = %g s; results so far are in %s\n",
                     s->time_s, out->dir);
             return 1;
@@ -116,6 +116,7 @@ static int run_standalone(dem_sim *s, dem_output *out, const volatile sig_atomic
             if (reaches && interval > 0.0 && target < end) next_out++;
         }
     }
+    if (dem_output_flush(out, err)) return -1;   /* the rows still in memory, before "done" */
     double wall = nc_clock_now_s() - t0;
     printf("dem_solver: done, t = %.9g s, %ld steps in %.2f s (%.3g particle-steps/s), %zu contacts\n",
            s->time_s, steps, wall, wall > 0 ? (double)steps * (double)s->model.sph.n / wall : 0.0,

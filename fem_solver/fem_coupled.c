@@ -286,7 +286,8 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
     (void)reply;
     coupled *c = ctx;
     /* checkpointed before its first step: the run's results start now */
-    if (start_output(c, err)) return -1;
+    /* the rows the checkpoint counts are in fem.h5 before it names them */
+    if (start_output(c, err) || fem_output_flush(&c->out, err)) return -1;
     return fem_checkpoint_save(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
                                &c->run_entries, err);
 }
@@ -404,6 +405,13 @@ done:
         nc_error ignored;
         fem_analysis_update_axial(&c->s);
         fem_output_step(&c->out, &c->s, c->s.cur.time_s, &ignored);
+    }
+    /* the rows still in memory: a run (or a stopped one) whose results could not be written
+     * failed, and says why; an earlier error is said instead */
+    nc_error flushing;
+    if (fem_output_flush(&c->out, &flushing) && rc >= 0) {
+        if (err) *err = flushing;
+        rc = -1;
     }
     sum.final_time_s = c->s.cur.u ? c->s.cur.time_s : 0;
     sum.output_steps = c->out.n_out;

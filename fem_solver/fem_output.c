@@ -70,6 +70,7 @@ int fem_output_open(fem_output *o, const fem_model *m, const char *dir, nc_error
         free(support_dofs);
         return -1;
     }
+    nc_h5_set_buffered(&o->h5);
     o->open = 1;
     hsize_t n = (hsize_t)m->n_nodes, e = (hsize_t)m->n_elements, p = (hsize_t)m->n_monitor,
             r = (hsize_t)o->n_support;
@@ -118,7 +119,7 @@ int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
     return 0;
 }
 
-static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *err);
+static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
 
 static void close_series(fem_output *o)
 {
@@ -175,6 +176,7 @@ int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_err
         discard(o);
         return -1;
     }
+    nc_h5_set_buffered(&o->h5);
     /* every series holds at least the checkpoint's rows before any is cut (a file older than
      * the checkpoint is left as it is) */
     static const char *const out_series[] = {"/output/time", "/output/step", "/output/load_factor",
@@ -226,7 +228,7 @@ int fem_output_reopen(fem_output *o, const fem_model *m, const char *dir, nc_err
     /* the XDMF index lists exactly the rows kept */
     o->model = m;
     nc_xdmf_close(&o->xdmf);
-    return write_xdmf(o, m, 0, err);
+    return write_xdmf(o, m, err);
 }
 
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
@@ -307,9 +309,10 @@ static void format_grid(FILE *f, const fem_model *m, int i, double t)
     fprintf(f, "   </Grid>\n");
 }
 
-/* Adds the grids of output steps first .. n_out-1 to fem.xdmf; written anew with all of them
- * when it is not open yet (the first output step, or a resumed run's kept rows). */
-static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *err)
+/* Adds the grids of the output steps fem.xdmf does not list yet (n_xdmf .. n_out-1, rows the
+ * caller has just written to fem.h5) to it; written anew with all of them when it is not open
+ * yet (the first output step, or a resumed run's kept rows). */
+static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
 {
     static const char head[] = "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
                                "  <Grid Name=\"net\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
@@ -317,7 +320,7 @@ static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *er
     char path[700], *text = NULL;
     size_t len = 0;
     snprintf(path, sizeof path, "%s/fem.xdmf", o->dir);
-    if (!o->xdmf.open) first = 0;
+    int first = o->xdmf.open ? o->n_xdmf : 0;
     FILE *f = open_memstream(&text, &len);
     if (!f) return nc_error_set(err, 1, "%s: out of memory", path);
     for (int i = first; i < o->n_out; i++) format_grid(f, m, i, o->times[i]);
@@ -326,7 +329,15 @@ static int write_xdmf(fem_output *o, const fem_model *m, int first, nc_error *er
              : o->xdmf.open ? nc_xdmf_append(&o->xdmf, text, len, err)
                             : nc_xdmf_create(&o->xdmf, path, head, text, len, tail, err);
     free(text);
+    if (rc == 0) o->n_xdmf = o->n_out;
     return rc;
+}
+
+int fem_output_flush(fem_output *o, nc_error *err)
+{
+    if (!o->open) return 0;
+    if (nc_h5_flush(&o->h5, err)) return -1;
+    return o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
 }
 
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
@@ -360,9 +371,12 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     if (nc_h5_series_append(&o->reaction, o->buf, err)) return -1;
     if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;
     o->times[o->n_out++] = time_s;
-    if (nc_h5_flush(&o->h5, err)) return -1;
     o->model = m;
-    return write_xdmf(o, m, o->n_out - 1, err);
+    /* the rows wait in memory (nc_h5_set_buffered) and are written every fraction of a second;
+     * the first output step at once, so that fem.xdmf exists from the start */
+    int written = o->xdmf.open ? nc_h5_flush_due(&o->h5, err) : (nc_h5_flush(&o->h5, err) ? -1 : 1);
+    if (written < 0) return -1;
+    return written ? write_xdmf(o, m, err) : 0;
 }
 
 int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set)
@@ -457,7 +471,8 @@ void fem_output_close(fem_output *o)
 {
     if (!o) return;
     if (o->open) {
-        nc_error ignored;
+        nc_error ignored;   /* the runs flush with fem_output_flush first, and report its error */
+        fem_output_flush(o, &ignored);
         if (o->max_u_node >= 0 && o->disp.dataset > 0) {
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_magnitude", o->max_u_m, &ignored);
             nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);

@@ -25,9 +25,11 @@
  *   /element_sets/element_exceedance_time [m] s (first time above it; -1: never, no step);
  *   with a breaking load given, the root attribute overloaded_elements (their total) and,
  *   when it is > 0, the root string attribute overload (the warnings, one line per set).
- * The file is flushed after every output step and fem.xdmf (XDMF 3, read by ParaView's
- * default reader) grows by that step's grid in place (nc_xdmf.h), so both stay readable if
- * the run stops.
+ * The series' rows wait in memory, and fem.h5 is written at the first output step, then at
+ * an output step a fraction of a second of wall time after its last write (nc_h5_flush_due)
+ * and by fem_output_flush; only then does fem.xdmf (XDMF 3, read by ParaView's default
+ * reader) grow in place by the grids of the steps written (nc_xdmf.h), so both stay readable
+ * if the run stops or is killed, holding the steps of the last write.
  * A run resumed from a checkpoint reopens the files (fem_output_reopen): the series are cut
  * back to the rows they held at the checkpoint, fem.xdmf is rewritten for those rows, and
  * later output is appended.
@@ -57,6 +59,7 @@ typedef struct fem_output {
     int has_history;
     char dir[512];
     int n_out;         /* output rows written (/output series) */
+    int n_xdmf;        /* output rows fem.xdmf lists (those written to the file) */
     long n_mon;        /* monitor rows written (/monitor series) */
     int cap;
     double *times;     /* output times, for the XDMF file */
@@ -91,8 +94,12 @@ int fem_output_reserve_peaks(fem_output *o, const fem_model *m, nc_error *err);
  * and, from s->axial (current: fem_analysis_update_axial), each set's largest axial force
  * and the elements above their set's breaking_load_n. */
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
-/* Appends one full output step, flushes, adds the step's grid to the XDMF file. */
+/* Appends one full output step; when the file is written (see above), the grids of the steps
+ * written go to the XDMF file. */
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
+/* Writes the rows waiting in memory to fem.h5 and their grids to fem.xdmf: before a
+ * checkpoint counts the rows, and before a run's verdict (a full disk fails the run). */
+int fem_output_flush(fem_output *o, nc_error *err);
 /* Support reactions of the current state into r [3 n_support] (N), load factor lambda. */
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r);
 /* Each set's peak and exceedance so far into per_set [n_sets] (may be NULL); returns the

@@ -2,7 +2,8 @@
  * cut back to the rows it held at the checkpoint and grows again from there, the rows before
  * are untouched, a dataset written again is replaced, and a file or series that does not fit
  * (missing, other row size, fewer rows than the checkpoint needs) is refused with a message
- * naming the file and the dataset; a buffered file's rows wait for its flush. */
+ * naming the file and the dataset; a buffered file's rows wait for its flush, which
+ * nc_h5_flush_due makes once the interval has passed. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -201,12 +202,44 @@ static void test_buffered_rows_wait_for_flush(void **state)
     }
 }
 
+/* nc_h5_flush_due: not due right after the file became buffered or was flushed; due once
+ * NC_H5_FLUSH_INTERVAL_S of wall time passed, and then it writes the rows. */
+static void test_flush_due_after_the_interval(void **state)
+{
+    (void)state;
+    nc_error err;
+    nc_h5_file f;
+    nc_h5_series s;
+    assert_int_equal(nc_h5_create(&f, path, &err), 0);
+    nc_h5_set_buffered(&f);
+    assert_int_equal(nc_h5_series_create(&f, &s, "/t", NC_H5_F64, 1, NULL, &err), 0);
+    double x = 1.0;
+    hsize_t dims[1] = {0};
+    assert_int_equal(nc_h5_series_append(&s, &x, &err), 0);
+    assert_int_equal(nc_h5_flush_due(&f, &err), 0);
+    hid_t space = H5Dget_space(s.dataset);
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    H5Sclose(space);
+    assert_int_equal(dims[0], 0);   /* not due: the row waits */
+    usleep((useconds_t)(NC_H5_FLUSH_INTERVAL_S * 1.2e6));
+    assert_int_equal(nc_h5_flush_due(&f, &err), 1);
+    space = H5Dget_space(s.dataset);
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    H5Sclose(space);
+    assert_int_equal(dims[0], 1);   /* due: written */
+    assert_int_equal(nc_h5_series_append(&s, &x, &err), 0);
+    assert_int_equal(nc_h5_flush_due(&f, &err), 0);   /* the interval counts from that write */
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_truncate_and_append, setup, teardown),
         cmocka_unit_test_setup_teardown(test_refusals, setup, teardown),
         cmocka_unit_test_setup_teardown(test_buffered_rows_wait_for_flush, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_flush_due_after_the_interval, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

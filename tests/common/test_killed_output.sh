@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# test_killed_output — fem_solver and dem_solver killed (SIGKILL) in the middle of a run: their
+# result rows wait in memory between writes (nc_h5_flush_due), so what the kill leaves is the
+# last write. The HDF5 file opens, every series is as long as the output times, and the XDMF
+# file lists only complete output steps of it (tests/xdmf_check.py against the output times),
+# more than the first.
+. tests/e2e_lib.sh
+
+killed() {   # NAME OUTPUT_DIR XDMF TIMES_DATASET COMMAND...: runs COMMAND, kills it mid-run
+  local name=$1 out=$2 xdmf=$3 times=$4
+  shift 4
+  "$@" --output "$out" > "$NC_TMP/$name.log" 2>&1 &
+  local pid=$!
+  for _ in $(seq 1 100); do [ -f "$out/$xdmf" ] && break; sleep 0.1; done
+  [ -f "$out/$xdmf" ] || { cat "$NC_TMP/$name.log"; fail "$name: no $xdmf after 10 s"; }
+  sleep 1.5   # several writes later (one every fraction of a second)
+  kill -0 "$pid" 2>/dev/null || { cat "$NC_TMP/$name.log"; fail "$name: ended before it was killed"; }
+  kill -KILL "$pid"
+  wait "$pid" 2>/dev/null
+  "$PY" tests/xdmf_check.py "$out/$xdmf" "$times" || fail "$name: $xdmf does not describe what was written"
+  "$PY" - "$out" "$xdmf" "$times" <<'PY' || fail "$name: results not readable after SIGKILL"
+import sys, h5py, xml.etree.ElementTree as ET
+out, xdmf, times = sys.argv[1:]
+h5 = out + "/" + ("fem.h5" if xdmf == "fem.xdmf" else "dem.h5")
+series = {"fem.xdmf": ["/output/" + k for k in ("step", "load_factor", "displacement", "velocity",
+                                                "position", "axial_force", "strain", "reaction")],
+          "particles.xdmf": ["/particles/position", "/particles/velocity",
+                             "/particles/angular_velocity", "/walls/force", "/energy/kinetic"]}[xdmf]
+with h5py.File(h5, "r") as f:
+    rows = f[times].shape[0]
+    lengths = {name: f[name].shape[0] for name in series}
+assert set(lengths.values()) == {rows}, (rows, lengths)
+grids = len(ET.parse(out + "/" + xdmf).getroot().findall(".//Grid[@GridType='Uniform']"))
+assert 2 <= grids <= rows, "%d grids listed, %d rows written" % (grids, rows)
+print("%s: %d output rows written, %d listed in %s after SIGKILL" % (h5, rows, grids, xdmf))
+PY
+}
+
+# FEM: the 21 x 21 net for 20 s instead of 1 (about 8 s)
+"$PY" - "$NC_TMP/net.json" <<'PY'
+import json, sys
+m = json.load(open("fem_solver/examples/net_dynamic.json"))
+m["analysis"]["end_time_s"] = 20.0
+json.dump(m, open(sys.argv[1], "w"))
+PY
+killed fem "$NC_TMP/fem" fem.xdmf /output/time "$NC_BIN/fem_solver" "$NC_TMP/net.json"
+
+# DEM: spheres settling in a box (about 4 s)
+killed dem "$NC_TMP/dem" particles.xdmf /time "$NC_BIN/dem_solver" dem_solver/examples/settle.json
+echo PASS
