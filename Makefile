@@ -39,11 +39,16 @@ PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 # HDF5 is linked from the static archive Debian's libhdf5-dev ships beside the shared library:
 # the shared one brings libcurl and two dozen libraries of its own (for a remote-file driver
 # netcouple does not use), and loading them took each program about 15 ms at every start, a
-# tenth of a short coupled run (docs/notes/interface_jacobian.md, "Speed"). Without the
-# archive, the shared library.
+# tenth of a short coupled run (docs/notes/interface_jacobian.md, "Speed"). The archive's own
+# dependencies come from its libhdf5.settings ("Extra libraries"), linked only where an
+# object taken from it needs them (--as-needed: on Debian 12 no curl). Without the archive,
+# the shared library.
 HDF5_LIBDIR := $(patsubst -L%,%,$(filter -L%,$(shell pkg-config --libs-only-L hdf5 2>/dev/null)))
-HDF5_ARCHIVE := $(wildcard $(addsuffix /libhdf5.a,$(HDF5_LIBDIR)))
-HDF5_LIBS := $(if $(HDF5_ARCHIVE),$(HDF5_ARCHIVE) -lsz -lz -ldl,$(shell pkg-config --libs hdf5 2>/dev/null))
+HDF5_ARCHIVE := $(firstword $(wildcard $(addsuffix /libhdf5.a,$(HDF5_LIBDIR))))
+HDF5_EXTRA := $(shell sed -n 's/^ *Extra libraries: *//p' $(dir $(HDF5_ARCHIVE))libhdf5.settings 2>/dev/null)
+HDF5_STATIC := $(HDF5_ARCHIVE) -Wl,--push-state,--as-needed $(or $(HDF5_EXTRA),-lsz -lz -ldl -lm) \
+  -Wl,--pop-state
+HDF5_LIBS := $(if $(HDF5_ARCHIVE),$(HDF5_STATIC),$(shell pkg-config --libs hdf5 2>/dev/null))
 PKG_LIBS := $(shell pkg-config --libs libzmq libcjson 2>/dev/null) $(HDF5_LIBS)
 # SuiteSparse ships no .pc file on Debian 12.
 SUITESPARSE_CFLAGS := -I/usr/include/suitesparse

@@ -53,6 +53,7 @@ static int fail(nc_h5_file *f, nc_error *err, const char *what, const char *obje
     int saved = errno;
     char why[200];
     reason(why, saved);
+    if (!f->failed) snprintf(f->failure, sizeof f->failure, "%s", why);
     f->failed = 1;
     return nc_error_set(err, 1, "%s: %s %s: %s", f->path, what, object, why);
 }
@@ -123,7 +124,7 @@ int nc_h5_flush_due(nc_h5_file *f, nc_error *err)
 int nc_h5_flush(nc_h5_file *f, nc_error *err)
 {
     if (f->file < 0) return 0;
-    if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error", f->path);
+    if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error (%s)", f->path, f->failure);
     f->flushed_at_s = nc_clock_now_s();
     for (int i = 0; i < f->n_series; i++)
         if (write_pending(f->series[i], err)) return -1;
@@ -172,7 +173,7 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
                 const hsize_t *dims, const void *data, nc_error *err)
 {
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
-    if (f->failed) return nc_error_set(err, 1, "%s: %s not written after an earlier write error", f->path, path);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not written after an earlier write error (%s)", f->path, path, f->failure);
     if (make_parents(f, path, err)) return -1;
     /* a file reopened to append to (a resumed run) already holds the end-of-run datasets */
     if (H5Lexists(f->file, path, H5P_DEFAULT) > 0 && H5Ldelete(f->file, path, H5P_DEFAULT) < 0)
@@ -198,7 +199,7 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
 static int write_attr(nc_h5_file *f, const char *object, const char *name, hid_t type,
                       const void *value, nc_error *err)
 {
-    if (f->failed) return nc_error_set(err, 1, "%s: attribute %s not written after an earlier write error", f->path, name);
+    if (f->failed) return nc_error_set(err, 1, "%s: attribute %s not written after an earlier write error (%s)", f->path, name, f->failure);
     errno = 0;
     hid_t space = H5Screate(H5S_SCALAR);
     if (H5Aexists_by_name(f->file, object, name, H5P_DEFAULT) > 0)
@@ -236,7 +237,7 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     memset(s, 0, sizeof *s);
     s->dataset = H5I_INVALID_HID;
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
-    if (f->failed) return nc_error_set(err, 1, "%s: %s not created after an earlier write error", f->path, path);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not created after an earlier write error (%s)", f->path, path, f->failure);
     if (make_parents(f, path, err)) return -1;
     s->type = type;
     s->rank = rank;
@@ -273,7 +274,7 @@ int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_ty
     memset(s, 0, sizeof *s);
     s->dataset = H5I_INVALID_HID;
     if (rank < 1 || rank > 3) return nc_error_set(err, 1, "%s: %s: rank %d not supported", f->path, path, rank);
-    if (f->failed) return nc_error_set(err, 1, "%s: %s not opened after an earlier write error", f->path, path);
+    if (f->failed) return nc_error_set(err, 1, "%s: %s not opened after an earlier write error (%s)", f->path, path, f->failure);
     s->type = type;
     s->rank = rank;
     s->owner = f;
@@ -347,7 +348,7 @@ static int write_pending(nc_h5_series *s, nc_error *err)
 {
     if (s->pending_rows == 0 || s->dataset <= 0) return 0;
     if (s->owner->failed)
-        return nc_error_set(err, 1, "%s: %s not written after an earlier write error", s->owner->path, s->name);
+        return nc_error_set(err, 1, "%s: %s not written after an earlier write error (%s)", s->owner->path, s->name, s->owner->failure);
     int rc = write_rows(s, s->pending, (hsize_t)s->pending_rows, err);
     s->pending_rows = 0;
     return rc;
@@ -380,11 +381,14 @@ static void delist(nc_h5_file *f, const nc_h5_series *s)
 int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
 {
     if (s->owner->failed)
-        return nc_error_set(err, 1, "%s: %s not written after an earlier write error", s->owner->path, s->name);
+        return nc_error_set(err, 1, "%s: %s not written after an earlier write error (%s)", s->owner->path, s->name, s->owner->failure);
     if (!s->owner->buffered) return write_rows(s, row, 1, err);
     const size_t bytes = row_bytes(s);
     if (s->pending_rows == s->pending_cap) {
-        size_t cap = s->pending_cap ? 2 * s->pending_cap : 64;
+        /* the first room for 64 rows or 1 MiB of them, whichever is fewer (a row of a large
+         * model's field is megabytes), then doubled */
+        size_t first = (1u << 20) / (bytes ? bytes : 1);
+        size_t cap = s->pending_cap ? 2 * s->pending_cap : first < 1 ? 1 : first > 64 ? 64 : first;
         unsigned char *grown = realloc(s->pending, cap * bytes);
         if (!grown) return nc_error_set(err, 1, "%s: out of memory for %s", s->owner->path, s->name);
         s->pending = grown;

@@ -2,10 +2,10 @@
  *
  * Files are created fresh (truncating) or reopened to append (nc_h5_open), datasets are addressed by absolute paths whose
  * parent groups are created on demand, and time series grow along their first dimension
- * one row at a time. nc_h5_flush() after each output step keeps everything written so far
- * readable if the process is later stopped or killed (the file stays in the default,
- * pre-1.10 format, which has no "file open for writing" flag to clear after a crash); a file
- * whose rows wait in memory (nc_h5_set_buffered) is then as its last flush left it.
+ * one row at a time. nc_h5_flush() keeps everything written so far readable if the process
+ * is later stopped or killed (the file stays in the default, pre-1.10 format, which has no
+ * "file open for writing" flag to clear after a crash); a file whose rows wait in memory
+ * (nc_h5_set_buffered) is then as its last flush left it.
  *
  * Write errors (a full disk): the message names the file, what failed and the operating
  * system's reason ("No space left on device"); the file is then marked failed, nothing more
@@ -25,6 +25,7 @@ typedef struct nc_h5_file {
     hid_t file;
     char path[512];
     int failed;         /* a write or flush failed: nothing more is written (see nc_h5_close) */
+    char failure[200];  /* the first failure's reason, repeated by every later refusal */
     int buffered;       /* series rows wait in memory for nc_h5_flush (nc_h5_set_buffered) */
     double flushed_at_s;   /* nc_clock_now_s() at the last flush (or when opened) */
     struct nc_h5_series **series;   /* buffered: the open series, which nc_h5_flush writes */
@@ -62,7 +63,9 @@ void nc_h5_set_buffered(nc_h5_file *f);
  * time passed since the file's last flush (or its opening). 1 when it wrote, 0 when not due
  * yet, -1 on a write error. Writing after every output step took a third of the coupler's
  * own time, and a sixth of a solver's, in runs of small steps (docs/notes/interface_jacobian.md,
- * "Speed"); what a killed process leaves unwritten is the last fraction of a second. */
+ * "Speed"); what a killed process leaves unwritten is what came after the last flush: a
+ * fraction of a second for a writer that calls this at every row, since its last output step
+ * for one that calls it at output steps only (the solvers). */
 #define NC_H5_FLUSH_INTERVAL_S 0.25
 int nc_h5_flush_due(nc_h5_file *f, nc_error *err);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */

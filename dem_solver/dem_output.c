@@ -268,7 +268,13 @@ int dem_output_write(dem_output *o, const dem_sim *s, const double *net_force, n
         nc_h5_series_append(&o->kinetic, &ke, err))
         return -1;
     o->n_out++;
-    if (format_step(o, s, k, s->time_s, net_row, err)) return -1;
+    /* a grid formatted only in part (out of memory) is not left in the text to be written */
+    size_t particles_len = o->xdmf_particles.len, net_len = o->xdmf_net.len;
+    if (format_step(o, s, k, s->time_s, net_row, err)) {
+        o->xdmf_particles.len = particles_len;
+        o->xdmf_net.len = net_len;
+        return -1;
+    }
     /* the rows wait in memory (nc_h5_set_buffered) and are written every fraction of a second;
      * the first output step at once, so that the XDMF files exist from the start */
     int written = o->n_out == 1 ? (nc_h5_flush(&o->h5, err) ? -1 : 1) : nc_h5_flush_due(&o->h5, err);
@@ -356,6 +362,8 @@ int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err)
     if (reopen_files(o, s, err) == 0) return 0;
     close_files(o); /* a second RESUME may try again */
     o->created = 0;
+    o->xdmf_particles.len = 0;   /* the grids of the rows it could not reopen */
+    o->xdmf_net.len = 0;
     return -1;
 }
 

@@ -298,7 +298,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     /* the result rows still in memory: a run (or a stopped one) whose results could not be
      * written failed, and says why; an earlier error is said instead */
     nc_error flushing;
-    if (dem_output_flush(out, &flushing) && rc >= 0) {
+    if (dem_output_flush(out, &flushing) && (rc == 0 || rc == 130)) {
         if (err) *err = flushing;
         rc = -1;
     }

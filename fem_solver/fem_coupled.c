@@ -401,15 +401,16 @@ done:
         nc_error ignored;
         fem_analysis_restore(&c->s, &ignored);
     }
-    if (c->out.open && c->written_step != c->s.cur.step && c->s.m) {
-        nc_error ignored;
-        fem_analysis_update_axial(&c->s);
-        fem_output_step(&c->out, &c->s, c->s.cur.time_s, &ignored);
-    }
-    /* the rows still in memory: a run (or a stopped one) whose results could not be written
-     * failed, and says why; an earlier error is said instead */
+    /* the last state and the rows still in memory: a run (or a stopped one) whose results
+     * could not be written failed, and says why; an earlier error is said instead */
     nc_error flushing;
-    if (fem_output_flush(&c->out, &flushing) && rc >= 0) {
+    int unwritten = 0;
+    if (c->out.open && c->written_step != c->s.cur.step && c->s.m) {
+        fem_analysis_update_axial(&c->s);
+        unwritten = fem_output_step(&c->out, &c->s, c->s.cur.time_s, &flushing) != 0;
+    }
+    if (!unwritten) unwritten = fem_output_flush(&c->out, &flushing) != 0;
+    if (unwritten && rc >= 0) {
         if (err) *err = flushing;
         rc = -1;
     }

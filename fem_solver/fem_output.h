@@ -58,9 +58,9 @@ typedef struct fem_output {
     nc_h5_series stroke, dissipated;   /* only with element history (has_history) */
     int has_history;
     char dir[512];
-    int n_out;         /* output rows written (/output series) */
-    int n_xdmf;        /* output rows fem.xdmf lists (those written to the file) */
-    long n_mon;        /* monitor rows written (/monitor series) */
+    int n_out;         /* output rows appended (/output series; in fem.h5 once written) */
+    int n_xdmf;        /* output rows fem.xdmf lists (written to fem.h5 before it lists them) */
+    long n_mon;        /* monitor rows appended (/monitor series) */
     int cap;
     double *times;     /* output times, for the XDMF file */
     double *buf;       /* [3 max(n_nodes, n_elements)] scratch */

@@ -145,8 +145,11 @@ case_abs=$REPLY
 [ -n "$out" ] || printf -v out 'runs/%s-%(%Y%m%d-%H%M%S)T' "${case_abs##*/}" -1
 parent=.; [[ $out == */* ]] && parent=${out%/*}
 if [ -z "$resume_dir" ] && [ ! -e "$out" ] && [ -d "${parent:-/}" ]; then
-  # a new folder in an existing one: cp makes it as the copy (one process instead of two)
-  cp -R "$case_abs" "$out" || die "cannot copy $case_dir into $out"
+  # a new folder in an existing one: cp makes it as the copy (one process instead of two;
+  # -H: a case folder given as a symbolic link is copied, not the link), writable whatever
+  # the case folder's own mode
+  cp -RH "$case_abs" "$out" || die "cannot copy $case_dir into $out"
+  [ -w "$out" ] || chmod u+w "$out" || die "$out: cannot make the output folder writable"
   abs_dir "$out" || die "$out: cannot enter the output folder"
   out=$REPLY
 else
@@ -247,7 +250,7 @@ wait_all_exit() {   # MS [any]: waits until every program has ended, at most MS 
   now_ms; local until=$((NOW_MS + $1))   # (without "any", a Ctrl-C ends the wait)
   reap
   while any_running && [ "$NOW_MS" -lt "$until" ] && { [ -z "$interrupted" ] || [ -n "${2:-}" ]; }; do
-    pause 0.01; reap; now_ms
+    pause; reap; now_ms
   done
 }
 on_signal() { interrupted=$1; }
@@ -288,10 +291,17 @@ report() {
     if [ "$failed" != coupler ] && [ -f "$failed.log" ]; then
       echo "run_case: last lines of $out/$failed.log:" >&2; tail -n 10 "$failed.log" >&2
     fi
-    # a full disk takes the program's own message with it: its log stays empty
+    # a full disk takes the program's own message with it: its log stays empty (a program
+    # killed by a signal leaves it empty too, with room on the disk)
     if [ -f "$failed.log" ] && [ ! -s "$failed.log" ]; then
-      echo "run_case: $out/$failed.log is empty: $failed's messages could not be written" \
-           "($(df -hP . 2>/dev/null | awk 'NR == 2 {print $4 " free on " $6}'); a full disk?)" >&2
+      free_k=""; mount_point=""   # (a command substitution: waited for, unlike <(...))
+      read -r free_k mount_point <<< "$(df -kP . 2>/dev/null | awk 'NR == 2 {print $4, $6}')"
+      if [[ $free_k =~ ^[0-9]+$ ]] && [ "$free_k" -lt 1024 ]; then
+        echo "run_case: $out/$failed.log is empty: $failed's messages could not be written" \
+             "($free_k kB free on $mount_point: a full disk)" >&2
+      else
+        echo "run_case: $out/$failed.log is empty: $failed wrote no message" >&2
+      fi
     fi
     exit 1
   fi
@@ -348,7 +358,8 @@ status_shown=0; show_pid=""
 # when run_case.sh dies (setpriv --pdeathsig, util-linux), instead of waiting for a coupler
 # that never comes until its idle timeout.
 guard=()
-# (looked up, not tried: util-linux has had --pdeathsig since 2.33, Debian 10)
+# (looked up, not tried: util-linux has had --pdeathsig since 2.33, Debian 10 and Ubuntu
+# 20.04; an older setpriv fails every program at its start, naming the option)
 type -P setpriv >/dev/null 2>&1 && guard=(setpriv --pdeathsig TERM)
 # Two pipes, each from a process substitution (a fork without an exec, and no file to make or
 # remove), opened again through /dev/fd for the ends wanted:
@@ -466,10 +477,10 @@ read_log() {   # TIMEOUT: the log lines that arrived; 1 at the end of the log
     return 1
   done
 }
-pause() {   # [SECONDS]: a pause (0.1 s), cut short when the last program ends; 0.01 s after
+pause() {   # 0.1 s, cut short when the last program ends; 0.01 s once they have (or no pipe)
   if [ -n "$alive_fd" ]; then
     local byte
-    read -r -t "${1:-0.1}" -u "$alive_fd" byte
+    read -r -t 0.1 -u "$alive_fd" byte
     [ $? -gt 128 ] && return 0
     exec {alive_fd}<&-; alive_fd=""   # all three have ended (they never write)
     return 0

@@ -11,9 +11,14 @@ killed() {   # NAME OUTPUT_DIR XDMF TIMES_DATASET COMMAND...: runs COMMAND, kill
   shift 4
   "$@" --output "$out" > "$NC_TMP/$name.log" 2>&1 &
   local pid=$!
-  for _ in $(seq 1 100); do [ -f "$out/$xdmf" ] && break; sleep 0.1; done
-  [ -f "$out/$xdmf" ] || { cat "$NC_TMP/$name.log"; fail "$name: no $xdmf after 10 s"; }
-  sleep 1.5   # several writes later (one every fraction of a second)
+  # killed once a second write has listed its steps (the first comes at once), while it runs
+  local grids=0
+  for _ in $(seq 1 600); do
+    grids=$(grep -c 'GridType="Uniform"' "$out/$xdmf" 2>/dev/null)
+    [ "${grids:-0}" -ge 2 ] && break
+    sleep 0.1
+  done
+  [ "${grids:-0}" -ge 2 ] || { cat "$NC_TMP/$name.log"; fail "$name: $xdmf lists ${grids:-no} steps after 60 s"; }
   kill -0 "$pid" 2>/dev/null || { cat "$NC_TMP/$name.log"; fail "$name: ended before it was killed"; }
   kill -KILL "$pid"
   wait "$pid" 2>/dev/null

@@ -18,6 +18,9 @@
 #  9. a coupler.json the coupler refuses, a DEM slow to start -> the coupler, started with the
 #     solvers, tells them to go (both exit 0, not stopped after the grace time) and only the
 #     coupler is named as failed;
+# 10. a case folder given as a symbolic link, and one that is read-only -> the output folder is
+#     a folder of its own (writable for a user other than root) and --set changes its copies,
+#     not the case's files;
 #  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
 #     (time, remaining time, contact, deflection) with its messages, the final status line
 #     stays, and coupler.log still holds everything without terminal control characters.
@@ -185,6 +188,27 @@ failed_line | grep -Eq "^run_case: failed: coupler \(exit 1: coupler.json: dt: .
 awk "BEGIN {exit !($took < 12)}" || fail "bad coupler.json: reported after $took s (limit 12 s)"
 no_leftovers
 echo "9 ok ($took s): $(failed_line)"
+
+# 10. a case folder given as a symbolic link, and a read-only one
+case_sum=$(cksum < cases/rest_position/coupler.json)
+ln -s "$PWD/cases/rest_position" "$NC_TMP/linked_case"
+mkdir -p "$NC_TMP/read_only"
+cp -R cases/rest_position "$NC_TMP/read_only/case"
+chmod 555 "$NC_TMP/read_only/case"
+for c in "$NC_TMP/linked_case" "$NC_TMP/read_only/case"; do
+  out=$NC_TMP/copy_of_${c##*/}
+  rm -rf "$out"
+  scripts/run_case.sh "$c" --out "$out" --quiet --set coupler.end_time=0.01 \
+    --set fem.analysis.end_time_s=0.01 > "$out.out" 2>&1 || fail "10: the run of $c failed"
+  [ -d "$out" ] && [ ! -L "$out" ] || fail "10: $out is not a folder of its own"
+  # (root writes into a folder of mode 555: the mode matters, and is made writable, for others)
+  [ "$(id -u)" -eq 0 ] || [ -w "$out" ] || fail "10: $out is not writable ($(stat -c %a "$out"))"
+  "$PY" -c 'import json, sys; assert json.load(open(sys.argv[1]))["end_time"] == 0.01' \
+    "$out/coupler.json" || fail "10: --set did not reach $out/coupler.json"
+done
+chmod 755 "$NC_TMP/read_only/case"
+[ "$(cksum < cases/rest_position/coupler.json)" = "$case_sum" ] || fail "10: the case's coupler.json was changed"
+echo "10 ok: a linked and a read-only case folder copied into writable folders, the case untouched"
 
 # 7. the live status line on a terminal
 if command -v script >/dev/null; then

@@ -25,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -467,6 +468,29 @@ static void test_resume_is_bit_identical(void **state)
     snprintf(xp, sizeof xp, "%s/particles.xdmf", out);
     snprintf(xn, sizeof xn, "%s/dem_net.xdmf", out);
     char *xdmf_particles = read_text(xp), *xdmf_net = read_text(xn);
+
+    /* killed right after the checkpoint at K_RESUME: the rows it counts are in dem.h5 (written
+     * for the checkpoint; else only the first output step's would be, the rest in memory) */
+    {
+        char out_k[600], h5_k[700];
+        snprintf(out_k, sizeof out_k, "%s/out_killed", dir);
+        snprintf(h5_k, sizeof h5_k, "%s/dem.h5", out_k);
+        assert_int_equal(nc_file_make_dirs(out_k, &err), 0);
+        run k;
+        start(&k, input, out_k);
+        run_steps(&k, 0, K_RESUME);
+        kill(k.pid, SIGKILL);
+        int status = 0;
+        assert_int_equal(waitpid(k.pid, &status, 0), k.pid);
+        proto_message_free(&k.req);
+        proto_message_free(&k.rep);
+        proto_peer_close(k.peer);
+        free(k.replies.data);
+        results rk;
+        read_results(h5_k, &rk);
+        assert_int_equal(rows_of(&rk, "time"), 1 + K_RESUME / 4);   /* t = 0 and every 8e-4 s */
+        free_results(&rk);
+    }
 
     /* refused resumes: missing, another step, another model; the results stay as they are */
     char msg[1024];

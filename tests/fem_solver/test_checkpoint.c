@@ -556,6 +556,26 @@ static void test_resume_bit_identical(void **state)
     assert_int_equal(rows(h5_b, "/monitor/time"), 10);   /* t = 0 .. 9 ms (flushed at 9 ms) */
     assert_int_equal(rows(h5_b, "/output/time"), 4);     /* t = 0, 3, 6, 9 ms */
 
+    /* A'': killed right after the checkpoint before step 7: its rows are in fem.h5 (written
+     * for the checkpoint; else only the first output step's would be, the rest in memory) */
+    {
+        char dir_c[600], h5_c[700];
+        static reply_rec rc_[N_STEPS][N_IT];
+        memset(rc_, 0, sizeof rc_);
+        double u_c[3 * 64] = {0}, v_c[3 * 64] = {0};
+        out_dir("k", dir_c, sizeof dir_c);
+        open_session(&ss, json, dir_c, "k");
+        run_steps(&ss, 0, K_RESUME, rc_, u_c, v_c);
+        nc_error err;
+        if (command(&ss, PROTO_MSG_CHECKPOINT, K_RESUME, K_RESUME * DT, "step_000007", &err))
+            fail_msg("checkpoint: %s", err.message);
+        kill_session(&ss);
+        snprintf(h5_c, sizeof h5_c, "%s/fem.h5", dir_c);
+        assert_int_equal(rows(h5_c, "/monitor/time"), K_RESUME + 1);   /* t = 0 .. 7 ms */
+        assert_int_equal(rows(h5_c, "/output/time"), 3);           /* t = 0, 3, 6 ms */
+        free_recs(rc_);
+    }
+
     /* B: a fresh process in dir_b resumes step 7 and gets A's commands */
     open_session(&ss, json, dir_b, "b");
     nc_error err;
