@@ -61,8 +61,8 @@ int nc_h5_flush(nc_h5_file *f, nc_error *err);
 void nc_h5_set_buffered(nc_h5_file *f);
 /* The buffered files' write policy: nc_h5_flush once NC_H5_FLUSH_INTERVAL_S or more of wall
  * time passed since the file's last flush (or its opening). 1 when it wrote, 0 when not due
- * yet, -1 on a write error. Writing after every output step took a third of the coupler's
- * own time, and a sixth of a solver's, in runs of small steps (docs/notes/interface_jacobian.md,
+ * yet, -1 on a write error. Writing after every step took a third of the coupler's own
+ * time, and HDF5 an eighth of the DEM's, in runs of small steps (docs/notes/interface_jacobian.md,
  * "Speed"); what a killed process leaves unwritten is what came after the last flush: a
  * fraction of a second for a writer that calls this at every row, since its last output step
  * for one that calls it at output steps only (the solvers). */

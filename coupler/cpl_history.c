@@ -2,7 +2,6 @@
  * when each reaches the disk). */
 #include "cpl_history.h"
 
-
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>

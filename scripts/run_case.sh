@@ -190,10 +190,20 @@ ms grace_ms "$grace"; ms stall_ms "$stall_limit"
 beat_every_ms=$((stall_ms / 10)); [ $beat_every_ms -le 1000 ] || beat_every_ms=1000
 # nap SECONDS: a pause without a process, a read with a timeout on a pipe that never has data
 # (nap_fd, held open read-write by this shell from the start of the programs); sleep without it
-nap_fd=""
+nap_fd=""; alive_fd=""   # (the pipes are made where the programs start)
 nap() {
   if [ -n "$nap_fd" ]; then read -r -t "$1" -u "$nap_fd" _; else sleep "$1"; fi
   return 0
+}
+pause() {   # 0.1 s, cut short when the last program ends; 0.01 s once they have (or no pipe)
+  if [ -n "$alive_fd" ]; then
+    local byte
+    read -r -t 0.1 -u "$alive_fd" byte
+    [ $? -gt 128 ] && return 0
+    exec {alive_fd}<&-; alive_fd=""   # all three have ended (they never write)
+    return 0
+  fi
+  nap 0.01
 }
 
 reap() {   # collects the exit status of every program that has ended
@@ -476,16 +486,6 @@ read_log() {   # TIMEOUT: the log lines that arrived; 1 at the end of the log
     [ -n "$pending" ] && log_line "$pending"; pending=""
     return 1
   done
-}
-pause() {   # 0.1 s, cut short when the last program ends; 0.01 s once they have (or no pipe)
-  if [ -n "$alive_fd" ]; then
-    local byte
-    read -r -t 0.1 -u "$alive_fd" byte
-    [ $? -gt 128 ] && return 0
-    exec {alive_fd}<&-; alive_fd=""   # all three have ended (they never write)
-    return 0
-  fi
-  nap 0.01
 }
 show() {   # new log lines, then the status line (a terminal); else just a pause
   if [ $live -eq 0 ] || [ -n "$log_ended" ]; then pause; return 0; fi
