@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static hid_t mem_type(nc_h5_type type)
 {
@@ -130,6 +131,17 @@ int nc_h5_flush(nc_h5_file *f, nc_error *err)
         if (write_pending(f->series[i], err)) return -1;
     errno = 0;
     if (H5Fflush(f->file, H5F_SCOPE_GLOBAL) < 0) return fail(f, err, "cannot flush", "the file");
+    return 0;
+}
+
+int nc_h5_sync(nc_h5_file *f, nc_error *err)
+{
+    if (f->file < 0) return 0;
+    if (nc_h5_flush(f, err)) return -1;
+    void *handle = NULL;
+    errno = 0;
+    if (H5Fget_vfd_handle(f->file, H5P_DEFAULT, &handle) >= 0 && handle && fsync(*(int *)handle) != 0)
+        return fail(f, err, "cannot flush to the disk", "the file");
     return 0;
 }
 

@@ -68,6 +68,9 @@ void nc_h5_set_buffered(nc_h5_file *f);
  * for one that calls it at output steps only (the solvers). */
 #define NC_H5_FLUSH_INTERVAL_S 0.25
 int nc_h5_flush_due(nc_h5_file *f, nc_error *err);
+/* nc_h5_flush, then the file to the disk (fsync): rows a checkpoint counts survive a crash of
+ * the machine, not only of the process. */
+int nc_h5_sync(nc_h5_file *f, nc_error *err);
 void nc_h5_close(nc_h5_file *f);           /* safe on a zeroed or already closed struct */
 
 /* Fixed-size datasets: rank 1..3, dims[rank]. */

@@ -370,12 +370,9 @@ int dem_output_resume(dem_output *o, const dem_sim *s, nc_error *err)
 int dem_output_sync(dem_output *o, nc_error *err)
 {
     if (!o->created) return 0;
-    if (dem_output_flush(o, err)) return -1;
-    void *handle = NULL;
-    if (H5Fget_vfd_handle(o->h5.file, H5P_DEFAULT, &handle) >= 0 && handle &&
-        fsync(*(int *)handle) != 0)
-        return nc_error_set(err, 1, "%s: cannot flush to the disk: %s", o->h5.path, strerror(errno));
-    return 0;
+    /* the file first, then the XDMF grids of what it now holds */
+    if (nc_h5_sync(&o->h5, err)) return -1;
+    return add_pending_xdmf(o, err);
 }
 
 void dem_output_close(dem_output *o)

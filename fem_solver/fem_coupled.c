@@ -287,7 +287,7 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
     coupled *c = ctx;
     /* checkpointed before its first step: the run's results start now */
     /* the rows the checkpoint counts are in fem.h5 before it names them */
-    if (start_output(c, err) || fem_output_flush(&c->out, err)) return -1;
+    if (start_output(c, err) || fem_output_sync(&c->out, err)) return -1;
     return fem_checkpoint_save(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
                                &c->run_entries, err);
 }
@@ -401,15 +401,16 @@ done:
         nc_error ignored;
         fem_analysis_restore(&c->s, &ignored);
     }
-    /* the last state and the rows still in memory: a run (or a stopped one) whose results
-     * could not be written failed, and says why; an earlier error is said instead */
+    /* the last state, the rows still in memory and the run's summary: a run (or a stopped one)
+     * whose results could not be written failed, and says why; an earlier error is said
+     * instead */
     nc_error flushing;
     int unwritten = 0;
     if (c->out.open && c->written_step != c->s.cur.step && c->s.m) {
         fem_analysis_update_axial(&c->s);
         unwritten = fem_output_step(&c->out, &c->s, c->s.cur.time_s, &flushing) != 0;
     }
-    if (!unwritten) unwritten = fem_output_flush(&c->out, &flushing) != 0;
+    if (!unwritten) unwritten = fem_output_finish(&c->out, &flushing) != 0;
     if (unwritten && rc >= 0) {
         if (err) *err = flushing;
         rc = -1;

@@ -333,11 +333,22 @@ static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err)
     return rc;
 }
 
-int fem_output_flush(fem_output *o, nc_error *err)
+/* fem.h5's rows (to the disk: sync), then the XDMF grids of the steps it now holds */
+static int write_rows_and_grids(fem_output *o, int sync, nc_error *err)
 {
     if (!o->open) return 0;
-    if (nc_h5_flush(&o->h5, err)) return -1;
+    if (sync ? nc_h5_sync(&o->h5, err) : nc_h5_flush(&o->h5, err)) return -1;
     return o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
+}
+
+int fem_output_flush(fem_output *o, nc_error *err)
+{
+    return write_rows_and_grids(o, 0, err);
+}
+
+int fem_output_sync(fem_output *o, nc_error *err)
+{
+    return write_rows_and_grids(o, 1, err);
 }
 
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err)
@@ -467,18 +478,26 @@ static int write_overload(fem_output *o, const fem_model *m, nc_error *err)
     return rc ? -1 : 0;
 }
 
+int fem_output_finish(fem_output *o, nc_error *err)
+{
+    if (!o->open || o->finished) return 0;
+    if (o->max_u_node >= 0 && o->disp.dataset > 0 &&
+        (nc_h5_attr_double(&o->h5, "/output/displacement", "max_magnitude", o->max_u_m, err) ||
+         nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, err) ||
+         nc_h5_attr_double(&o->h5, "/output/displacement", "max_node", o->max_u_node, err)))
+        return -1;
+    if (o->model && o->peak_n && write_overload(o, o->model, err)) return -1;
+    if (fem_output_flush(o, err)) return -1;
+    o->finished = 1;
+    return 0;
+}
+
 void fem_output_close(fem_output *o)
 {
     if (!o) return;
     if (o->open) {
-        nc_error ignored;   /* the runs flush with fem_output_flush first, and report its error */
-        fem_output_flush(o, &ignored);
-        if (o->max_u_node >= 0 && o->disp.dataset > 0) {
-            nc_h5_attr_double(&o->h5, "/output/displacement", "max_magnitude", o->max_u_m, &ignored);
-            nc_h5_attr_double(&o->h5, "/output/displacement", "max_time", o->max_u_time_s, &ignored);
-            nc_h5_attr_double(&o->h5, "/output/displacement", "max_node", o->max_u_node, &ignored);
-        }
-        if (o->model && o->peak_n) write_overload(o, o->model, &ignored);
+        nc_error ignored;   /* a run finishes first (fem_output_finish) and reports its error */
+        fem_output_finish(o, &ignored);
         close_series(o);
         nc_h5_flush(&o->h5, &ignored);
         nc_h5_close(&o->h5);

@@ -68,6 +68,7 @@ typedef struct fem_output {
     int n_support;
     int *support_nodes;
     int open;
+    int finished;      /* fem_output_finish done: the file holds the run's summary */
     nc_xdmf_file xdmf; /* fem.xdmf, open from the first output step */
     const fem_model *model;
     double max_u_m, max_u_time_s;   /* run maximum of |u| over the monitored steps */
@@ -97,9 +98,15 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
 /* Appends one full output step; when the file is written (see above), the grids of the steps
  * written go to the XDMF file. */
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
-/* Writes the rows waiting in memory to fem.h5 and their grids to fem.xdmf: before a
- * checkpoint counts the rows, and before a run's verdict (a full disk fails the run). */
+/* Writes the rows waiting in memory to fem.h5 and their grids to fem.xdmf. */
 int fem_output_flush(fem_output *o, nc_error *err);
+/* The same with fem.h5 flushed to the disk (fsync): the rows a checkpoint counts survive a
+ * crash of the machine. */
+int fem_output_sync(fem_output *o, nc_error *err);
+/* What a run writes last, before its verdict (a full disk fails the run): the largest |u|
+ * (attributes of /output/displacement), /element_sets, then fem_output_flush. Once:
+ * fem_output_close does it (errors ignored) when the run has not. */
+int fem_output_finish(fem_output *o, nc_error *err);
 /* Support reactions of the current state into r [3 n_support] (N), load factor lambda. */
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r);
 /* Each set's peak and exceedance so far into per_set [n_sets] (may be NULL); returns the

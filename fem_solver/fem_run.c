@@ -69,9 +69,10 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
     }
     rc = 0;
 done:
-    /* the rows still in memory, before the summary: a run (or a stopped one) whose results
-     * could not be written failed, and says why; an earlier error is said instead */
-    if (rc >= 0 && fem_output_flush(&out, err)) rc = -1;
+    /* the rows still in memory and the run's summary in fem.h5, before the printed one: a run
+     * (or a stopped one) whose results could not be written failed, and says why; an earlier
+     * error is said instead */
+    if (rc >= 0 && fem_output_finish(&out, err)) rc = -1;
     sum.output_steps = out.n_out;
     /* the run's largest |u| over every step, not the last step's */
     sum.max_displacement_m = out.max_u_node >= 0 ? out.max_u_m : 0.0;
