@@ -16,8 +16,8 @@
  *   every step /monitor/time [s], /monitor/node_ids [p] i32, /monitor/displacement and
  *   /monitor/velocity [s,p,3]. /output/displacement holds the run's largest |u| as
  *   attributes max_magnitude (m), max_time (s) and max_node, over every monitored step.
- *   Per element set, over every monitored step (written at close; index k = element set k,
- *   as in /mesh/element_set): /element_sets/breaking_load [k] N (0: not given),
+ *   Per element set, over every monitored step (written at the end of the run; index k =
+ *   element set k, as in /mesh/element_set): /element_sets/breaking_load [k] N (0: not given),
  *   /element_sets/peak_axial_force [k] N (the largest tensile axial force),
  *   /element_sets/peak_time [k] s (load factor for statics), /element_sets/peak_element [k]
  *   i32, /element_sets/exceeded_elements [k] i32 (elements whose force ever exceeded the
