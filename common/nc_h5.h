@@ -63,8 +63,9 @@ void nc_h5_set_buffered(nc_h5_file *f);
  * time passed since the file's last flush (or its opening). 1 when it wrote, 0 when not due
  * yet, -1 on a write error. Writing after every step took a third of the coupler's own
  * time, and HDF5 an eighth of the DEM's, in runs of small steps (docs/notes/interface_jacobian.md,
- * "Speed"). Called after every row it adds, a writer leaves unwritten when it is killed only
- * the rows it added within that interval after its last write. */
+ * "Speed"); what a killed process leaves unwritten is what came after the last flush: a
+ * fraction of a second for a writer that calls this at every row, since its last output step
+ * for one that calls it at output steps only (the solvers). */
 #define NC_H5_FLUSH_INTERVAL_S 0.25
 int nc_h5_flush_due(nc_h5_file *f, nc_error *err);
 /* nc_h5_flush, then the file to the disk (fsync): rows a checkpoint counts survive a crash of

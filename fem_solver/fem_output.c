@@ -121,15 +121,6 @@ int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
 
 static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
 
-/* The rows waiting in memory are written NC_H5_FLUSH_INTERVAL_S after the last write
- * (nc_h5_flush_due), and then the XDMF grids of the output steps written. */
-static int write_when_due(fem_output *o, nc_error *err)
-{
-    int written = nc_h5_flush_due(&o->h5, err);
-    if (written < 0) return -1;
-    return written && o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
-}
-
 static void close_series(fem_output *o)
 {
     nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
@@ -271,10 +262,7 @@ int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_e
     if (nc_h5_series_append(&o->mon_disp, b, err)) return -1;
     for (int i = 0; i < m->n_monitor; i++)
         for (int c = 0; c < 3; c++) b[3 * i + c] = s->cur.v[3 * m->monitor_nodes[i] + c];
-    if (nc_h5_series_append(&o->mon_vel, b, err)) return -1;
-    /* every step, not only at output steps: with sparse output the monitor rows would
-     * otherwise wait in memory until the next one */
-    return write_when_due(o, err);
+    return nc_h5_series_append(&o->mon_vel, b, err);
 }
 
 void fem_output_reactions(fem_output *o, const fem_analysis *s, double lambda, double *r)
@@ -395,8 +383,11 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;
     o->times[o->n_out++] = time_s;
     o->model = m;
-    /* the first output step at once, so that fem.xdmf exists from the start */
-    return o->xdmf.open ? write_when_due(o, err) : fem_output_flush(o, err);
+    /* the rows wait in memory (nc_h5_set_buffered) and are written every fraction of a second;
+     * the first output step at once, so that fem.xdmf exists from the start */
+    int written = o->xdmf.open ? nc_h5_flush_due(&o->h5, err) : (nc_h5_flush(&o->h5, err) ? -1 : 1);
+    if (written < 0) return -1;
+    return written ? write_xdmf(o, m, err) : 0;
 }
 
 int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set)

@@ -26,8 +26,8 @@
  *   with a breaking load given, the root attribute overloaded_elements (their total) and,
  *   when it is > 0, the root string attribute overload (the warnings, one line per set).
  * The series' rows wait in memory, and fem.h5 is written at the first output step, then at
- * the first step (monitor rows every step) a fraction of a second of wall time after its last
- * write (nc_h5_flush_due), and by fem_output_flush; only then does fem.xdmf (XDMF 3, read by ParaView's default
+ * an output step a fraction of a second of wall time after its last write (nc_h5_flush_due)
+ * and by fem_output_flush; only then does fem.xdmf (XDMF 3, read by ParaView's default
  * reader) grow in place by the grids of the steps written (nc_xdmf.h), so both stay readable
  * if the run stops or is killed, holding the steps of the last write.
  * A run resumed from a checkpoint reopens the files (fem_output_reopen): the series are cut
