@@ -1,13 +1,16 @@
 /* nc_h5 — HDF5 helpers: create file, groups on demand, fixed datasets, growing series. */
+#define _GNU_SOURCE   /* fallocate */
 #include "nc_h5.h"
 
 #include "nc_clock.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static hid_t mem_type(nc_h5_type type)
@@ -57,6 +60,57 @@ static int fail(nc_h5_file *f, nc_error *err, const char *what, const char *obje
     if (!f->failed) snprintf(f->failure, sizeof f->failure, "%s", why);
     f->failed = 1;
     return nc_error_set(err, 1, "%s: %s %s: %s", f->path, what, object, why);
+}
+
+/* What a write may add to the file besides what HDF5 has already allocated (its end of
+ * allocation, H5Fget_eoa) and the chunks it starts: the chunk index's new nodes, the
+ * free-space aggregators' next blocks. Taken generously: it only makes a nearly full disk
+ * fail a few kilobytes earlier. */
+#define MARGIN_BYTES (64u << 10)
+#define INDEX_BYTES_PER_SERIES (4u << 10)
+#define INDEX_BYTES_PER_CHUNK 512u
+
+static int file_descriptor(const nc_h5_file *f)
+{
+    void *handle = NULL;
+    if (f->file < 0 || H5Fget_vfd_handle(f->file, H5P_DEFAULT, &handle) < 0 || !handle) return -1;
+    return *(int *)handle;
+}
+
+/* Takes the disk space for the next write before HDF5 starts it: the file's blocks from its
+ * end for what HDF5 has allocated and not yet written (metadata waiting in its cache), the
+ * `bytes` this write adds and a margin (fallocate with the file's size unchanged; blocks
+ * already taken are kept). A full disk then fails the write before any of it reached the
+ * file, which stays as its last flush left it: a flush that failed part way could leave the
+ * superblock and the objects it points to out of step, the file unreadable ("addr
+ * overflow"). A file system without fallocate is written to without. */
+static int reserve(nc_h5_file *f, size_t bytes, nc_error *err)
+{
+    int fd = file_descriptor(f);
+    struct stat st;
+    haddr_t allocated = 0;
+    if (fd < 0 || fstat(fd, &st) != 0) return 0;
+    if (H5Fget_eoa(f->file, &allocated) >= 0 && allocated > (haddr_t)st.st_size)
+        bytes += (size_t)(allocated - (haddr_t)st.st_size);
+    errno = 0;
+    if (fallocate(fd, FALLOC_FL_KEEP_SIZE, st.st_size, (off_t)(bytes + MARGIN_BYTES)) == 0) {
+        f->reserved = 1;
+        return 0;
+    }
+    if (errno == ENOSPC || errno == EDQUOT || errno == EFBIG)
+        return fail(f, err, "cannot take the disk space for", "the next write");
+    return 0;
+}
+
+/* Gives back the blocks taken past the end of the file (truncating a file to its own size
+ * frees them). */
+static void release(nc_h5_file *f, int fd)
+{
+    struct stat st;
+    if (!f->reserved) return;
+    if (fd >= 0 ? fstat(fd, &st) == 0 && ftruncate(fd, st.st_size) == 0
+                : stat(f->path, &st) == 0 && truncate(f->path, st.st_size) == 0)
+        f->reserved = 0;
 }
 
 void nc_h5_quiet(void)
@@ -109,6 +163,7 @@ int nc_h5_open(nc_h5_file *f, const char *path, nc_error *err)
 
 static int write_pending(nc_h5_series *s, nc_error *err);
 static int enlist(nc_h5_file *f, nc_h5_series *s, nc_error *err);
+static size_t pending_bytes(const nc_h5_series *s);
 
 void nc_h5_set_buffered(nc_h5_file *f)
 {
@@ -127,6 +182,9 @@ int nc_h5_flush(nc_h5_file *f, nc_error *err)
     if (f->file < 0) return 0;
     if (f->failed) return nc_error_set(err, 1, "%s: not written after an earlier write error (%s)", f->path, f->failure);
     f->flushed_at_s = nc_clock_now_s();
+    size_t bytes = 0;
+    for (int i = 0; i < f->n_series; i++) bytes += pending_bytes(f->series[i]);
+    if (reserve(f, bytes, err)) return -1;
     for (int i = 0; i < f->n_series; i++)
         if (write_pending(f->series[i], err)) return -1;
     errno = 0;
@@ -148,15 +206,16 @@ int nc_h5_sync(nc_h5_file *f, nc_error *err)
 void nc_h5_close(nc_h5_file *f)
 {
     if (!f) return;
-    for (int i = 0; i < f->n_series && !f->failed; i++)
-        if (write_pending(f->series[i], NULL)) break;
+    if (f->file > 0 && !f->failed) nc_h5_flush(f, NULL);
     free(f->series);
     f->series = NULL;
     f->n_series = f->cap_series = 0;
     if (f->file > 0) {
         /* after a failed write HDF5 cannot flush the file and would fail (or crash) closing
          * it: it is left as the last successful flush wrote it and released by the OS */
-        if (!f->failed && H5Fclose(f->file) < 0) f->failed = 1;
+        if (f->failed) release(f, file_descriptor(f));
+        else if (H5Fclose(f->file) < 0) f->failed = 1;
+        else release(f, -1);
         f->file = H5I_INVALID_HID;
     }
 }
@@ -171,6 +230,7 @@ static int make_parents(nc_h5_file *f, const char *path, nc_error *err)
         htri_t exists = H5Lexists(f->file, buf, H5P_DEFAULT);
         if (exists < 0) return nc_error_set(err, 1, "%s: bad HDF5 path %s", f->path, buf);
         if (!exists) {
+            if (reserve(f, 0, err)) return -1;
             errno = 0;
             hid_t group = H5Gcreate2(f->file, buf, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
             if (group < 0) return fail(f, err, "cannot create group", buf);
@@ -190,6 +250,9 @@ int nc_h5_write(nc_h5_file *f, const char *path, nc_h5_type type, int rank,
     /* a file reopened to append to (a resumed run) already holds the end-of-run datasets */
     if (H5Lexists(f->file, path, H5P_DEFAULT) > 0 && H5Ldelete(f->file, path, H5P_DEFAULT) < 0)
         return fail(f, err, "cannot replace dataset", path);
+    size_t bytes = type == NC_H5_F64 ? sizeof(double) : sizeof(int32_t);
+    for (int i = 0; i < rank; i++) bytes *= (size_t)dims[i];
+    if (reserve(f, bytes, err)) return -1;
     errno = 0;
     hid_t space = H5Screate_simple(rank, dims, NULL);
     hid_t dataset = H5Dcreate2(f->file, path, file_type(type), space, H5P_DEFAULT, H5P_DEFAULT,
@@ -212,6 +275,7 @@ static int write_attr(nc_h5_file *f, const char *object, const char *name, hid_t
                       const void *value, nc_error *err)
 {
     if (f->failed) return nc_error_set(err, 1, "%s: attribute %s not written after an earlier write error (%s)", f->path, name, f->failure);
+    if (reserve(f, H5Tget_size(type), err)) return -1;
     errno = 0;
     hid_t space = H5Screate(H5S_SCALAR);
     if (H5Aexists_by_name(f->file, object, name, H5P_DEFAULT) > 0)
@@ -267,7 +331,9 @@ int nc_h5_series_create(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_
     size_t rows = row_values >= 32768 ? 1 : 32768 / row_values;
     if (rows > 1024) rows = 1024;
     chunk[0] = rows;
+    s->chunk_rows = rows;
     if (row_values == 0) chunk[1] = 1;
+    if (reserve(f, 0, err)) return -1;
     errno = 0;
     hid_t space = H5Screate_simple(rank, s->dims, maxdims);
     hid_t props = H5Pcreate(H5P_DATASET_CREATE);
@@ -318,7 +384,12 @@ int nc_h5_series_open(nc_h5_file *f, nc_h5_series *s, const char *path, nc_h5_ty
         return nc_error_set(err, 1, "%s: dataset %s has %llu rows, the checkpoint needs %llu "
                             "(the file is older than the checkpoint)", f->path, path,
                             (unsigned long long)dims[0], (unsigned long long)keep_rows);
+    hid_t create = H5Dget_create_plist(s->dataset);
+    hsize_t chunk[3] = {1, 1, 1};
+    if (create >= 0 && H5Pget_chunk(create, 3, chunk) >= 1) s->chunk_rows = chunk[0];
+    if (create >= 0) H5Pclose(create);
     s->dims[0] = keep_rows;
+    if (reserve(f, 0, err)) return -1;
     errno = 0;
     if (dims[0] != keep_rows && H5Dset_extent(s->dataset, s->dims) < 0)
         return fail(f, err, "cannot truncate", path);
@@ -335,6 +406,21 @@ static size_t row_bytes(const nc_h5_series *s)
     size_t n = s->type == NC_H5_F64 ? sizeof(double) : sizeof(int32_t);
     for (int i = 1; i < s->rank; i++) n *= (size_t)s->dims[i];
     return n;
+}
+
+/* What writing rows more rows may add to the file: the chunks they start, in full (a chunk
+ * is stored whole from its first row on), and the chunk index's share. */
+static size_t rows_bytes(const nc_h5_series *s, hsize_t rows)
+{
+    if (rows == 0) return 0;
+    hsize_t per_chunk = s->chunk_rows ? s->chunk_rows : 1;
+    hsize_t chunks = (s->dims[0] + rows + per_chunk - 1) / per_chunk - (s->dims[0] + per_chunk - 1) / per_chunk;
+    return chunks ? (size_t)(chunks * per_chunk) * row_bytes(s) + INDEX_BYTES_PER_SERIES + (size_t)chunks * INDEX_BYTES_PER_CHUNK : 0;
+}
+
+static size_t pending_bytes(const nc_h5_series *s)
+{
+    return s->dataset > 0 ? rows_bytes(s, s->pending_rows) : 0;
 }
 
 /* rows more rows at the end of the dataset */
@@ -394,7 +480,8 @@ int nc_h5_series_append(nc_h5_series *s, const void *row, nc_error *err)
 {
     if (s->owner->failed)
         return nc_error_set(err, 1, "%s: %s not written after an earlier write error (%s)", s->owner->path, s->name, s->owner->failure);
-    if (!s->owner->buffered) return write_rows(s, row, 1, err);
+    if (!s->owner->buffered)
+        return reserve(s->owner, rows_bytes(s, 1), err) ? -1 : write_rows(s, row, 1, err);
     const size_t bytes = row_bytes(s);
     if (s->pending_rows == s->pending_cap) {
         /* the first room for 64 rows or 1 MiB of them, whichever is fewer (a row of a large
@@ -415,7 +502,8 @@ void nc_h5_series_close(nc_h5_series *s)
 {
     if (!s) return;
     if (s->dataset > 0) {
-        if (!s->owner->failed) write_pending(s, NULL);
+        if (!s->owner->failed && !reserve(s->owner, pending_bytes(s), NULL))
+            write_pending(s, NULL);
         delist(s->owner, s);
         H5Dclose(s->dataset);
         s->dataset = H5I_INVALID_HID;

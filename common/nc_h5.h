@@ -10,7 +10,10 @@
  * Write errors (a full disk): the message names the file, what failed and the operating
  * system's reason ("No space left on device"); the file is then marked failed, nothing more
  * is written to it and nc_h5_close() leaves it as the last successful flush wrote it (HDF5
- * can neither flush nor safely close it). HDF5's exit handler is switched off for the same
+ * can neither flush nor safely close it). Each write and flush first takes the disk space
+ * it may need past the file's end (fallocate, the file's size unchanged; given back at
+ * close), so that a full disk stops it before any of it reaches the file: a flush that
+ * failed part way could leave the file unreadable. HDF5's exit handler is switched off for the same
  * reason: every program closes its files itself.
  */
 #ifndef NC_H5_H
@@ -30,6 +33,7 @@ typedef struct nc_h5_file {
     double flushed_at_s;   /* nc_clock_now_s() at the last flush (or when opened) */
     struct nc_h5_series **series;   /* buffered: the open series, which nc_h5_flush writes */
     int n_series, cap_series;
+    int reserved;             /* disk space was taken past the file's end (given back at close) */
 } nc_h5_file;
 
 typedef enum { NC_H5_F64, NC_H5_I32 } nc_h5_type;
@@ -42,6 +46,7 @@ typedef struct nc_h5_series {
     hsize_t dims[3];
     char name[256];
     nc_h5_file *owner;
+    hsize_t chunk_rows;              /* rows per chunk of the dataset */
     unsigned char *pending;          /* buffered file: rows appended since the last flush */
     size_t pending_rows, pending_cap;
 } nc_h5_series;
@@ -63,9 +68,8 @@ void nc_h5_set_buffered(nc_h5_file *f);
  * time passed since the file's last flush (or its opening). 1 when it wrote, 0 when not due
  * yet, -1 on a write error. Writing after every step took a third of the coupler's own
  * time, and HDF5 an eighth of the DEM's, in runs of small steps (docs/notes/interface_jacobian.md,
- * "Speed"); what a killed process leaves unwritten is what came after the last flush: a
- * fraction of a second for a writer that calls this at every row, since its last output step
- * for one that calls it at output steps only (the solvers). */
+ * "Speed"). Called after every row it adds, a writer leaves unwritten when it is killed only
+ * the rows it added within that interval after its last write. */
 #define NC_H5_FLUSH_INTERVAL_S 0.25
 int nc_h5_flush_due(nc_h5_file *f, nc_error *err);
 /* nc_h5_flush, then the file to the disk (fsync): rows a checkpoint counts survive a crash of

@@ -278,7 +278,7 @@ static int on_accept(void *ctx, const proto_message *cmd, proto_message *reply, 
         c->written_step = s->cur.step;
         c->next_output_s = (floor(s->cur.time_s / every_s + 1e-6) + 1.0) * every_s;
     }
-    return 0;
+    return fem_output_write_due(&c->out, err);
 }
 
 static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)

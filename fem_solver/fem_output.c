@@ -121,6 +121,13 @@ int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
 
 static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
 
+int fem_output_write_due(fem_output *o, nc_error *err)
+{
+    int written = nc_h5_flush_due(&o->h5, err);
+    if (written < 0) return -1;
+    return written && o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
+}
+
 static void close_series(fem_output *o)
 {
     nc_h5_series *all[] = {&o->time, &o->step, &o->load, &o->disp, &o->vel, &o->pos, &o->axial,
@@ -383,11 +390,9 @@ int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_erro
     if (o->n_out == o->cap && fem_output_reserve_times(o, o->cap ? 2 * o->cap : 64, err)) return -1;
     o->times[o->n_out++] = time_s;
     o->model = m;
-    /* the rows wait in memory (nc_h5_set_buffered) and are written every fraction of a second;
-     * the first output step at once, so that fem.xdmf exists from the start */
-    int written = o->xdmf.open ? nc_h5_flush_due(&o->h5, err) : (nc_h5_flush(&o->h5, err) ? -1 : 1);
-    if (written < 0) return -1;
-    return written ? write_xdmf(o, m, err) : 0;
+    /* the first output step at once, so that fem.xdmf exists from the start; the others
+     * when due (fem_output_write_due, at the end of the step) */
+    return o->xdmf.open ? 0 : fem_output_flush(o, err);
 }
 
 int fem_output_overload(const fem_output *o, const fem_model *m, fem_set_overload *per_set)

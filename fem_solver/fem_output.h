@@ -26,9 +26,9 @@
  *   with a breaking load given, the root attribute overloaded_elements (their total) and,
  *   when it is > 0, the root string attribute overload (the warnings, one line per set).
  * The series' rows wait in memory, and fem.h5 is written at the first output step, then at
- * an output step a fraction of a second of wall time after its last write (nc_h5_flush_due)
- * and by fem_output_flush; only then does fem.xdmf (XDMF 3, read by ParaView's default
- * reader) grow in place by the grids of the steps written (nc_xdmf.h), so both stay readable
+ * the end of the first step a fraction of a second of wall time after its last write
+ * (fem_output_write_due), and by fem_output_flush; only then does fem.xdmf (XDMF 3, read by
+ * ParaView's default reader) grow in place by the grids of the steps written (nc_xdmf.h), so both stay readable
  * if the run stops or is killed, holding the steps of the last write.
  * A run resumed from a checkpoint reopens the files (fem_output_reopen): the series are cut
  * back to the rows they held at the checkpoint, fem.xdmf is rewritten for those rows, and
@@ -95,9 +95,13 @@ int fem_output_reserve_peaks(fem_output *o, const fem_model *m, nc_error *err);
  * and, from s->axial (current: fem_analysis_update_axial), each set's largest axial force
  * and the elements above their set's breaking_load_n. */
 int fem_output_monitor(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
-/* Appends one full output step; when the file is written (see above), the grids of the steps
- * written go to the XDMF file. */
+/* Appends one full output step (the first is written at once, with fem.xdmf). */
 int fem_output_step(fem_output *o, const fem_analysis *s, double time_s, nc_error *err);
+/* Call once per step, after its monitor and output rows: writes the rows waiting in memory
+ * when NC_H5_FLUSH_INTERVAL_S passed since the last write (nc_h5_flush_due), then the grids
+ * of the output steps written to fem.xdmf. With sparse output the monitor rows, which come
+ * every step, would otherwise wait until the next output step. */
+int fem_output_write_due(fem_output *o, nc_error *err);
 /* Writes the rows waiting in memory to fem.h5 and their grids to fem.xdmf. */
 int fem_output_flush(fem_output *o, nc_error *err);
 /* The same with fem.h5 flushed to the disk (fsync): the rows a checkpoint counts survive a

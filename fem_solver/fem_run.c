@@ -39,6 +39,7 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
                 if (fem_output_step(&out, &s, lambda, err)) goto done;
                 written_step = k;
             }
+            if (fem_output_write_due(&out, err)) goto done;
         }
         sum.final_time_s = 1.0;
     } else {
@@ -58,6 +59,7 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
                 if (fem_output_step(&out, &s, s.cur.time_s, err)) goto done;
                 written_step = k;
             }
+            if (fem_output_write_due(&out, err)) goto done;
         }
         if (written_step != s.cur.step) {
             fem_analysis_update_axial(&s);

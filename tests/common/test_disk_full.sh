@@ -6,10 +6,12 @@
 # complete output steps (tests/xdmf_check.py against the HDF5 output times), at least the first
 # (written at once; later rows wait in memory for a fraction of a second, nc_h5_flush_due, so
 # a disk that fills within that time takes them with it). A coupled run
-# whose coupling.h5 fills the disk (its rows kept in memory between writes): exit 1, the
-# reason said (by the coupler, or by run_case.sh when the full disk took the coupler's log
-# too), coupling.h5 readable with the steps written, every series as long. Needs root (to
-# mount the tmpfs); skipped otherwise.
+# whose coupling.h5 and fem.h5 (its monitor rows, every step) fill the disk together: exit 1,
+# the reason said (by the coupler, or by run_case.sh when the full disk took the coupler's log
+# too), coupling.h5 readable with the steps written, every series as long, and fem.h5 and
+# dem.h5 readable too (a flush that failed part way once left a file unreadable, "addr
+# overflow": nc_h5 takes the disk space before it writes). Needs root (to mount the tmpfs);
+# skipped otherwise.
 . tests/e2e_lib.sh
 [ "$(id -u)" -eq 0 ] || { echo "SKIP: needs root to mount a small tmpfs"; exit 77; }
 mnt="$NC_TMP/full"
@@ -76,5 +78,15 @@ with h5py.File(sys.argv[1], "r") as f:
     assert set(lengths.values()) == {n}, lengths
     assert f["/iterations/step"].shape[0] >= n
 print("coupling.h5: %d steps readable after the disk filled up" % n)
+PY
+"$PY" - "$mnt/run/fem.h5" "$mnt/run/dem.h5" <<'PY' || fail "fem.h5 or dem.h5 not readable after the disk filled up"
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    rows = {k: f["/monitor/" + k].shape[0] for k in ("time", "displacement", "velocity")}
+    assert len(set(rows.values())) == 1, rows
+    assert f["/output/time"].shape[0] >= 1
+with h5py.File(sys.argv[2], "r") as f:
+    assert f["/time"].shape[0] >= 1
+print("fem.h5: %d monitor rows, dem.h5 readable after the disk filled up" % rows["time"])
 PY
 echo PASS

@@ -3,7 +3,10 @@
  * are untouched, a dataset written again is replaced, and a file or series that does not fit
  * (missing, other row size, fewer rows than the checkpoint needs) is refused with a message
  * naming the file and the dataset; a buffered file's rows wait for its flush, which
- * nc_h5_flush_due makes once the interval has passed. */
+ * nc_h5_flush_due makes once the interval has passed; a flush takes the disk space it needs
+ * past the file's end before it writes, and the file's close gives back what it did not use
+ * (test_disk_full has the full disk itself). */
+#define _GNU_SOURCE   /* fallocate, to ask whether the file system can reserve space */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -13,6 +16,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -233,6 +238,64 @@ static void test_flush_due_after_the_interval(void **state)
     nc_h5_close(&f);
 }
 
+static long long bytes_on_disk(const char *file, long long *size)
+{
+    struct stat st;
+    assert_int_equal(stat(file, &st), 0);
+    *size = (long long)st.st_size;
+    return (long long)st.st_blocks * 512;
+}
+
+static void test_disk_space_taken_then_given_back(void **state)
+{
+    (void)state;
+    /* does this file system reserve space past a file's end? (ext4, xfs, tmpfs do) */
+    char probe[300];
+    snprintf(probe, sizeof probe, "%s.probe", path);
+    int fd = open(probe, O_CREAT | O_WRONLY | O_TRUNC, 0600);
+    assert_true(fd >= 0);
+    int can_reserve = fallocate(fd, FALLOC_FL_KEEP_SIZE, 0, 1 << 20) == 0;
+    close(fd);
+    unlink(probe);
+
+    nc_error err;
+    nc_h5_file f;
+    nc_h5_series s;
+    assert_int_equal(nc_h5_create(&f, path, &err), 0);
+    nc_h5_set_buffered(&f);
+    hsize_t row_dims[1] = {1000};   /* 8 kB rows, 4 rows per chunk */
+    assert_int_equal(nc_h5_series_create(&f, &s, "/field", NC_H5_F64, 2, row_dims, &err), 0);
+    static double row[1000];
+    for (int r = 0; r < 50; r++) {
+        row[0] = r;
+        assert_int_equal(nc_h5_series_append(&s, row, &err), 0);
+    }
+    assert_int_equal(nc_h5_flush(&f, &err), 0);
+    long long size, on_disk = bytes_on_disk(path, &size);
+    assert_true(size >= 50 * 8000);
+    if (can_reserve) assert_true(on_disk >= size + 32 * 1024);   /* the margin, taken before */
+    nc_h5_series_close(&s);
+    nc_h5_close(&f);
+    on_disk = bytes_on_disk(path, &size);
+    assert_true(on_disk < size + 16 * 1024);   /* given back: what is left is the last block */
+    double first[1000];
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t d = H5Dopen2(file, "/field", H5P_DEFAULT);
+    hid_t space = H5Dget_space(d);
+    hsize_t dims[2];
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    assert_int_equal(dims[0], 50);
+    hsize_t start[2] = {49, 0}, count[2] = {1, 1000};
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL);
+    hid_t mem = H5Screate_simple(1, count + 1, NULL);
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, mem, space, H5P_DEFAULT, first) >= 0);
+    assert_true(first[0] == 49.0);
+    H5Sclose(mem);
+    H5Sclose(space);
+    H5Dclose(d);
+    H5Fclose(file);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -240,6 +303,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_refusals, setup, teardown),
         cmocka_unit_test_setup_teardown(test_buffered_rows_wait_for_flush, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flush_due_after_the_interval, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_disk_space_taken_then_given_back, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -3,7 +3,8 @@
 # result rows wait in memory between writes (nc_h5_flush_due), so what the kill leaves is the
 # last write. The HDF5 file opens, every series is as long as the output times, and the XDMF
 # file lists only complete output steps of it (tests/xdmf_check.py against the output times),
-# more than the first.
+# more than the first. With sparse output, the FEM's monitor rows (every step) are written as
+# they come too.
 . tests/e2e_lib.sh
 
 killed() {   # NAME OUTPUT_DIR XDMF TIMES_DATASET COMMAND...: runs COMMAND, kills it mid-run
@@ -49,6 +50,32 @@ m["analysis"]["end_time_s"] = 20.0
 json.dump(m, open(sys.argv[1], "w"))
 PY
 killed fem "$NC_TMP/fem" fem.xdmf /output/time "$NC_BIN/fem_solver" "$NC_TMP/net.json"
+
+# FEM with one output step in 20 s: its monitor rows (every step) are written every fraction of
+# a second too, not held until the next output step
+"$PY" - "$NC_TMP/sparse.json" <<'PY'
+import json, sys
+m = json.load(open("fem_solver/examples/net_dynamic.json"))
+m["analysis"]["end_time_s"] = 20.0
+m["output"]["interval_steps"] = 100000
+json.dump(m, open(sys.argv[1], "w"))
+PY
+"$NC_BIN/fem_solver" "$NC_TMP/sparse.json" --output "$NC_TMP/sparse" > "$NC_TMP/sparse.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 100); do [ -f "$NC_TMP/sparse/fem.xdmf" ] && break; sleep 0.1; done
+sleep 1.5
+kill -0 "$pid" 2>/dev/null || { cat "$NC_TMP/sparse.log"; fail "sparse output: ended before it was killed"; }
+kill -KILL "$pid"
+wait "$pid" 2>/dev/null
+"$PY" - "$NC_TMP/sparse/fem.h5" <<'PY' || fail "sparse output: monitor rows not written while running"
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    rows = {k: f["/monitor/" + k].shape[0] for k in ("time", "displacement", "velocity")}
+    assert len(set(rows.values())) == 1, rows
+    assert rows["time"] >= 10, "only %d monitor rows after 1.5 s" % rows["time"]
+    assert f["/output/time"].shape[0] == 1
+print("%s: %d monitor rows written, 1 output step, after SIGKILL" % (sys.argv[1], rows["time"]))
+PY
 
 # DEM: spheres settling in a box (about 4 s)
 killed dem "$NC_TMP/dem" particles.xdmf /time "$NC_BIN/dem_solver" dem_solver/examples/settle.json
