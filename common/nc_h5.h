@@ -13,7 +13,9 @@
  * can neither flush nor safely close it). Each write and flush first takes the disk space
  * it may need past the file's end (fallocate, the file's size unchanged; given back at
  * close), so that a full disk stops it before any of it reaches the file: a flush that
- * failed part way could leave the file unreadable. HDF5's exit handler is switched off for the same
+ * failed part way could leave the file unreadable. Not covered: file systems without
+ * fallocate (ext2, some network file systems), where the write goes ahead without, and
+ * copy-on-write ones (btrfs, ZFS), where rewriting a block in place needs new space too. HDF5's exit handler is switched off for the same
  * reason: every program closes its files itself.
  */
 #ifndef NC_H5_H

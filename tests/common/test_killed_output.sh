@@ -51,18 +51,20 @@ json.dump(m, open(sys.argv[1], "w"))
 PY
 killed fem "$NC_TMP/fem" fem.xdmf /output/time "$NC_BIN/fem_solver" "$NC_TMP/net.json"
 
-# FEM with one output step in 20 s: its monitor rows (every step) are written every fraction of
-# a second too, not held until the next output step
+# FEM with one output step in 200 s (minutes of wall time: it is killed long before): its
+# monitor rows (every step) are written every fraction of a second too, not held until the
+# next output step
 "$PY" - "$NC_TMP/sparse.json" <<'PY'
 import json, sys
 m = json.load(open("fem_solver/examples/net_dynamic.json"))
-m["analysis"]["end_time_s"] = 20.0
+m["analysis"]["end_time_s"] = 200.0
 m["output"]["interval_steps"] = 100000
 json.dump(m, open(sys.argv[1], "w"))
 PY
 "$NC_BIN/fem_solver" "$NC_TMP/sparse.json" --output "$NC_TMP/sparse" > "$NC_TMP/sparse.log" 2>&1 &
 pid=$!
 for _ in $(seq 1 100); do [ -f "$NC_TMP/sparse/fem.xdmf" ] && break; sleep 0.1; done
+[ -f "$NC_TMP/sparse/fem.xdmf" ] || { cat "$NC_TMP/sparse.log"; fail "sparse output: no fem.xdmf after 10 s"; }
 sleep 1.5
 kill -0 "$pid" 2>/dev/null || { cat "$NC_TMP/sparse.log"; fail "sparse output: ended before it was killed"; }
 kill -KILL "$pid"
