@@ -162,7 +162,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
         "relative_tolerance", "work_tolerance", "max_iterations", "on_max_iterations", "relaxation",
         "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
-        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "interface_jacobian",
+        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "impulse_tolerance",
+        "accept_impulse_loss", "interface_jacobian",
         "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
         "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
@@ -206,6 +207,10 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                                  INFINITY, &s->energy.tol_abs_j, err) ||
         nc_json_bool_opt(root, where, "accept_energy_growth", c->accept_energy_growth,
                          &c->accept_energy_growth, err) ||
+        nc_json_number_range_opt(root, where, "impulse_tolerance", s->impulse.tol_rel, 0.0, 1.0,
+                                 &s->impulse.tol_rel, err) ||
+        nc_json_bool_opt(root, where, "accept_impulse_loss", c->accept_impulse_loss,
+                         &c->accept_impulse_loss, err) ||
         nc_json_bool_opt(root, where, "interface_jacobian", s->interface_jacobian,
                          &s->interface_jacobian, err) ||
         nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,

@@ -28,6 +28,8 @@ typedef struct cpl_config {
     int accept_unconverged;     /* accepted unconverged steps do not make the exit status
                                    non-zero (they are still reported as not reliable) */
     int accept_energy_growth;   /* likewise for energy created beyond energy_tolerance */
+    int accept_impulse_loss;    /* likewise for interface impulse the structure missed beyond
+                                   impulse_tolerance (cpl_impulse.h) */
 } cpl_config;
 
 void cpl_config_default(cpl_config *c);

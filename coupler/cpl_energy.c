@@ -71,6 +71,10 @@ void cpl_energy_step(cpl_energy *e, long step, double end_time_s, const cpl_ener
         e->e0_j = total(&f) - f.external_work_j - f.interface_work_j + f.dissipated_j +
                   total(dem) - dem->external_work_j - dem->interface_work_j + dem->dissipated_j;
         e->started = 1;
+        /* the start state's kinetic + elastic energy counts as input too: a first step that
+         * holds a whole impact (a rock that bounced within it) has already lost it. Its
+         * potential is taken as at the step's end, so what fell in the step counts too. */
+        e->input_j = fmax(e->input_j, e->e0_j - f.potential_j - dem->potential_j);
     }
     double mismatch = f.interface_work_j + dem->interface_work_j;
     e->sum_mismatch_j += mismatch;

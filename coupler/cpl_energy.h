@@ -18,8 +18,9 @@
  *       removes again in the same run does not show (the mismatch and the dissipated terms
  *       are kept for that).
  *   input(n) = the largest kinetic + elastic energy of both sides reached in steps 0..n
- *       (the potentials are left out: their zero is arbitrary; what falls is converted to
- *       kinetic or elastic energy, which is counted).
+ *       and at the start (E(0) less the potentials at the end of step 0; the potentials are
+ *       left out: their zero is arbitrary; what falls is converted to kinetic or elastic
+ *       energy, which is counted).
  *   closure(n) = created(n) + Σ D − Σ mismatch: zero when the reports are consistent (each
  *       side's balance closes; a check of the reports, not a guard).
  * The guard fires when created(n) > tol_rel · input(n) + tol_abs_j; the first such step is

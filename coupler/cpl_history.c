@@ -307,6 +307,10 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
         nc_h5_attr_double(&h->h5, "/", "energy_growth", status->energy_growth, NULL);
         nc_h5_attr_double(&h->h5, "/", "accept_energy_growth", status->accept_energy_growth,
                           NULL);
+        nc_h5_attr_double(&h->h5, "/", "impulse_loss", status->impulse_loss, NULL);
+        nc_h5_attr_double(&h->h5, "/", "accept_impulse_loss", status->accept_impulse_loss, NULL);
+        nc_h5_attr_double(&h->h5, "/", "impulse_missed_share", status->impulse_missed_share,
+                          NULL);
     }
     nc_h5_series *all[] = {&h->s_time, &h->s_dt, &h->s_iterations, &h->s_residual,
                            &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,

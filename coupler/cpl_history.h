@@ -78,12 +78,16 @@ typedef struct cpl_run_status {
     int accept_unconverged;     /* the user opted in to accepting unconverged steps */
     int energy_growth;          /* the energy guard fired (cpl_energy.h) */
     int accept_energy_growth;   /* the user opted in to accepting that */
+    int impulse_loss;           /* the impulse guard fired (cpl_impulse.h) */
+    int accept_impulse_loss;    /* the user opted in to accepting that */
+    double impulse_missed_share;   /* |Σ missed| / Σ |given| (NAN: no interface Jacobian) */
 } cpl_run_status;
 
 /* Stores the timing split as attributes of /timing/total and the run's counts and status
  * (unconverged_steps, rejected_attempts, reduced_steps, min_dt_used, finished, reliable,
  * accept_unconverged, energy_growth, accept_energy_growth, energy_created, energy_input,
- * energy_first_step, energy_first_time) as root attributes (status may be NULL: counts only), flushes and
+ * energy_first_step, energy_first_time, impulse_loss, accept_impulse_loss,
+ * impulse_missed_share) as root attributes (status may be NULL: counts only), flushes and
  * closes (safe to repeat). */
 void cpl_history_close(cpl_history *h, const cpl_timing *timing, const cpl_energy *energy,
                        const cpl_run_status *status);

@@ -44,6 +44,7 @@
 #include <stdint.h>
 #include "cpl_checkpoint.h"
 #include "cpl_energy.h"
+#include "cpl_impulse.h"
 #include "cpl_jacobian_check.h"
 #include "cpl_relax.h"
 #include "nc_error.h"
@@ -156,6 +157,7 @@ typedef struct cpl_loop_settings {
                                        cannot reach the tolerance by max_iterations, if a
                                        smaller Δt is left (default 1; CPL_SLOW_* below) */
     cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
+    cpl_impulse_settings impulse;   /* the interface's momentum balance (cpl_impulse.h) */
     int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
                                        both participants can (default 1) */
     int verify_restore;             /* strong: send each participant's first solve with a
@@ -319,6 +321,7 @@ const double *cpl_loop_force(const cpl_loop *loop);
 double cpl_loop_time(const cpl_loop *loop);
 /* The energy balance and guard of the accepted steps so far. */
 const cpl_energy *cpl_loop_energy(const cpl_loop *loop);
+const cpl_impulse *cpl_loop_impulse(const cpl_loop *loop);
 /* Checkpoint/resume. After the ACCEPT_STEP of the step that reaches the next multiple of
  * checkpoint_interval_s (from the start time) and is not the last step, when both
  * participants have checkpoint/resume: CHECKPOINT "step_%06ld" (steps accepted) to both,

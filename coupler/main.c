@@ -10,8 +10,10 @@
  * manifest's checkpoint.
  *
  * Exit codes: 0 success, 1 input/participant/coupling failure, 3 finished but with accepted
- * unconverged steps or with energy created beyond energy_tolerance (results not reliable; 0
- * instead when coupler.json sets accept_unconverged, respectively accept_energy_growth), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
+ * unconverged steps, with energy created beyond energy_tolerance or with interface impulse
+ * the structure missed beyond impulse_tolerance (results not reliable; 0 instead when
+ * coupler.json sets accept_unconverged, accept_energy_growth, respectively
+ * accept_impulse_loss), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
  * coupler/README.md.
  */
 #include <math.h>
@@ -581,6 +583,46 @@ static void print_energy(app *a)
             e->sum_ext_j, e->closure_j);
 }
 
+/* The interface's momentum balance line of the summary (cpl_impulse.h). */
+static void print_impulse(app *a)
+{
+    const cpl_impulse *m = cpl_loop_impulse(a->loop);
+    FILE *o = a->progress.out;
+    if (!cpl_loop_uses_jacobian(a->loop)) return;   /* the plain exchange passes F on as it is */
+    double given = sqrt(m->given_ns[0] * m->given_ns[0] + m->given_ns[1] * m->given_ns[1] +
+                        m->given_ns[2] * m->given_ns[2]);
+    fprintf(o, "coupler: interface impulse: the particles' contact forces gave the structure "
+            "%.6g N s (%.6g N s summed step by step), the structure's linearised force "
+            "differed by %.6g N s: %.3g%% (the guard fires above impulse_tolerance %.3g%%)\n",
+            given, m->given_abs_ns, m->given_abs_ns * cpl_impulse_missed_share(m),
+            100.0 * cpl_impulse_missed_share(m), 100.0 * m->s.tol_rel);
+}
+
+/* The impulse guard's verdict when it fired (cpl_impulse.h). */
+static void print_impulse_verdict(app *a)
+{
+    const cpl_impulse *m = cpl_loop_impulse(a->loop);
+    /* the structure solved with F − correction: a correction along F took impulse away */
+    const double along = m->missed_ns[0] * m->given_ns[0] + m->missed_ns[1] * m->given_ns[1] +
+                         m->missed_ns[2] * m->given_ns[2];
+    fprintf(a->progress.out,
+            "coupler: results are NOT reliable: the force the structure solved with carried "
+            "%.3g%% %s impulse than the particles' contact forces (%.6g of %.6g N s; "
+            "above impulse_tolerance %.3g%% from step %ld, t = %.6g s): the coupling did not "
+            "pass the contact's momentum on (%s); %s\n",
+            100.0 * cpl_impulse_missed_share(m), along >= 0.0 ? "less" : "more",
+            m->given_abs_ns * cpl_impulse_missed_share(m),
+            m->given_abs_ns, 100.0 * m->s.tol_rel, m->first_step, m->first_time_s,
+            a->cfg.loop.scheme == CPL_SCHEME_WEAK
+                ? "weak coupling, one exchange per step, with a contact too stiff for the "
+                  "structure's nodes at this dt: the strong scheme passes it on"
+                : "steps accepted far from converged",
+            a->cfg.accept_impulse_loss
+                ? "accepted because coupler.json sets accept_impulse_loss"
+                : "exit status 3 (coupler.json \"accept_impulse_loss\": true accepts it with "
+                  "exit status 0)");
+}
+
 /* The guard's verdict when it fired: the last line of the summary. */
 static void print_energy_verdict(app *a)
 {
@@ -597,8 +639,9 @@ static void print_energy_verdict(app *a)
 }
 
 /* The end of the summary: how far the results can be trusted; the verdict is the last line.
- * Returns 1 when the results are reliable; *energy_ok: the energy guard did not fire. */
-static int print_status(app *a, int *energy_ok)
+ * Returns 1 when the results are reliable; *energy_ok: the energy guard did not fire;
+ * *impulse_ok: the impulse guard did not. */
+static int print_status(app *a, int *energy_ok, int *impulse_ok)
 {
     const cpl_timing *t = cpl_loop_timing(a->loop);
     const cpl_loop_settings *s = &a->cfg.loop;
@@ -614,7 +657,9 @@ static int print_status(app *a, int *energy_ok)
                 "dt_min %.3g s)\n", s->dt_s, dt_min);
     const cpl_energy *e = cpl_loop_energy(a->loop);
     *energy_ok = e->first_step < 0;
+    *impulse_ok = !cpl_loop_uses_jacobian(a->loop) || !cpl_impulse_fired(cpl_loop_impulse(a->loop));
     print_energy(a);
+    print_impulse(a);
     int reliable = 1;
     if (s->scheme == CPL_SCHEME_WEAK)
         fprintf(o, "coupler: results: weak coupling, one exchange per step: the interface "
@@ -626,10 +671,11 @@ static int print_status(app *a, int *energy_ok)
                      "within work_tolerance %.3g of the input energy: %ld of %ld steps by the "
                      "latter)", s->work_tol, t->work_test_steps, t->steps);
         fprintf(o, "coupler: %severy step converged to the tolerance %.3g%s\n",
-                *energy_ok ? "results are reliable: " : "", s->tol_abs, work);
+                *energy_ok && *impulse_ok ? "results are reliable: " : "", s->tol_abs, work);
     } else if (s->scheme == CPL_SCHEME_STRONG) {
-        /* both verdicts when both apply, the unconverged steps last */
+        /* every verdict that applies, the unconverged steps last */
         if (!*energy_ok) print_energy_verdict(a);
+        if (!*impulse_ok) print_impulse_verdict(a);
         reliable = 0;
         char why[256];
         if (dt_min < s->dt_s * (1.0 - 1e-9))
@@ -645,8 +691,9 @@ static int print_status(app *a, int *energy_ok)
                       "with exit status 0)");
     }
     if (!*energy_ok && reliable) print_energy_verdict(a);
+    if (!*impulse_ok && reliable) print_impulse_verdict(a);
     fflush(o);
-    return reliable && *energy_ok;
+    return reliable && *energy_ok && *impulse_ok;
 }
 
 int main(int argc, char **argv)
@@ -665,7 +712,7 @@ int main(int argc, char **argv)
     double *u0 = NULL, *v0 = NULL;
     cpl_failure failure;
     memset(&failure, 0, sizeof failure);
-    cpl_run_status status = {0, 0, 0, 0, 0};
+    cpl_run_status status = {.impulse_missed_share = NAN};
     cpl_config_default(&a.cfg);
     int tty = isatty(STDOUT_FILENO);
     cpl_progress_init(&a.progress, stdout, tty, a.quiet, 10.0, 0.0, 1.0, 1.0);
@@ -814,11 +861,15 @@ int main(int argc, char **argv)
     rc = shutdown_all(&a, NULL) ? 1 : 0;
     print_timing(&a);
     status.finished = 1;
-    int energy_ok = 1;
-    status.reliable = print_status(&a, &energy_ok);
+    int energy_ok = 1, impulse_ok = 1;
+    status.reliable = print_status(&a, &energy_ok, &impulse_ok);
     status.energy_growth = !energy_ok;
+    status.impulse_loss = !impulse_ok;
+    if (cpl_loop_uses_jacobian(a.loop))
+        status.impulse_missed_share = cpl_impulse_missed_share(cpl_loop_impulse(a.loop));
     if (rc == 0 && ((cpl_loop_timing(a.loop)->unconverged_steps > 0 && !a.cfg.accept_unconverged) ||
-                    (!energy_ok && !a.cfg.accept_energy_growth)))
+                    (!energy_ok && !a.cfg.accept_energy_growth) ||
+                    (!impulse_ok && !a.cfg.accept_impulse_loss)))
         rc = EXIT_UNRELIABLE;
     goto done;
 
@@ -847,6 +898,7 @@ fail:
 done:
     status.accept_unconverged = a.cfg.accept_unconverged;
     status.accept_energy_growth = a.cfg.accept_energy_growth;
+    status.accept_impulse_loss = a.cfg.accept_impulse_loss;
     if (history_open)
         cpl_history_close(&a.history, a.loop ? cpl_loop_timing(a.loop) : NULL,
                           a.loop ? cpl_loop_energy(a.loop) : NULL, &status);

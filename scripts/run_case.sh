@@ -61,14 +61,14 @@ parallel runs never collide; the coupler, started with them, reads them from the
 Programs come from $NC_BIN if set, else <repo>/bin.
 $NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
 $NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their endpoints.
-Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps
-or created energy (results NOT reliable; 0 with coupler.json "accept_unconverged" /
-"accept_energy_growth": true, still reported as NOT reliable); 1 a program failed (named,
-the others stopped) or stalled; 2 bad arguments or case, or --resume DIR without a complete
-checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all three programs stopped, the
-results so far readable. A finished run whose ropes exceeded their fem.json breaking_load_n
-lists the FEM's warnings before "done" (the model has no rope failure; exit status 0), or,
-with fem.json "analysis": {"fail_on_overload": true}, ends NOT reliable with exit status 3
+Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps,
+created energy or lost impulse at the interface (results NOT reliable; 0 with coupler.json
+"accept_unconverged" / "accept_energy_growth" / "accept_impulse_loss": true, still NOT
+reliable); 1 a program failed (named, the others stopped) or stalled; 2 bad arguments or case,
+or --resume DIR without a complete checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all
+programs stopped, the results so far readable. A finished run whose ropes exceeded their
+breaking_load_n lists the FEM's warnings before "done" (no rope failure in the model; exit 0),
+or with fem.json "analysis": {"fail_on_overload": true} ends NOT reliable with exit status 3
 (a solver's own exit status 3 after a finished coupling is such a verdict).
 EOF
 }

@@ -15,8 +15,10 @@
 #    within 2 % (measured -0.70 %).
 #  - weak 1e-2 jumps: contact-free time in W > 25 % of W (measured 64 %), contact lost and
 #    regained, and a force on return > 2x the reference's maximum (measured 3.35x); it creates
-#    energy, so the coupler's energy guard fires (the run opts in with accept_energy_growth
-#    and the warning is checked).
+#    energy, so the coupler's energy guard fires, and the structure misses part of the
+#    sphere's impulse, so the impulse guard fires too (the run opts in with
+#    accept_energy_growth and accept_impulse_loss, and both verdicts are checked); weak 2e-4
+#    passes the impulse guard.
 . tests/e2e_lib.sh
 case_dir=cases/cable_impact
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
@@ -32,7 +34,12 @@ run() {   # name scheme dt [run_case.sh arguments]
     --set coupler.end_time=$T "$@"
 }
 run weak_dt2e-4 weak 2e-4
-run weak_dt1e-2 weak 1e-2 --set coupler.accept_energy_growth=true
+run weak_dt1e-2 weak 1e-2 --set coupler.accept_energy_growth=true \
+  --set coupler.accept_impulse_loss=true
+grep -q "NOT reliable: the force the structure solved with carried" "$NC_TMP/weak_dt1e-2/coupler.log" \
+  || fail "weak_dt1e-2: no impulse verdict"
+grep -q "NOT reliable: the force the structure solved with" "$NC_TMP/weak_dt2e-4/coupler.log" \
+  && fail "weak_dt2e-4: impulse verdict"
 run strong_dt1e-2 strong 1e-2
 grep -q "^warning: step [0-9]* (t = .* s): the run has created .* J of energy" \
   "$NC_TMP/weak_dt1e-2/coupler.log" || fail "weak_dt1e-2: no energy-created warning"

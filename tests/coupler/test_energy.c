@@ -2,7 +2,8 @@
  * participants (cpl_test_models.h), whose discrete energies and dissipation are exact:
  * a converged strong run closes the balance to round-off and the coupling creates no energy
  * beyond the interface tolerance; weak coupling of the added-mass-like problem at a step
- * above its stability limit creates energy and fires the guard, naming the step. */
+ * above its stability limit creates energy and fires the guard, naming the step; the input
+ * energy counts the start state. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -154,12 +155,33 @@ static void test_tolerance_is_relative_to_input(void **state)
     assert_true(r.energy.first_step >= 0);
 }
 
+/* A first step that holds a whole impact: a 90 J rock (10 m above its potential's zero, 50 J
+ * of potential) bounced off within it and kept 10 J, 80 J dissipated, 0.5 J fallen. The input
+ * counts the start state (90 J + what fell in the step), not only what the first report has
+ * left, so the guard's limit is not ten times too tight. */
+static void test_input_counts_the_start_state(void **state)
+{
+    (void)state;
+    cpl_energy_settings s;
+    cpl_energy_settings_default(&s);
+    cpl_energy e;
+    cpl_energy_init(&e, &s);
+    cpl_energy_report fem = {1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NAN};
+    cpl_energy_report dem = {1, 10.0, 0.0, 49.5, 0.0, 0.0, 80.0, NAN};
+    cpl_energy_record rec;
+    cpl_energy_step(&e, 0, 1e-3, &fem, &dem, &rec);
+    assert_near(e.e0_j, 139.5, 1e-12);
+    assert_near(rec.input_j, 90.0, 1e-12);
+    assert_int_equal(rec.above, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_strong_balance_closes),
         cmocka_unit_test(test_weak_unstable_fires_guard),
         cmocka_unit_test(test_tolerance_is_relative_to_input),
+        cmocka_unit_test(test_input_counts_the_start_state),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
