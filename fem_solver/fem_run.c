@@ -7,6 +7,18 @@
 #include <math.h>
 #include <string.h>
 
+/* A standalone step whose Newton iteration failed: what the user can change. (A coupled
+ * run's coupler retries such a step with a smaller Δt by itself.) */
+static void newton_hint(nc_error *err)
+{
+    if (!err || err->code != FEM_ERR_NEWTON) return;
+    char first[NC_ERROR_MESSAGE_MAX];
+    snprintf(first, sizeof first, "%s", err->message);
+    nc_error_set(err, FEM_ERR_NEWTON, "%s; a smaller analysis.dt_s (load_steps for statics) or "
+                 "a larger analysis.max_iterations may converge: a slack net snapping taut "
+                 "under its own weight can need either", first);
+}
+
 int fem_run_standalone(const fem_model *m, const char *output_dir,
                        const volatile sig_atomic_t *stop, fem_run_summary *summary,
                        nc_error *err)
@@ -30,10 +42,14 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         for (int k = 1; k <= set->load_steps; k++) {
             if (stop && *stop) { rc = 1; goto done; }
             double lambda = (double)k / set->load_steps;
-            if (fem_analysis_static(&s, lambda, err)) goto done;
+            if (fem_analysis_static(&s, lambda, err)) {
+                newton_hint(err);
+                goto done;
+            }
             fem_analysis_update_axial(&s);
             sum.steps++;
             sum.newton_iterations += s.stats.iterations;
+            sum.final_time_s = lambda;
             if (fem_output_monitor(&out, &s, lambda, err)) goto done;
             if (k % set->output_interval == 0 || k == set->load_steps) {
                 if (fem_output_step(&out, &s, lambda, err)) goto done;
@@ -49,10 +65,14 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         long n_steps = (long)ceil(set->end_time_s / set->dt_s - 1e-9);
         for (long k = 1; k <= n_steps; k++) {
             if (stop && *stop) { rc = 1; break; }
-            if (fem_analysis_step(&s, set->dt_s, err)) goto done;
+            if (fem_analysis_step(&s, set->dt_s, err)) {
+                newton_hint(err);
+                goto done;
+            }
             s.cur.time_s = k * set->dt_s;   /* no drift from repeated sums */
             sum.steps++;
             sum.newton_iterations += s.stats.iterations;
+            sum.final_time_s = s.cur.time_s;   /* what a failed run reached */
             fem_analysis_update_axial(&s);   /* every step: the peak forces (fem_output_monitor) */
             if (fem_output_monitor(&out, &s, s.cur.time_s, err)) goto done;
             if (k % set->output_interval == 0) {

@@ -321,6 +321,17 @@ report() {
     echo "run_case: ropes above their breaking load (the model has no rope failure):" >&2
     grep "exceeded breaking_load_n" fem.log | sed 's/^fem_solver: warning: /  /' >&2
   fi
+  # the solvers' warnings about their input (a value outside its plausible range: a modulus
+  # in GPa written in Pa, a diameter in mm): the run went on with the input as given, and
+  # the warnings sit in the solvers' logs, which a run without a terminal does not show
+  input_warnings=""
+  if [ -f fem.log ] || [ -f dem.log ]; then
+    input_warnings=$(grep -h "^warning: [^ ]*\.json: " fem.log dem.log 2>/dev/null)
+  fi
+  if [ -n "$input_warnings" ]; then
+    echo "run_case: the solvers warned about their input (the results are those of the input as given):" >&2
+    sed 's/^warning: /  /' <<< "$input_warnings" >&2
+  fi
   # the coupler's verdict (the last line of its summary) also when an accept_* key let it
   # exit 0: such a run is never reported as done
   if [ "${rc[coupler]:-}" -eq 3 ] || log_has coupler.log "results are NOT reliable" || [ -n "$unreliable" ]; then
@@ -332,7 +343,11 @@ report() {
     [ -n "$unreliable" ] && exit 3
     exit "${rc[coupler]:-}"
   fi
-  echo "run_case: done, results in $out"
+  if [ -n "$input_warnings" ]; then
+    echo "run_case: done, with the warnings about the input above; results in $out"
+  else
+    echo "run_case: done, results in $out"
+  fi
   exit 0
 }
 

@@ -15,7 +15,10 @@
 #    run_case.sh lists the FEM's warning and says "done", exit 0 (the model has no rope
 #    failure); with fem.json analysis.fail_on_overload the FEM exits 3 after a finished
 #    coupling, and run_case.sh says the results are NOT reliable, names the FEM's reason and
-#    exits 3 (not "failed", not 1: no program failed).
+#    exits 3 (not "failed", not 1: no program failed);
+#  - a breaking load given as if in kN (100 N): run_case.sh lists the FEM's plausibility
+#    warning about it, which only fem.log had, and says "done, with the warnings about the
+#    input above".
 . tests/e2e_lib.sh
 case_dir=cases/rest_position
 [ -d "$case_dir" ] || { echo "SKIP: $case_dir missing"; exit 77; }
@@ -62,6 +65,16 @@ grep -q "^run_case: finished, but the results are NOT reliable" "$NC_TMP/overloa
 grep -q "^run_case: fem exited with 3: fem_solver: [0-9]* elements* exceeded the breaking load" \
   "$NC_TMP/overload_fails.out" || fail "overload_fails: the FEM's reason is not named"
 grep -q "done\|failed" "$NC_TMP/overload_fails.out" && fail "overload_fails: said done or failed"
+# a breaking load given in kN where N are meant (0.1 N per mm² of rope: 100 N on the cable's
+# 1.26e-4 m²): the FEM's plausibility warning, which only its log had, is listed too, and the
+# run is done "with the warnings about the input above"
+status_run kilo 0 --set fem.element_sets.0.breaking_load_n=100
+grep -q "^run_case: the solvers warned about their input" "$NC_TMP/kilo.out" \
+  || fail "kilo: the input warnings are not listed"
+grep -q "^  fem.json: element_sets\[0\].breaking_load_n: 100 N over the area .* kN given as N" "$NC_TMP/kilo.out" \
+  || fail "kilo: the FEM's plausibility warning is not listed"
+tail -n 1 "$NC_TMP/kilo.out" | grep -q "^run_case: done, with the warnings about the input above" \
+  || fail "kilo: last line '$(tail -n 1 "$NC_TMP/kilo.out")'"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
