@@ -73,7 +73,11 @@ def load_dem(results_dir):
 
 class Fem:
     """FEM output steps: time, load_factor [k], axial_force/strain [k, m], reaction
-    [k, supports, 3] at support_nodes, displacement [k, n, 3]; max_u (m), max_time, max_node."""
+    [k, supports, 3] at support_nodes, displacement [k, n, 3]; max_u (m), max_time, max_node.
+    Over every step, per element set (None when fem.h5 has no /element_sets): set_peak_force
+    (N), set_peak_element, set_peak_time (s), set_breaking_load (N, 0: none given),
+    set_exceeded (elements above it), set_first_exceedance (s, -1: never); overload: the FEM's
+    warnings about them ("" when none)."""
 
     def __init__(self, path):
         with h5py.File(path, "r") as f:
@@ -93,6 +97,17 @@ class Fem:
             self.reference_length = (np.array(f["/mesh/reference_length"])
                                      if "/mesh/reference_length" in f else None)
             self.position = np.array(f["/output/position"]) if "/output/position" in f else None
+            sets = f["/element_sets"] if "/element_sets" in f else None
+            def per_set(name):
+                return np.array(sets[name]) if sets is not None and name in sets else None
+            self.set_peak_force = per_set("peak_axial_force")
+            self.set_peak_element = per_set("peak_element")
+            self.set_peak_time = per_set("peak_time")
+            self.set_breaking_load = per_set("breaking_load")
+            self.set_exceeded = per_set("exceeded_elements")
+            self.set_first_exceedance = per_set("first_exceedance_time")
+            text = f.attrs.get("overload", b"")
+            self.overload = text.decode() if isinstance(text, bytes) else str(text)
 
 
 def load_fem(results_dir):

@@ -151,13 +151,28 @@ rb = run_case("rebound", case, [
     "dem.materials.0.restitution=1.0", "fem.element_sets.0.youngs_modulus_pa=1e10",
     "dem.net_wall.wall_position=middle", "fem.analysis.coupling_load=step_constant",
     "coupler.end_time=0.22", "fem.analysis.end_time_s=0.22",
-    "dem.output_interval_s=0.002", "fem.output.interval_steps=2"])
+    "dem.output_interval_s=0.002", "fem.output.interval_steps=2",
+    "fem.element_sets.0.breaking_load_n=4000"])
 p = report(rb)
 print(p.stdout, p.stderr)
 check(p.returncode == 0, "rebound: report.py exit 0")
 d = parsed(p)
 t = h5_truth(rb)
 common_checks("rebound", d, t, rb)
+# the every-step rope peak and the breaking load, against fem.h5 /element_sets
+with h5py.File(os.path.join(rb, "fem.h5"), "r") as f:
+    peaks = f["/element_sets/peak_axial_force"][:]
+    exceeded = int(f["/element_sets/exceeded_elements"][0])
+    overload = f.attrs.get("overload", b"")
+near(num(d, "rope force every step", 0), peaks.max(), 1e-5, "rebound: every-step peak rope force (N)", rel=True)
+check(num(d, "rope force every step", 0) >= num(d, "rope force", 0) * (1 - 1e-9),
+      "rebound: the every-step peak is at least the output steps' one")
+check(int(num(d, "breaking load", 2)) == exceeded,
+      "rebound: elements above the breaking load %d (fem.h5: %d)" % (int(num(d, "breaking load", 2)), exceeded))
+with open(os.path.join(rb, "report.md")) as fh:
+    said = "Ropes above their breaking load" in fh.read()
+check(said == (exceeded > 0) == bool(overload),
+      "rebound: report.md names the ropes above their breaking load exactly when fem.h5 does (%d)" % exceeded)
 part = cfg["particles"][0]
 tc, zc = free_fall(d, "rebound", part["position"][2], -part["velocity"][2], part["radius"],
                    cfg["materials"][0]["density_kg_m3"], 5e-3)
