@@ -45,8 +45,8 @@ static void describe(const cJSON *item, char *out, size_t size)
     cJSON_free(text);
 }
 
-static int wrong(nc_error *err, const char *where, const char *key, const char *expected,
-                 const cJSON *got)
+int nc_json_wrong(nc_error *err, const char *where, const char *key, const char *expected,
+                  const cJSON *got)
 {
     char shown[64];
     char path[512];
@@ -294,9 +294,9 @@ static int get_number(const cJSON *obj, const char *where, const char *key, int 
         *out = fallback;
         return 0;
     }
-    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble)) return wrong(err, where, key, expected, item);
+    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble)) return nc_json_wrong(err, where, key, expected, item);
     double value = item->valuedouble;
-    if (value < min || value > max) return wrong(err, where, key, expected, item);
+    if (value < min || value > max) return nc_json_wrong(err, where, key, expected, item);
     *out = value;
     return 0;
 }
@@ -332,7 +332,7 @@ int nc_json_positive(const cJSON *obj, const char *where, const char *key, doubl
     const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
     if (!item) return missing(err, where, key, "a number > 0");
     if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble) || !(item->valuedouble > 0.0))
-        return wrong(err, where, key, "a number > 0", item);
+        return nc_json_wrong(err, where, key, "a number > 0", item);
     *out = item->valuedouble;
     return 0;
 }
@@ -348,10 +348,10 @@ static int get_int(const cJSON *obj, const char *where, const char *key, int req
         *out = fallback;
         return 0;
     }
-    if (!cJSON_IsNumber(item)) return wrong(err, where, key, expected, item);
+    if (!cJSON_IsNumber(item)) return nc_json_wrong(err, where, key, expected, item);
     double value = item->valuedouble;
     if (!isfinite(value) || value != floor(value) || value < (double)min || value > (double)max)
-        return wrong(err, where, key, expected, item);
+        return nc_json_wrong(err, where, key, expected, item);
     *out = (long)value;
     return 0;
 }
@@ -376,7 +376,7 @@ int nc_json_bool_opt(const cJSON *obj, const char *where, const char *key, int f
         *out = fallback;
         return 0;
     }
-    if (!cJSON_IsBool(item)) return wrong(err, where, key, "true or false", item);
+    if (!cJSON_IsBool(item)) return nc_json_wrong(err, where, key, "true or false", item);
     *out = cJSON_IsTrue(item);
     return 0;
 }
@@ -386,7 +386,7 @@ int nc_json_string(const cJSON *obj, const char *where, const char *key, const c
 {
     const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
     if (!item) return missing(err, where, key, "a string");
-    if (!cJSON_IsString(item) || !item->valuestring) return wrong(err, where, key, "a string", item);
+    if (!cJSON_IsString(item) || !item->valuestring) return nc_json_wrong(err, where, key, "a string", item);
     *out = item->valuestring;
     return 0;
 }
@@ -417,14 +417,14 @@ int nc_json_choice_opt(const cJSON *obj, const char *where, const char *key,
         *index = fallback_index;
         return 0;
     }
-    if (!cJSON_IsString(item)) return wrong(err, where, key, expected, item);
+    if (!cJSON_IsString(item)) return nc_json_wrong(err, where, key, expected, item);
     for (int i = 0; choices[i]; i++) {
         if (strcmp(item->valuestring, choices[i]) == 0) {
             *index = i;
             return 0;
         }
     }
-    return wrong(err, where, key, expected, item);
+    return nc_json_wrong(err, where, key, expected, item);
 }
 
 int nc_json_vec3(const cJSON *obj, const char *where, const char *key, double out[3],
@@ -433,11 +433,11 @@ int nc_json_vec3(const cJSON *obj, const char *where, const char *key, double ou
     const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
     if (!item) return missing(err, where, key, "[x, y, z]");
     if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
-        return wrong(err, where, key, "[x, y, z] (3 numbers)", item);
+        return nc_json_wrong(err, where, key, "[x, y, z] (3 numbers)", item);
     int i = 0;
     for (const cJSON *c = item->child; c; c = c->next, i++) {
         if (!cJSON_IsNumber(c) || !isfinite(c->valuedouble))
-            return wrong(err, where, key, "[x, y, z] (3 finite numbers)", item);
+            return nc_json_wrong(err, where, key, "[x, y, z] (3 finite numbers)", item);
         out[i] = c->valuedouble;
     }
     return 0;
@@ -459,7 +459,7 @@ int nc_json_array(const cJSON *obj, const char *where, const char *key, const cJ
 {
     const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
     if (!item) return missing(err, where, key, "an array");
-    if (!cJSON_IsArray(item)) return wrong(err, where, key, "an array", item);
+    if (!cJSON_IsArray(item)) return nc_json_wrong(err, where, key, "an array", item);
     *arr = item;
     *count = cJSON_GetArraySize(item);
     return 0;
@@ -482,7 +482,7 @@ int nc_json_object(const cJSON *obj, const char *where, const char *key, const c
 {
     const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
     if (!item) return missing(err, where, key, "an object {...}");
-    if (!cJSON_IsObject(item)) return wrong(err, where, key, "an object {...}", item);
+    if (!cJSON_IsObject(item)) return nc_json_wrong(err, where, key, "an object {...}", item);
     *out = item;
     return 0;
 }

@@ -20,6 +20,11 @@ int nc_json_load_file(const char *path, cJSON **root, nc_error *err);
 int nc_json_parse_text(const char *name, const char *text, size_t size, cJSON **root,
                        nc_error *err);
 
+/* The error of a value that is not what `key` takes: "<where>.<key>: expected <expected>,
+ * got <the value>" (for checks the getters below do not make). Returns -1. */
+int nc_json_wrong(nc_error *err, const char *where, const char *key, const char *expected,
+                  const cJSON *got);
+
 /* Fails naming any key of `obj` not in the NULL-terminated `allowed` list (catches typos). */
 int nc_json_check_keys(const cJSON *obj, const char *where, const char *const *allowed,
                        nc_error *err);

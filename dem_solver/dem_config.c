@@ -651,7 +651,7 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
         p->dt_auto = 0;
         p->dt_s = dt->valuedouble;
     } else {
-        return nc_error_set(err, 1, "%s.dt_s: expected a number > 0 or \"auto\"", file);
+        return nc_json_wrong(err, file, "dt_s", "a number > 0 or \"auto\"", dt);
     }
     long threads;
     if (nc_json_number_range_opt(root, file, "dt_safety", 0.1, 1e-6, 1.0, &p->dt_safety, err) ||

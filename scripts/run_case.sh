@@ -39,10 +39,10 @@ usage: scripts/run_case.sh CASE_DIR [--out DIR] [--set FILE.KEY=VALUE ...]
 Runs one coupled case: fem_solver, dem_solver and the coupler on localhost.
 
 CASE_DIR holds fem.json, dem.json, coupler.json and whatever they refer to (meshes, STL).
-Everything is copied into DIR (default: runs/<case>-<date-time>), --set overrides are applied
-to the copies, and all results land there: fem.h5, dem.h5, coupling.h5, their XDMF files,
-iterations.log, one log per program (fem.log, dem.log, coupler.log) and coupler.progress (the
-coupler's last state and status line).
+Everything is copied into DIR (default: runs/<case>-<date-time>; an earlier run's results in
+DIR are replaced, as is said), --set overrides are applied to the copies, and all results land
+there: fem.h5, dem.h5, coupling.h5, their XDMF files, iterations.log, one log per program
+(fem.log, dem.log, coupler.log) and coupler.progress (the coupler's last state and status).
   --set FILE.KEY=VALUE    e.g. --set coupler.scheme=weak --set dem.materials.0.restitution=0.2
                           (numbers index lists; VALUE is JSON if it parses as JSON, else a
                           string)
@@ -156,6 +156,9 @@ else
   [ -d "$out" ] || mkdir -p "$out" || die "$out: cannot create the output folder"
   abs_dir "$out" || die "$out: cannot enter the output folder"
   out=$REPLY
+  if [ -z "$resume_dir" ] && [ -e "$out/coupling.h5" ]; then
+    echo "run_case: $out holds an earlier run's results: they are replaced (a new --out folder keeps them)" >&2
+  fi
   if [ -z "$resume_dir" ] && [ "$case_abs" != "$out" ]; then
     cp -R "$case_abs"/. "$out"/ || die "cannot copy $case_dir into $out"
   fi

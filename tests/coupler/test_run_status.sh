@@ -2,7 +2,8 @@
 # End to end: the run's status as the coupler and run_case.sh report it (the three real
 # programs on cases/rest_position, 0.4 s: the sphere lands on the cable at about 0.25 s).
 #  - default settings: every step converges -> exit 0, the coupler's last line says the
-#    results are reliable, run_case.sh says "done";
+#    results are reliable, run_case.sh says "done"; run again into the same folder, it says
+#    that the earlier run's results are replaced;
 #  - max_iterations 2: no step in contact converges, not even after six halvings of Δt
 #    (dt_min = Δt/64) -> coupler exit 3, its last line says the results are NOT reliable and
 #    why, run_case.sh exits 3 and does not say "done"; coupling.h5 records the rejections
@@ -39,6 +40,11 @@ status_run reliable 0
 last_line reliable | grep -q "^coupler: results are reliable" \
   || fail "reliable: last line is '$(last_line reliable)'"
 grep -q "run_case: done" "$NC_TMP/reliable.out" || fail "reliable: run_case.sh did not say done"
+grep -q "holds an earlier run's results" "$NC_TMP/reliable.out" && fail "reliable: a new folder said to hold results"
+# run again into the same folder: said, and replaced
+status_run reliable 0
+grep -q "^run_case: .*/reliable holds an earlier run's results: they are replaced" "$NC_TMP/reliable.out" \
+  || fail "reliable again: replacing an earlier run's results is not said"
 
 status_run unconverged 3 --set coupler.max_iterations=2
 last_line unconverged | grep -q "^coupler: results are NOT reliable: [0-9]* of [0-9]* steps were accepted without converging.*dt_min.*exit status 3" \

@@ -62,8 +62,8 @@ static void test_malformed_json(void **state)
     expect_error("{\"materials\": [{\"name\": \"a\", \"youngs_modulus_pa\": 1, \"poisson_ratio\": 0.2,"
                  " \"density_kg_m3\": 1, \"restitution\": 1.5, \"friction\": 0.1}]}",
                  "materials[0].restitution");
-    expect_error("{" MAT ", \"dt_s\": -1}", "dt_s");
-    expect_error("{" MAT ", \"dt_s\": \"soon\"}", "dt_s");
+    expect_error("{" MAT ", \"dt_s\": -1}", "dt_s: expected a number > 0 or \"auto\", got -1");
+    expect_error("{" MAT ", \"dt_s\": \"soon\"}", "got \"soon\"");
     expect_error("{" MAT ", \"contact_law\": \"hooke\"}", "contact_law");
     expect_error("{" MAT ", \"contact_law\": \"linear\"}", "linear");
     expect_error("{" MAT ", \"particles\": [{\"position\": [0,0,0], \"radius\": 0.1},"
