@@ -210,6 +210,23 @@ void dem_sim_net_gap(const dem_sim *s, dem_coupled_info *info)
     info->contacts = contacts;
 }
 
+int dem_sim_check_net_start(const dem_sim *s, nc_error *err)
+{
+    const dem_net *net = &s->model.net;
+    if (!net->active) return 0;
+    for (size_t i = 0; i < s->model.sph.n; i++) {
+        const double r = s->model.sph.radius[i];
+        const double gap = sphere_net_gap(s, net, (long)i, 1e30);
+        if (gap < -DEM_START_NET_OVERLAP * r)
+            return nc_error_set(err, 1, "%s: particle %d starts %.3g m inside the net (%.0f %% of "
+                                "its radius %.3g m past a rope's surface; the net's start "
+                                "geometry is the FEM's): place it outside the net, touching at most",
+                                s->model.source[0] ? s->model.source : "dem", s->model.sph.id[i],
+                                -gap, -100.0 * gap / r, r);
+    }
+    return 0;
+}
+
 /* Algorithm 1's larger step: when no sphere can reach another sphere, a plane or the net
  * during the whole coupling step (travel bound |v| dt + ½ |g| dt² + rotation sweep), the
  * bodies fly ballistically in one exact step instead of sub-stepping. Not with STL meshes

@@ -69,5 +69,11 @@ int dem_sim_solve_coupled(dem_sim *s, double dt_step, const double *disp_end,
                           nc_error *err);
 /* Gap information with the net at its current position. */
 void dem_sim_net_gap(const dem_sim *s, dem_coupled_info *info);
+/* A fresh run's start: an error naming the particle when a sphere lies deeper in the net than
+ * DEM_START_NET_OVERLAP of its radius (a rock placed inside the net by mistake is thrown out
+ * by a contact force of its whole overlap: the run creates gigajoules). Touching, and the
+ * small overlap of a contact at rest, are allowed. */
+#define DEM_START_NET_OVERLAP 0.05
+int dem_sim_check_net_start(const dem_sim *s, nc_error *err);
 
 #endif

@@ -69,7 +69,9 @@ static int on_save(void *ctx, const proto_message *cmd, nc_error *err)
                                     "partly loaded state");
     /* output step 0 at the first BEGIN_STEP, not before: a participant that is to resume
      * must not have created or truncated its result files (protocol/README.md §3.3) */
-    if (c->out->n_out == 0 && dem_output_write(c->out, c->s, c->force, err)) return -1;
+    if (c->out->n_out == 0 &&
+        (dem_sim_check_net_start(c->s, err) || dem_output_write(c->out, c->s, c->force, err)))
+        return -1;
     if (dem_sim_begin_step(c->s, err)) return -1;
     c->e_start_j = dem_sim_mechanical_energy(c->s);
     return 0;

@@ -127,4 +127,17 @@ with h5py.File(d + "/coupling.h5", "r") as f:
     assert (solved[f["/iterations/contact_force"][:, 2] != 0] == 1).all()
 print("efficiency: %d steps (%d large), FEM solved in %d" % (len(dt), big, fem_steps))
 PY
+
+# the rock placed inside the net by mistake (its centre 5 cm above the flat net, radius 12 cm):
+# the DEM refuses at the first step, naming the particle and how deep, before any result
+# step is written; a rock touching the net (centre 12 cm above) starts
+scripts/run_case.sh tests/coupler/cases/small_net --out "$NC_TMP/inside" --quiet \
+  --set 'dem.particles.0.position=[0,0,0.05]' > "$NC_TMP/inside.out" 2>&1
+rc=$?
+[ "$rc" -eq 1 ] || { cat "$NC_TMP/inside.out"; fail "rock inside the net: exit $rc, expected 1"; }
+grep -q "particle 0 starts 0.07 m inside the net (58 % of its radius 0.12 m" "$NC_TMP/inside.out" \
+  || { cat "$NC_TMP/inside.out"; fail "rock inside the net: not said"; }
+grep -q "^run_case: failed: dem" "$NC_TMP/inside.out" || fail "rock inside the net: the DEM not named"
+run_case touching tests/coupler/cases/small_net --set 'dem.particles.0.position=[0,0,0.12]' \
+  --set coupler.end_time=0.01 --set fem.analysis.end_time_s=0.01
 echo PASS
