@@ -269,7 +269,7 @@ void cpl_loop_free(cpl_loop *L)
     free(L->v_prev);
     free(L->u_before);
     double *check_vectors[] = {L->du, L->dv, L->df, L->lin_u, L->lin_v, L->probe_u,
-                               L->probe_v, L->probe_plus, L->probe_minus};
+                               L->probe_v, L->probe_plus, L->probe_minus, L->correction};
     for (size_t i = 0; i < sizeof check_vectors / sizeof *check_vectors; i++)
         free(check_vectors[i]);
     cpl_jacobian_free(&L->jac);
