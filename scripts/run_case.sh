@@ -326,7 +326,7 @@ report() {
   fi
   # the solvers' warnings about their input (a value outside its plausible range: a modulus
   # in GPa written in Pa, a diameter in mm): the run went on with the input as given, and
-  # the warnings sit in the solvers' logs, which a run without a terminal does not show
+  # the warnings sit in the solvers' logs, which run_case.sh does not show while it runs
   input_warnings=""
   if [ -f fem.log ] || [ -f dem.log ]; then
     input_warnings=$(grep -h "^warning: [^ ]*\.json: " fem.log dem.log 2>/dev/null)
