@@ -9,6 +9,7 @@ PYTHON=/usr/bin/python3
 # paper 7.2 with strong coupling at the paper's largest step (3e-2 s) and a damped contact
 # (COR 0.5), run long enough (8 s) for the sphere to come to rest on the cable
 echo "demo: running cases/rest_position (paper 7.2, strong coupling, dt 3e-2 s, COR 0.5, 8 s) into $out"
+echo "demo: (the paper's sphere has a density of 3.5e4 kg/m³, denser than any rock: the DEM warns about it, as it should)"
 "$root/scripts/run_case.sh" "$root/cases/rest_position" --out "$out" \
   --set coupler.dt=3e-2 --set fem.analysis.dt_s=3e-2 \
   --set coupler.end_time=8 --set fem.analysis.end_time_s=8 \
