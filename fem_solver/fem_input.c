@@ -480,7 +480,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
         nc_json_number_range_opt(o, w, "dt_s", 1e-3, 1e-15, INFINITY, &s->dt_s, err) ||
         nc_json_number_range_opt(o, w, "end_time_s", 1.0, 0.0, INFINITY, &s->end_time_s, err) ||
         nc_json_number_range_opt(o, w, "load_ramp_s", 0.0, 0.0, INFINITY, &s->load_ramp_s, err) ||
-        nc_json_int_opt(o, w, "max_iterations", 20, 1, 10000, &iters, err) ||
+        nc_json_int_opt(o, w, "max_iterations", s->max_iterations, 1, 10000, &iters, err) ||
         nc_json_number_range_opt(o, w, "residual_tolerance_n", 1e-8, 0.0, INFINITY, &s->residual_tol_n, err) ||
         nc_json_number_range_opt(o, w, "relative_tolerance", 1e-10, 0.0, 1.0, &s->relative_tol, err) ||
         nc_json_number_range_opt(o, w, "displacement_tolerance_m", 1e-9, 0.0, INFINITY, &s->displacement_tol_m, err))

@@ -19,7 +19,7 @@ void fem_settings_default(fem_settings *s)
     s->dt_s = 1e-3;
     s->end_time_s = 1.0;
     s->load_steps = 1;
-    s->max_iterations = 20;
+    s->max_iterations = 50;   /* fem_solver/README.md: a slack net snapping taut needed more than 20 */
     s->residual_tol_n = 1e-8;
     s->relative_tol = 1e-10;
     s->displacement_tol_m = 1e-9;
