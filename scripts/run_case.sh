@@ -236,6 +236,9 @@ running() {   # REPLY = names of the programs still running
 how() {   # P -> REPLY = "exit 1", "exit 137 = SIGKILL" (killed, or exited so), "running"
   local r=${rc[$1]:-}
   if [ -z "$r" ]; then REPLY="running"
+  # a participant's own exit status after either stop signal (protocol/README.md §6), also
+  # after the SIGTERM this script sends: not a sign of SIGINT
+  elif [ "$r" -eq 130 ] && [ "$1" != coupler ]; then REPLY="exit 130: stopped by SIGINT or SIGTERM"
   elif [ "$r" -gt 128 ] && [ "$r" -lt 160 ]; then REPLY="exit $r = SIG$(kill -l $((r - 128)))"
   else REPLY="exit $r"; fi
 }
