@@ -74,7 +74,7 @@ int cpl_history_reject(cpl_history *h, const cpl_reject_record *rec, nc_error *e
 /* How trustworthy a finished run is; written as root attributes by cpl_history_close. */
 typedef struct cpl_run_status {
     int finished;               /* the run reached its end (no error, not interrupted) */
-    int reliable;               /* finished and no unconverged step accepted */
+    int reliable;               /* finished, no unconverged step accepted, no guard fired */
     int accept_unconverged;     /* the user opted in to accepting unconverged steps */
     int energy_growth;          /* the energy guard fired (cpl_energy.h) */
     int accept_energy_growth;   /* the user opted in to accepting that */

@@ -33,6 +33,8 @@
  * after them, so the results are the same as without the check.
  * Energy balance: every accepted step feeds the energies both participants reported with
  * their last solve to the energy guard (cpl_energy.h); its record goes with the step record.
+ * Impulse balance: every accepted step adds the DEM's interface impulse and, with the
+ * interface Jacobian, what the structure's linearised force differed by (cpl_impulse.h).
  * The loop itself never prints: it reports every iteration, rejection and step to an
  * observer.
  */

@@ -121,11 +121,18 @@ int fem_output_reserve_times(fem_output *o, int count, nc_error *err)
 
 static int write_xdmf(fem_output *o, const fem_model *m, nc_error *err);
 
+/* The XDMF grids of the output steps fem.h5 holds since its last write and fem.xdmf does not
+ * list yet. */
+static int write_new_grids(fem_output *o, nc_error *err)
+{
+    return o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
+}
+
 int fem_output_write_due(fem_output *o, nc_error *err)
 {
     int written = nc_h5_flush_due(&o->h5, err);
     if (written < 0) return -1;
-    return written && o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
+    return written ? write_new_grids(o, err) : 0;
 }
 
 static void close_series(fem_output *o)
@@ -345,7 +352,7 @@ static int write_rows_and_grids(fem_output *o, int sync, nc_error *err)
 {
     if (!o->open) return 0;
     if (sync ? nc_h5_sync(&o->h5, err) : nc_h5_flush(&o->h5, err)) return -1;
-    return o->model && o->n_xdmf < o->n_out ? write_xdmf(o, o->model, err) : 0;
+    return write_new_grids(o, err);
 }
 
 int fem_output_flush(fem_output *o, nc_error *err)
