@@ -147,6 +147,7 @@ static int build_full(fem_sparse *s, nc_error *err)
 int fem_sparse_factorize(fem_sparse *s, int *bad_eq, nc_error *err)
 {
     *bad_eq = -1;
+    s->factor_is_saved = 0;
     /* a zero diagonal is a dof nothing holds: report it before any factorisation */
     double dmax = 0;
     for (int i = 0; i < s->n; i++) dmax = fmax(dmax, fabs(s->x[s->diag[i]]));
@@ -229,12 +230,17 @@ int fem_sparse_solve(fem_sparse *s, const double *b, double *x, nc_error *err)
 
 int fem_sparse_save_factor(fem_sparse *s, nc_error *err)
 {
+    /* a step that kept the factorisation of an earlier one (modified Newton) or that ended
+     * where it was restored: the saved copy already is this factor */
+    if (s->factor_is_saved && s->saved_valid && s->have_factor && !s->use_lu) return 0;
+    s->factor_is_saved = 0;
     if (s->L_saved) cholmod_free_factor(&s->L_saved, &s->c);
     s->saved_valid = 0;
     if (!s->have_factor || s->use_lu) return 0;
     s->L_saved = cholmod_copy_factor(s->L, &s->c);
     if (!s->L_saved) return nc_error_set(err, 1, "out of memory copying the factorisation");
     s->saved_valid = 1;
+    s->factor_is_saved = 1;
     memcpy(s->saved_factor_x, s->factor_x, (size_t)s->nnz * sizeof *s->x);
     return 0;
 }
@@ -245,12 +251,14 @@ int fem_sparse_restore_factor(fem_sparse *s, nc_error *err)
         s->have_factor = 0;
         return 0;
     }
+    if (s->factor_is_saved && s->have_factor && !s->use_lu) return 0;   /* L is the copy */
     cholmod_factor *copy = cholmod_copy_factor(s->L_saved, &s->c);
     if (!copy) return nc_error_set(err, 1, "out of memory copying the factorisation");
     cholmod_free_factor(&s->L, &s->c);
     s->L = copy;
     s->use_lu = 0;
     s->have_factor = 1;
+    s->factor_is_saved = 1;
     memcpy(s->factor_x, s->saved_factor_x, (size_t)s->nnz * sizeof *s->x);
     return 0;
 }
@@ -262,6 +270,7 @@ int fem_sparse_refactor(fem_sparse *s, const double *values, const double *saved
     size_t bytes = (size_t)s->nnz * sizeof *s->x;
     if (s->L_saved) cholmod_free_factor(&s->L_saved, &s->c);
     s->saved_valid = 0;
+    s->factor_is_saved = 0;
     if (saved_values) {
         memcpy(s->x, saved_values, bytes);
         if (fem_sparse_factorize(s, &bad, err) || fem_sparse_save_factor(s, err))

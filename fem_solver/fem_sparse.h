@@ -33,6 +33,8 @@ typedef struct fem_sparse {
     int have_factor;          /* the last numeric factorisation succeeded */
     cholmod_factor *L_saved;  /* copy of L made by fem_sparse_save_factor */
     int saved_valid;
+    int factor_is_saved;      /* L is L_saved bit for bit (no factorisation since the last
+                                 save or restore): both then skip their copy */
     double *factor_x;         /* [nnz] the values L (or the LU) was computed from, and ... */
     double *saved_factor_x;   /* ... those of L_saved: a checkpoint stores them, since the
                                  same values on the same pattern give the same factors */
