@@ -282,6 +282,10 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
             nc_h5_attr_double(&h->h5, "/timing/total", "solver_dem_s", t->solver_dem_s, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "steps", (double)t->steps, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "iterations", (double)t->iterations, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "fem_solves", (double)t->fem_solves, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "dem_solves", (double)t->dem_solves, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "fem_repeats_skipped",
+                              (double)t->fem_repeats_skipped, NULL);
         }
         nc_h5_attr_double(&h->h5, "/", "unconverged_steps", (double)t->unconverged_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "rejected_attempts", (double)t->rejected_attempts, NULL);

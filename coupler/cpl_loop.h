@@ -13,6 +13,9 @@
  * structure is otherwise unloaded and at rest). With that option the FEM's step begins at its
  * first SOLVE of the step: a skipped step sends it nothing (no BEGIN_STEP / ACCEPT_STEP), and
  * its next BEGIN_STEP carries the later time.
+ * Always: an iteration whose FEM input (the DEM's force, without a linearisation) equals that
+ * of the FEM's last solve in the try is not sent to the FEM; its last answer stands (the
+ * protocol's same input, same reply), counted in cpl_timing.fem_repeats_skipped.
  * Step rejection: a strong step that does not converge in max_iterations (or whose iteration
  * diverges, or, with reject_slow, cannot converge in time at its recent rate: CPL_SLOW_*), or
  * in which a participant's solve fails with CPL_ERR_STEP_FAILED, is rejected:
@@ -279,6 +282,9 @@ typedef struct cpl_timing {
     long slow_rejections;           /* ... of them early, as converging too slowly */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
     long backtracks;                /* DEM solves repeated by contact backtracking */
+    long fem_repeats_skipped;       /* FEM solves not sent: the input was the one the FEM had
+                                       just solved with in the same try (same force, no
+                                       linearisation), so its answer is the one it gave */
     long work_test_steps;           /* accepted steps whose velocity residual was above the
                                        tolerance: converged by the work test (work_tolerance) */
     long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's

@@ -537,6 +537,11 @@ static void print_timing(app *a)
     fprintf(o, "coupler: %ld steps, %ld iterations (%.2f per step), %ld unconverged steps\n",
             t->steps, t->iterations, t->steps ? (double)t->iterations / (double)t->steps : 0.0,
             t->unconverged_steps);
+    if (t->fem_repeats_skipped > 0)
+        fprintf(o, "coupler: %ld FEM solves (%ld not sent: the same force without contact "
+                "linearisation as the FEM had just solved with in the step, so the answer it "
+                "had given), %ld DEM solves\n", t->fem_solves, t->fem_repeats_skipped,
+                t->dem_solves);
     if (t->backtracks > 0)
         fprintf(o, "coupler: contact backtracking: %ld extra DEM solves halfway back to an "
                 "iterate with contact\n", t->backtracks);

@@ -4,10 +4,11 @@
  *   netcouple-set DIR FILE.KEY=VALUE ...
  *
  * FILE is fem, dem or coupler (DIR/FILE.json); KEY a dotted path in it, numbers indexing
- * lists (dem.materials.0.restitution). VALUE is JSON when it parses as JSON (0.2, true,
- * [1, 2], {"a": 1}), else a string. A missing key of an object is added, missing objects on
- * the way are created; an index must exist. Each file touched is written once, after every
- * override was applied, through a temporary file and a rename (indented by two spaces). On
+ * lists (dem.materials.0.restitution, or dem.materials[0].restitution). VALUE is JSON when
+ * it parses as JSON (0.2, true, [1, 2], {"a": 1}), else a string. A missing key of an object
+ * is added, missing objects on the way are created; an index must exist (brackets hold
+ * nothing else). Each file touched is written once, after every override was applied,
+ * through a temporary file and a rename (indented by two spaces). On
  * any error nothing is written, a message names the override (or the file) and the exit
  * status is 2, as run_case.sh's own argument errors.
  *
@@ -45,6 +46,28 @@ static int is_index(const char *key)
     return 1;
 }
 
+/* KEY written with list indices in brackets, as in JSONPath or Python (particles[0].radius),
+ * becomes the dotted form in place (particles.0.radius: never longer). -1 when a bracket
+ * holds anything but digits or is not followed by '.', '[' or the end. */
+static int brackets_to_dots(char *key)
+{
+    char *out = key;
+    for (const char *c = key; *c;) {
+        if (*c == ']') return -1;
+        if (*c != '[') {
+            *out++ = *c++;
+            continue;
+        }
+        c++;
+        if (!isdigit((unsigned char)*c)) return -1;
+        *out++ = '.';
+        while (isdigit((unsigned char)*c)) *out++ = *c++;
+        if (*c++ != ']' || (*c && *c != '.' && *c != '[')) return -1;
+    }
+    *out = '\0';
+    return 0;
+}
+
 /* Applies one override (`set`, the argument as given) to docs[]; loads the file on first use. */
 static int apply(const char *dir, const char *set, cJSON **docs, nc_error *err)
 {
@@ -74,6 +97,11 @@ static int apply(const char *dir, const char *set, cJSON **docs, nc_error *err)
     }
     memcpy(path, dot + 1, len);
     path[len] = '\0';
+    if (brackets_to_dots(path)) {
+        cJSON_Delete(value);
+        return nc_error_set(err, 2, "--set '%s': brackets in KEY hold a list index only "
+                            "(dem.particles[0].radius, or dem.particles.0.radius)", set);
+    }
     cJSON *node = docs[f];
     char *key = path;
     for (;;) {

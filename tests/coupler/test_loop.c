@@ -1,7 +1,8 @@
 /* Coupling loops against closed-form in-process participants (cpl_test_models.h):
  * weak lags (first-order error), strong reproduces the monolithic solution, α = 1 diverges
  * exactly where |J| > 1, Aitken beats constant α, IQN-ILS bound, force vs displacement
- * relaxation, the quadratic predictor, efficiency options, max-iteration policy, participant
+ * relaxation, the quadratic predictor, efficiency options, no FEM solve repeated for the
+ * same input, max-iteration policy, participant
  * errors, interruption, step rejection (failed solve, divergence, dt_min and the policy, with
  * the efficiency options), BEGIN_STEP and ACCEPT_STEP sent to both participants at once. */
 #include <stdarg.h>
@@ -526,6 +527,41 @@ static void test_skip_fem_without_contact(void **state)
     assert_below(r.u_err, 1e-8);   /* still the monolithic answer */
 }
 
+/* No contact, a moving structure: the particles exert no force (kc = 0) on a structure set
+ * swinging by its initial velocity. Each step's FEM input is then the zero force of its first
+ * solve again, so only that solve is sent (fem_repeats_skipped counts the others); the
+ * iteration still runs to the tolerance (the half step of Aitken's first iteration, then its
+ * full step) and the structure follows its free swing, the monolithic answer. With a force
+ * that changes between iterations (gravity on the particles, a spring contact) every
+ * iteration solves the FEM. */
+static void swinging_free(tm_structure *s, tm_particles *p)
+{
+    for (size_t i = 0; i < s->nd; i++) s->v0[i] = s->v[i] = 1.0;
+    for (size_t i = 0; i < p->nd; i++) p->kc[i] = 0.0;
+}
+
+static void test_fem_not_solved_again_for_same_input(void **state)
+{
+    (void)state;
+    cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_STRONG, 0.01, 0.1);
+    run_result r;
+    run(&TM_MILD, &s, &r, swinging_free);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.rec.steps, 10);
+    for (long i = 0; i < r.rec.steps; i++) assert_true(r.rec.converged[i]);
+    assert_true(r.timing.iterations > r.rec.steps);              /* the iteration ran on */
+    assert_int_equal(r.timing.fem_solves, r.rec.steps);           /* one FEM solve per step */
+    assert_int_equal(r.timing.fem_repeats_skipped, r.timing.iterations - r.rec.steps);
+    /* none reached the FEM; one more: the restore check repeats its first answer */
+    assert_int_equal(r.fem_solves, r.rec.steps + 1);
+    assert_below(1e-3, r.u_mono_scale);                           /* it did swing */
+    assert_below(r.u_err, 1e-12);
+    run(&TM_MILD, &s, &r, NULL);
+    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.timing.fem_repeats_skipped, 0);
+    assert_int_equal(r.timing.fem_solves, r.timing.iterations);
+}
+
 static void test_max_iterations_stop_policy(void **state)
 {
     (void)state;
@@ -980,6 +1016,7 @@ int main(void)
         cmocka_unit_test(test_force_vs_displacement_relaxation),
         cmocka_unit_test(test_far_step_option),
         cmocka_unit_test(test_skip_fem_without_contact),
+        cmocka_unit_test(test_fem_not_solved_again_for_same_input),
         cmocka_unit_test(test_max_iterations_stop_policy),
         cmocka_unit_test(test_participant_error_names_where),
         cmocka_unit_test(test_interrupt_flag),
