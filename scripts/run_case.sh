@@ -44,8 +44,8 @@ DIR are replaced, as is said), --set overrides are applied to the copies, and al
 there: fem.h5, dem.h5, coupling.h5, their XDMF files, iterations.log, one log per program
 (fem.log, dem.log, coupler.log) and coupler.progress (the coupler's last state and status).
   --set FILE.KEY=VALUE    e.g. --set coupler.scheme=weak --set dem.materials.0.restitution=0.2
-                          (numbers index lists; VALUE is JSON if it parses as JSON, else a
-                          string)
+                          (numbers index lists, also as materials[0]; VALUE is JSON if it
+                          parses as JSON, else a string)
   --fem-program CMD       replace a solver by another participant taking the same arguments
   --dem-program CMD       (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py")
   --quiet                 print only warnings, errors and the verdict

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # test_set — run_case.sh's --set overrides (netcouple-set): numbers, booleans, strings, JSON
-# lists and objects land where the dotted path says, in the three files; missing keys and
-# objects are created, list items replaced; the result parses as the same JSON as the input
-# with exactly those changes (compared with Python's json module). Every bad override (no '=',
-# an unknown file, an index past the list, a path through a number, an empty name, a file
-# that is not JSON) exits 2 with a message naming it, and leaves the files untouched. And
+# lists and objects land where the dotted path says (list indices also in brackets), in the
+# three files; missing keys and objects are created, list items replaced; the result parses
+# as the same JSON as the input with exactly those changes (compared with Python's json
+# module). Every bad override (no '=', an unknown file, an index past the list, a path through
+# a number, an empty name, brackets around anything but an index, a file that is not JSON)
+# exits 2 with a message naming it, and leaves the files untouched. And
 # through run_case.sh itself: the run uses the value set, a bad --set stops it before any
 # program starts.
 . tests/e2e_lib.sh
@@ -14,7 +15,7 @@ rm -rf "$dir"; cp -R cases/rest_position "$dir"
 cp -R cases/rest_position "$NC_TMP/set_before"
 
 "$NC_BIN/netcouple-set" "$dir" coupler.scheme=weak coupler.dt=1e-3 \
-  dem.materials.0.restitution=0.2 dem.materials.0.name=granite coupler.relaxation.alpha=0.5 \
+  'dem.materials[0].restitution=0.2' dem.materials.0.name=granite coupler.relaxation.alpha=0.5 \
   coupler.new.deep.flag=true 'fem.analysis.note=two words' 'coupler.list=[1, 2.5, "a"]' \
   'dem.gravity.2=-9.80665' 'fem.extra={"a": {"b": null}}' || fail "valid overrides: exit $?"
 "$PY" - "$NC_TMP/set_before" "$dir" <<'PY' || fail "the files are not the input with the overrides"
@@ -56,6 +57,11 @@ refused "'5' is not an index of a list of 1 item" coupler.dt=5 dem.materials.5.x
 refused "'x' is not an index of a list of 1 item" dem.materials.x=1
 refused "'x' is inside a number, not an object or list" coupler.dt.x=1
 refused "an empty name in KEY" coupler..a=1
+for bad in 'dem.materials[x].a=1' 'dem.materials[0]x=1' 'dem.materials[0.a=1' \
+           'dem.materials]0.a=1' 'dem.materials[].a=1'; do
+  refused "brackets in KEY hold a list index only" "$bad"
+done
+refused "'5' is not an index of a list of 1 item" 'dem.materials[5].x=1'
 echo '{"broken": ' > "$dir/fem.json"
 refused "$dir/fem.json:1:12: malformed JSON" fem.a=1
 cp cases/rest_position/fem.json "$dir/fem.json"
