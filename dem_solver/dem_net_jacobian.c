@@ -211,6 +211,14 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/* Tangents have NCOL columns, of which a particle uses its nc = 3 n_nodes: only those are
+ * cleared and copied (a free sphere on one node uses 3 of 96; clearing all of them was a
+ * fifth of the replay's time on a barrier). */
+static void zero_cols(double a[3][NCOL], int nc)
+{
+    for (int k = 0; k < 3; k++) memset(a[k], 0, (size_t)nc * sizeof a[k][0]);
+}
+
 /* column c of a 3xNCOL tangent dotted with a vector */
 static double col_dot(const double a[3], double d[3][NCOL], int c)
 {
@@ -258,7 +266,9 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         w[k] = r->w[k] + mo->dw[k];
     }
     /* closest point (dem_detect_net.c) */
-    double q[3], t = 0.0, Dt[NCOL] = {0}, Dq[3][NCOL] = {{0}};
+    double q[3], t = 0.0, Dt[NCOL], Dq[3][NCOL];
+    memset(Dt, 0, (size_t)nc * sizeof Dt[0]);
+    zero_cols(Dq, nc);
     if (edge) {
         dem_closest_on_segment(p, xa, xb, q, &t);
     } else {
@@ -290,22 +300,28 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         }
     double rr[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
     double dist = sqrt(dot3(rr, rr));
-    double n[3], Dn[3][NCOL] = {{0}}, Ddist[NCOL] = {0}, Dr[3][NCOL] = {{0}};
+    double n[3], Dn[3][NCOL], Ddist[NCOL], Dr[3][NCOL];
+    zero_cols(Dn, nc);
+    zero_cols(Dr, nc);
+    memset(Ddist, 0, (size_t)nc * sizeof Ddist[0]);
     for (int k = 0; k < 3; k++) n[k] = rr[k] / dist;
     for (int c = 0; c < nc && want; c++) {
         for (int k = 0; k < 3; k++) Dr[k][c] = Dq[k][c] - mo->Dx[k][c];
         Ddist[c] = col_dot(n, Dr, c);
         for (int k = 0; k < 3; k++) Dn[k][c] = (Dr[k][c] - n[k] * Ddist[c]) / dist;
     }
-    double overlap = r->reach - dist, Dov[NCOL] = {0};
+    double overlap = r->reach - dist, Dov[NCOL];
     for (int c = 0; c < nc; c++) Dov[c] = -Ddist[c];
-    double lever = r->radius - 0.5 * overlap, Dlever[NCOL] = {0};
+    double lever = r->radius - 0.5 * overlap, Dlever[NCOL];
     for (int c = 0; c < nc; c++) Dlever[c] = -0.5 * Dov[c];
     /* the incoming history (dem_new_record) and the crossed-cable flip (dem_emit_wall_contact) */
-    double ft[3], kt_prev, fn_prev, impact_speed, Dft[3][NCOL] = {{0}}, Dktp[NCOL] = {0};
-    double Dv0[NCOL] = {0};   /* of impact_speed, when an earlier sub-step of this step set it */
+    double ft[3], kt_prev, fn_prev, impact_speed, Dft[3][NCOL], Dktp[NCOL];
+    double Dv0[NCOL];   /* of impact_speed, when an earlier sub-step of this step set it */
     const double *np;
     int has_prev;
+    zero_cols(Dft, nc);
+    memset(Dktp, 0, (size_t)nc * sizeof Dktp[0]);
+    memset(Dv0, 0, (size_t)nc * sizeof Dv0[0]);
     if (in) {
         memcpy(ft, in->ft, sizeof ft);
         kt_prev = in->kt;
@@ -313,9 +329,9 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         impact_speed = in->impact_speed;
         np = in->n;
         has_prev = 1;
-        memcpy(Dft, in->dft, sizeof Dft);
-        memcpy(Dktp, in->dkt, sizeof Dktp);
-        memcpy(Dv0, in->dv0, sizeof Dv0);
+        for (int k = 0; k < 3; k++) memcpy(Dft[k], in->dft[k], (size_t)nc * sizeof Dft[k][0]);
+        memcpy(Dktp, in->dkt, (size_t)nc * sizeof Dktp[0]);
+        memcpy(Dv0, in->dv0, (size_t)nc * sizeof Dv0[0]);
     } else if (r->sub == 0 && r->has_prev) {
         memcpy(ft, r->ft, sizeof ft);
         kt_prev = r->kt_prev;
@@ -341,7 +357,8 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         }
     }
     /* relative velocity (eq. (A.2)): the wall point minus the sphere's surface point */
-    double vo[3], Dvo[3][NCOL] = {{0}};
+    double vo[3], Dvo[3][NCOL];
+    zero_cols(Dvo, nc);
     for (int k = 0; k < 3; k++) {
         vo[k] = edge ? (1.0 - t) * va[k] + t * vb[k] : va[k];
         for (int c = 0; c < nc && want; c++) {
@@ -353,7 +370,9 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     wr[0] = w[1] * ri[2] - w[2] * ri[1];
     wr[1] = w[2] * ri[0] - w[0] * ri[2];
     wr[2] = w[0] * ri[1] - w[1] * ri[0];
-    double vc[3], Dvc[3][NCOL] = {{0}}, Dri[3][NCOL] = {{0}};
+    double vc[3], Dvc[3][NCOL], Dri[3][NCOL];
+    zero_cols(Dvc, nc);
+    zero_cols(Dri, nc);
     for (int k = 0; k < 3; k++) vc[k] = vo[k] - (vi[k] + wr[k]);
     for (int c = 0; c < nc && want; c++) {
         for (int k = 0; k < 3; k++) Dri[k][c] = Dlever[c] * n[k] + lever * Dn[k][c];
@@ -454,7 +473,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     if (trial2 > cap * cap) { /* Coulomb: the spring slides at the cap */
         double len = sqrt(trial2), sc = trial2 > 0.0 ? cap / len : 0.0, Dcap[NCOL];
         double Dg[3][NCOL];   /* the trial spring's, for the spring limit below */
-        memcpy(Dg, Dft, sizeof Dg);
+        for (int k = 0; k < 3; k++) memcpy(Dg[k], Dft[k], (size_t)nc * sizeof Dg[k][0]);
         for (int c = 0; c < nc; c++) {
             Dcap[c] = fn > 0.0 ? pr->mu * Dfn[c] : 0.0;
             double Dlen = trial2 > 0.0 ? col_dot(tr, Dtr, c) / len : 0.0;
@@ -485,10 +504,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
         dtq[1][c] = Dri[2][c] * f[0] - Dri[0][c] * f[2] + ri[2] * df[0][c] - ri[0] * df[2][c];
         dtq[2][c] = Dri[0][c] * f[1] - Dri[1][c] * f[0] + ri[0] * df[1][c] - ri[1] * df[0][c];
     }
-    memset(out->dft, 0, sizeof out->dft);
-    memset(out->dkt, 0, sizeof out->dkt);
-    memset(out->dv0, 0, sizeof out->dv0);
-    for (int c = 0; c < nc; c++) {
+    for (int c = 0; c < nc; c++) {   /* the next sub-step of this contact reads nc columns */
         for (int k = 0; k < 3; k++) out->dft[k][c] = Dft[k][c];
         out->dkt[c] = Dkt[c];
         out->dv0[c] = v0_now ? -Dvn[c] : Dv0[c];
@@ -496,7 +512,7 @@ static void contact(const dem_sim *s, const dem_net_jacobian *jac, const dem_jac
     }
 }
 
-/* Orders blocks by (i, j) for the merge. */
+/* Orders blocks by (i, j). */
 typedef struct block {
     int32_t i, j;
     double k[9];
@@ -508,6 +524,66 @@ static int block_cmp(const void *a, const void *b)
     if (x->i != y->i) return x->i < y->i ? -1 : 1;
     if (x->j != y->j) return x->j < y->j ? -1 : 1;
     return 0;
+}
+
+/* The blocks of a replay, summed per (i, j) as they come: an open-addressing table from the
+ * pair to its block. Each pair's contributions are added in the order the records produce
+ * them, the order the stable sort and merge of all contributions used to sum them in (the
+ * same K bit for bit); that sort of one entry per record and node pair was a tenth of the
+ * DEM's time on a barrier, its table a few MB. */
+typedef struct block_sum {
+    block *blocks;
+    size_t n, cap;            /* blocks */
+    uint32_t *slot;           /* table: block index + 1, 0 = empty */
+    size_t table_cap;         /* a power of 2, at least twice n */
+} block_sum;
+
+static size_t pair_hash(int32_t i, int32_t j, size_t mask)
+{
+    uint64_t key = ((uint64_t)(uint32_t)i << 32) | (uint32_t)j;
+    key *= 0x9E3779B97F4A7C15ull;
+    return (size_t)(key >> 32) & mask;
+}
+
+/* The block of (i, j); *created when it is new (its k then unset); NULL when out of
+ * memory. */
+static block *block_at(block_sum *bs, int32_t i, int32_t j, int *created)
+{
+    *created = 0;
+    if (2 * (bs->n + 1) > bs->table_cap) {
+        size_t cap = bs->table_cap ? 2 * bs->table_cap : 64;
+        uint32_t *slot = calloc(cap, sizeof *slot);
+        if (!slot || bs->n + 1 > UINT32_MAX - 1) {
+            free(slot);
+            return NULL;
+        }
+        for (size_t b = 0; b < bs->n; b++) {
+            size_t h = pair_hash(bs->blocks[b].i, bs->blocks[b].j, cap - 1);
+            while (slot[h]) h = (h + 1) & (cap - 1);
+            slot[h] = (uint32_t)(b + 1);
+        }
+        free(bs->slot);
+        bs->slot = slot;
+        bs->table_cap = cap;
+    }
+    size_t h = pair_hash(i, j, bs->table_cap - 1);
+    for (; bs->slot[h]; h = (h + 1) & (bs->table_cap - 1)) {
+        block *bk = &bs->blocks[bs->slot[h] - 1];
+        if (bk->i == i && bk->j == j) return bk;
+    }
+    if (bs->n == bs->cap) {
+        size_t cap = bs->cap ? 2 * bs->cap : 64;
+        block *blocks = realloc(bs->blocks, cap * sizeof *blocks);
+        if (!blocks) return NULL;
+        bs->blocks = blocks;
+        bs->cap = cap;
+    }
+    block *bk = &bs->blocks[bs->n++];
+    bs->slot[h] = (uint32_t)bs->n;
+    bk->i = i;
+    bk->j = j;
+    *created = 1;
+    return bk;
 }
 
 static int rec_cmp(const void *a, const void *b)
@@ -628,7 +704,7 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     long *added_in = malloc((nn + 1) * sizeof *added_in);
     size_t n_touched = 0;
     size_t *slot = malloc((jac->n_rec + 1) * sizeof *slot);
-    block *blocks = NULL;
+    block_sum sum = {0};
     dem_jac_state *state = malloc((jac->n_rec + 1) * sizeof *state);
     particle *pts = NULL;
     motion *scratch = malloc(sizeof *scratch);   /* a cluster sphere's motion */
@@ -644,15 +720,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     }
     jac->n_dropped = 0;
     for (size_t k = 0; k < npt; k++) jac->n_dropped += pts[k].overflow;
-    size_t max_blocks = 0; /* each record: its 1 or 2 nodes times its particle's nodes */
-    for (size_t x = 0; x < jac->n_rec; x++) max_blocks += 2 * (size_t)pts[slot[x]].n_nodes;
-    if (want_K && !(blocks = malloc((max_blocks + 1) * sizeof *blocks))) {
-        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
-        goto done;
-    }
     for (size_t k = 0; k < 3 * nn; k++) end[k] = net->ref[k] + disp_end[k];
     for (size_t k = 0; k < nn; k++) added_in[k] = -1;
-    size_t nbk = 0;
     for (long sub = 0; sub < jac->n_sub; sub++) {
         for (size_t x = 0; x < n_touched; x++)
             memset(force + 3 * (size_t)touched[x], 0, 3 * sizeof *force);
@@ -662,7 +731,8 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             dem_jac_record *r = &jac->rec[x];
             particle *pt = &pts[slot[x]];
             const dem_jac_state *in = r->sub > 0 && r->link >= 0 ? &state[r->link] : NULL;
-            double f[3], tq[3], df[3][NCOL] = {{0}}, dtq[3][NCOL] = {{0}}, t, dt[NCOL] = {0};
+            double f[3], tq[3], df[3][NCOL], dtq[3][NCOL], t, dt[NCOL];   /* nc columns set
+                                                                             when want */
             const int want = want_K && !pt->overflow, nc = 3 * pt->n_nodes;
             const motion *mo = pt->cluster ? sphere_motion(pt, r, nc, want, scratch) : &pt->m;
             contact(s, jac, r, end, in, pt, mo, want, f, tq, df, dtq, &t, dt, &state[x]);
@@ -727,14 +797,18 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
                 for (int b = 0; b < pt->n_nodes; b++) {
                     int32_t node_b = pt->node[b];
                     if (!pt->respond && node_b != na && node_b != nb) continue;
-                    block *bk = &blocks[nbk++];
-                    bk->i = nodes[a];
-                    bk->j = node_b;
+                    int created;
+                    block *bk = block_at(&sum, nodes[a], node_b, &created);
+                    if (!bk) {
+                        rc = nc_error_set(err, 1, "dem: out of memory for the interface Jacobian");
+                        goto done;
+                    }
                     for (int row = 0; row < 3; row++)
                         for (int c = 0; c < 3; c++) {
                             int col = 3 * b + c;
                             double dF = -sa * df[row][col] + (edge ? sgn * dt[col] * f[row] : 0.0);
-                            bk->k[3 * row + c] = -wgt * dF;
+                            if (created) bk->k[3 * row + c] = -wgt * dF;
+                            else bk->k[3 * row + c] += -wgt * dF;
                         }
                 }
             }
@@ -792,15 +866,9 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
             for (size_t k = 0; k < 3 * nn; k++) force_out[k] = impulse[k] / jac->dt_step;
     }
     if (want_K) {
-        qsort(blocks, nbk, sizeof *blocks, block_cmp);
-        size_t m = 0;
-        for (size_t b = 0; b < nbk; b++) {
-            if (m > 0 && blocks[m - 1].i == blocks[b].i && blocks[m - 1].j == blocks[b].j) {
-                for (int e = 0; e < 9; e++) blocks[m - 1].k[e] += blocks[b].k[e];
-            } else {
-                blocks[m++] = blocks[b];
-            }
-        }
+        block *blocks = sum.blocks;
+        const size_t m = sum.n;
+        qsort(blocks, m, sizeof *blocks, block_cmp);   /* by (i, j): each pair once */
         size_t cap = jac->cap_blocks;
         if (grow((void **)&jac->nodes, &cap, m, 2 * sizeof *jac->nodes, err)) {
             rc = -1;
@@ -822,6 +890,6 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     }
 done:
     free(end); free(force); free(impulse); free(touched); free(added_in);
-    free(slot); free(blocks); free(state); free(pts); free(scratch);
+    free(slot); free(sum.blocks); free(sum.slot); free(state); free(pts); free(scratch);
     return rc;
 }

@@ -58,8 +58,10 @@
  * the contact pass, the incoming history) and afterwards one sweep over those records with
  * a tangent of 3 columns per node the particle touches (at most DEM_JAC_MAX_NODES; a
  * particle touching more is left out of K and counted in n_dropped): linear
- * in the number of net contacts times sub-steps, plus sorts of the records and blocks. The
- * results of the step are bit-identical with the option on.
+ * in the number of net contacts times sub-steps (each record's work in its particle's
+ * columns only), plus a sort of the records and of the distinct blocks (summed per node pair
+ * as they come, in a hash table). The results of the step are bit-identical with the option
+ * on.
  */
 #ifndef DEM_NET_JACOBIAN_H
 #define DEM_NET_JACOBIAN_H
