@@ -868,7 +868,7 @@ int dem_net_jacobian_replay(const dem_sim *s, dem_net_jacobian *jac, const doubl
     if (want_K) {
         block *blocks = sum.blocks;
         const size_t m = sum.n;
-        qsort(blocks, m, sizeof *blocks, block_cmp);   /* by (i, j): each pair once */
+        if (m > 1) qsort(blocks, m, sizeof *blocks, block_cmp);   /* by (i, j): each pair once */
         size_t cap = jac->cap_blocks;
         if (grow((void **)&jac->nodes, &cap, m, 2 * sizeof *jac->nodes, err)) {
             rc = -1;
