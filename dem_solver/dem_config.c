@@ -551,8 +551,29 @@ static int parse_planes(dem_sim *s, const cJSON *root, const char *file, nc_erro
     return 0;
 }
 
+/* STL files carry no unit and are read in metres: a terrain exported in millimetres spans a
+ * thousand times its size. */
+#define PLAUSIBLE_MESH_EXTENT_MAX_M 5000.0
+
+static void warn_mesh_extent(FILE *sink, const char *where, const dem_mesh *mesh)
+{
+    double extent = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t v = 0; v < mesh->n_vertices; v++) {
+            lo = fmin(lo, mesh->vertices[3 * v + (size_t)k]);
+            hi = fmax(hi, mesh->vertices[3 * v + (size_t)k]);
+        }
+        if (hi > lo) extent = fmax(extent, hi - lo);
+    }
+    if (extent > PLAUSIBLE_MESH_EXTENT_MAX_M)
+        nc_warn(sink, "%s.file: %s spans %g m, above the plausible %g m for a slope; STL files "
+                "carry no unit and are read in metres (a model exported in millimetres spans "
+                "1000 times its size)", where, mesh->path, extent, PLAUSIBLE_MESH_EXTENT_MAX_M);
+}
+
 static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const char *base_dir,
-                        nc_error *err)
+                        FILE *sink, nc_error *err)
 {
     static const char *const keys[] = {"file", "velocity", "material", NULL};
     static const double zero[3] = {0, 0, 0};
@@ -580,6 +601,7 @@ static int parse_meshes(dem_sim *s, const cJSON *root, const char *file, const c
         char full[1024];
         nc_file_join(base_dir, path, full, sizeof full);
         if (dem_stl_load(mesh, full, err)) return nc_error_prefix(err, "%s.file", where);
+        warn_mesh_extent(sink, where, mesh);
     }
     return 0;
 }
@@ -690,7 +712,7 @@ static int parse_root(dem_sim *s, const cJSON *root, const char *file, const cha
     }
     if (parse_materials(s, root, file, sink, err) || parse_particles(s, root, file, sink, err) ||
         parse_generators(s, root, file, sink, err) || parse_clusters(s, root, file, sink, err) ||
-        parse_planes(s, root, file, err) || parse_meshes(s, root, file, base_dir, err) ||
+        parse_planes(s, root, file, err) || parse_meshes(s, root, file, base_dir, sink, err) ||
         parse_net_wall(s, root, file, sink, err))
         return -1;
     return 0;

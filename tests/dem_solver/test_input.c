@@ -2,7 +2,9 @@
  * names the file/field; the engineer's forms (mass_kg for radius, drop_height_m and
  * impact_energy_j for velocity) against hand-computed values; implausible values give
  * warnings naming file and field and nothing else; ASCII and binary STL give the same welded mesh; a sphere resting on
- * triangles sharing an edge or a vertex makes exactly one contact carrying its weight. */
+ * triangles sharing an edge or a vertex makes exactly one contact carrying its weight; a
+ * sphere starting inside a plane or a mesh is refused, touching is not; an STL spanning
+ * kilometres (millimetres read as metres) is warned about. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -338,6 +340,74 @@ static void test_mesh_shared_features_once(void **state)
     }
 }
 
+/* A sphere may not start inside a plane or a mesh (it would be thrown out by the force of the
+ * whole overlap); touching is allowed, and so is a centre far behind a one-sided plane (no
+ * contact acts there). The unit square floor.stl at z = 0 and a plane z = 0, radius 0.1 m. */
+static void test_start_inside_walls(void **state)
+{
+    (void)state;
+    char path[512], json[2048];
+    const char *plane = "\"planes\": [{\"point\": [0,0,0], \"normal\": [0,0,1]}]";
+    snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,0.05], "
+             "\"radius\": 0.1}], %s}", plane);
+    expect_error(json, "test.json: particle 0 starts 0.05 m inside planes[0] (its centre 0.05 m "
+                       "in front of the plane, radius 0.1 m)");
+    snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,-0.05], "
+             "\"radius\": 0.1}], %s}", plane);
+    expect_error(json, "starts 0.15 m inside planes[0] (its centre 0.05 m behind the plane");
+    dem_sim s;
+    const double allowed_z[2] = {0.1, -0.5};   /* touching; far behind */
+    for (int k = 0; k < 2; k++) {
+        snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,%g], "
+                 "\"radius\": 0.1}], %s}", allowed_z[k], plane);
+        dem_test_build(&s, json);
+        dem_sim_free(&s);
+    }
+    dem_test_write_file(path, sizeof path, "floor.stl", ascii_square, strlen(ascii_square));
+    const double inside_z[2] = {0.095, -0.05};   /* meshes are two-sided */
+    const char *said[2] = {"starts 0.005 m inside meshes[0]", "starts 0.05 m inside meshes[0]"};
+    for (int k = 0; k < 2; k++) {
+        snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,%g], "
+                 "\"radius\": 0.1}], \"meshes\": [{\"file\": \"%s\"}]}", inside_z[k], path);
+        expect_error(json, said[k]);
+        expect_error(json, "floor.stl");
+    }
+    snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,0.1], "
+             "\"radius\": 0.1}], \"meshes\": [{\"file\": \"%s\"}]}", path);
+    dem_test_build(&s, json);
+    dem_sim_free(&s);
+}
+
+/* An STL spanning more than 5 km (a slope exported in millimetres) is named in a warning; a
+ * metre-sized one is not. */
+static void test_mesh_extent_warning(void **state)
+{
+    (void)state;
+    static const char *big =
+        "solid big\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 22000 0 0\n"
+        "  vertex 0 22000 0\n endloop\nendfacet\nendsolid big\n";
+    char path[512], json[2048];
+    const char *names[2] = {"slope_mm.stl", "floor.stl"};
+    const char *texts[2] = {big, ascii_square};
+    for (int k = 0; k < 2; k++) {
+        dem_test_write_file(path, sizeof path, names[k], texts[k], strlen(texts[k]));
+        snprintf(json, sizeof json, "{" MAT ", \"particles\": [{\"position\": [0.3,0.6,0.5], "
+                 "\"radius\": 0.1}], \"meshes\": [{\"file\": \"%s\"}]}", path);
+        dem_sim s;
+        char *w = build_with_warnings(&s, json);
+        print_message("%s: %s\n", names[k], w[0] ? w : "(no warning)");
+        if (k == 0) {
+            expect_warning(w, "test.json: meshes[0].file:");
+            expect_warning(w, " spans 22000 m, above the plausible 5000 m");
+            expect_warning(w, "slope_mm.stl");
+        } else {
+            assert_null(strstr(w, "spans"));
+        }
+        free(w);
+        dem_sim_free(&s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -348,6 +418,8 @@ int main(void)
         cmocka_unit_test(test_plausibility_warnings),
         cmocka_unit_test(test_stl_ascii_and_binary),
         cmocka_unit_test(test_mesh_shared_features_once),
+        cmocka_unit_test(test_start_inside_walls),
+        cmocka_unit_test(test_mesh_extent_warning),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
