@@ -5,6 +5,8 @@ Reads a run folder of scripts/run_case.sh on a barrier of scripts/make_barrier.p
 fem.h5, dem.h5, coupling.h5) and prints, and with --plot draws:
   - maximum elongation: the largest displacement of the net along the impact direction (any
     net node, fem.h5 output steps only) and of `net_centre` (a monitor node: every FEM step);
+  - impact: the block's velocity at its first contact with the net (coupling.h5, every step),
+    from the dem.h5 output steps before it; its direction is the impact direction below;
   - braking time: from the first contact (coupling.h5, every step) to the block's stop, the
     first time its velocity along the impact direction is <= 0 (dem.h5 output steps, linear
     interpolation between them);
@@ -21,12 +23,15 @@ fem.h5, dem.h5, coupling.h5) and prints, and with --plot draws:
     energy at the first contact and at the end, and where it went: brakes (fem.h5
     `element_dissipated_energy`, output steps), the rest of the FEM's dissipation (Rayleigh and
     the integrator's), strain and kinetic energy of the structure, contact dissipation (DEM),
-    the interface mismatch and the guard's created energy; with coupling.h5's
+    the interface mismatch and the guard's created energy, the DEM's dissipation before the
+    first net contact apart (a rock on a slope), the block's potential energy from the contact
+    to the end; with coupling.h5's
     `fem_numerical_dissipated` also the split of the FEM's own dissipation into Rayleigh
     damping and the integrator's, and what no mechanism of the model accounts for (the
     integrator's share and the interface mismatch) against the block's energy.
 --json FILE writes the same figures as JSON (keys as printed). Exit status 0, or 2 with a
-message naming the file when the folder lacks what is needed.
+message naming the file when the folder lacks what is needed or the block never touched the
+net.
 """
 import argparse
 import json
@@ -100,21 +105,30 @@ def report(run):
     fem_path, dem_path, cpl_path = (os.path.join(run, n) for n in ("fem.h5", "dem.h5", "coupling.h5"))
     fem, dem, cpl = read(fem_path, "fem"), read(dem_path, "dem"), read(cpl_path, "coupling")
 
-    # impact direction: the block's initial velocity
-    t_dem, v_block = block_velocity(dem, dem_path)
-    v0 = v_block[0]
-    speed0 = float(np.linalg.norm(v0))
-    if speed0 == 0.0:
-        fail("%s: the block does not move at the first output step" % dem_path)
-    d = v0 / speed0
-    v_along = v_block @ d
-
     # coupling steps
     ct = dataset(cpl, cpl_path, "steps/time")
     inc = dataset(cpl, cpl_path, "steps/in_contact")
     conv = dataset(cpl, cpl_path, "steps/converged")
     hit = np.nonzero(inc)[0]
-    t_hit = float(ct[hit[0]] - dataset(cpl, cpl_path, "steps/dt")[hit[0]]) if len(hit) else None
+    if not len(hit):
+        fail("%s: the block never touched the barrier (/steps/in_contact is 0 in all %d steps, "
+             "to t = %.4g s): nothing to report (a longer end_time? scripts/report.py shows "
+             "where the rock went)" % (cpl_path, len(ct), ct[-1] if len(ct) else 0.0))
+    t_hit = float(ct[hit[0]] - dataset(cpl, cpl_path, "steps/dt")[hit[0]])
+
+    # impact: the block's velocity at its first contact with the net, from the last dem.h5
+    # output step before it, carried to the contact with the acceleration of the two output
+    # steps before (a block released on a slope, or at rest, reaches the net at its own speed)
+    t_dem, v_block = block_velocity(dem, dem_path)
+    k = max(int(np.searchsorted(t_dem, t_hit, side="right")) - 1, 0)
+    v0 = v_block[k].copy()
+    if k >= 1 and t_dem[k] > t_dem[k - 1]:
+        v0 += (v_block[k] - v_block[k - 1]) / (t_dem[k] - t_dem[k - 1]) * (t_hit - t_dem[k])
+    speed0 = float(np.linalg.norm(v0))
+    if speed0 == 0.0:
+        fail("%s: the block is at rest when it first touches the net (t = %.4g s)" % (dem_path, t_hit))
+    d = v0 / speed0
+    v_along = v_block @ d
 
     out = {"run": run, "steps": int(len(ct)), "unconverged_steps": int((conv == 0).sum()),
            "end_time_s": float(ct[-1]), "impact_speed_m_s": speed0,
@@ -139,9 +153,11 @@ def report(run):
     out["max_centre_elongation_time_s"] = float(mt[np.argmax(mu)])
 
     # braking time
-    t_stop = first_crossing(t_dem, v_along)
+    after = t_dem > t_hit    # from the contact on, where the block moves at speed0 along d
+    t_stop = first_crossing(np.concatenate(([t_hit], t_dem[after])),
+                            np.concatenate(([speed0], v_along[after])))
     out["block_stop_s"] = t_stop
-    out["braking_time_s"] = (t_stop - t_hit) if (t_stop is not None and t_hit is not None) else None
+    out["braking_time_s"] = (t_stop - t_hit) if t_stop is not None else None
     out["block_final_velocity_along_m_s"] = float(v_along[-1])
 
     # residual height
@@ -196,7 +212,8 @@ def report(run):
     # energy balance
     g = lambda key: dataset(cpl, cpl_path, "energy/" + key)
     dk = g("dem_kinetic")
-    k_hit = max(hit[0] - 1, 0) if len(hit) else 0
+    k_hit = max(hit[0] - 1, 0)
+    dem_diss = g("dem_dissipated")
     brake = dataset(fem, fem_path, "output/element_dissipated_energy")[-1].sum() \
         if "output/element_dissipated_energy" in fem else 0.0
     fem_diss = float(g("fem_dissipated").sum())
@@ -207,12 +224,16 @@ def report(run):
         "fem_other_dissipation_j": fem_diss - float(brake),
         "fem_strain_end_j": float(g("fem_elastic")[-1]),
         "fem_kinetic_end_j": float(g("fem_kinetic")[-1]),
-        "contact_dissipation_j": float(g("dem_dissipated").sum()),
+        "contact_dissipation_j": float(dem_diss[hit[0]:].sum()),
+        "dissipation_before_contact_j": float(dem_diss[:hit[0]].sum()),
         "interface_mismatch_j": float(g("interface_created").sum()),
         "created_max_j": float(g("created").max()),
         "created_limit_j": float(g("limit")[-1]),
         "guard_fired": bool(g("above").any()),
     }
+    if "energy/dem_potential" in cpl:   # the block climbing after the rebound (a slope)
+        dp = g("dem_potential")
+        out["energy"]["block_potential_change_j"] = float(dp[-1] - dp[k_hit])
     # the integrator's share of the FEM's dissipation (coupling.h5 from the version that
     # records it): what no physical mechanism of the model (brakes, Rayleigh damping, contact
     # dashpots) accounts for, together with the interface mismatch
@@ -235,7 +256,7 @@ def print_report(r):
     p = print
     p("barrier report: %s" % r["run"])
     p("  run: %d steps to t = %.4g s, %d unconverged" % (r["steps"], r["end_time_s"], r["unconverged_steps"]))
-    p("  impact: %.3g m/s along (%.3f, %.3f, %.3f), first contact at %s s"
+    p("  impact: %.3g m/s along (%.3f, %.3f, %.3f) at the first contact with the net, %.4g s"
       % ((r["impact_speed_m_s"],) + tuple(r["impact_direction"]) + (r["first_contact_s"],)))
     p("  maximum elongation: net %.3f m (node %d, t = %.4g s; fem.h5 output steps only), "
       "net_centre %.3f m (t = %.4g s; every step)"
@@ -268,9 +289,14 @@ def print_report(r):
       % ((r["peak_anchor_reaction_n"] or 0) / 1e3, (r["peak_post_base_reaction_n"] or 0) / 1e3))
     e = r["energy"]
     p("  energy (coupling.h5 /energy, every step; brakes from fem.h5):")
-    p("    block kinetic at contact %.4g J -> end %.4g J" % (e["block_kinetic_at_contact_j"], e["block_kinetic_end_j"]))
-    p("    brakes %.4g J, other FEM dissipation (Rayleigh, integrator) %.4g J, contact %.4g J"
-      % (e["brakes_j"], e["fem_other_dissipation_j"], e["contact_dissipation_j"]))
+    p("    block kinetic (translation and rotation) at contact %.4g J -> end %.4g J%s"
+      % (e["block_kinetic_at_contact_j"], e["block_kinetic_end_j"],
+         "; its potential energy from contact to the end %+.4g J" % e["block_potential_change_j"]
+         if "block_potential_change_j" in e else ""))
+    p("    brakes %.4g J, other FEM dissipation (Rayleigh, integrator) %.4g J, contact %.4g J "
+      "(the DEM's dissipation from the first net contact on; before it, on terrain or walls: %.4g J)"
+      % (e["brakes_j"], e["fem_other_dissipation_j"], e["contact_dissipation_j"],
+         e["dissipation_before_contact_j"]))
     p("    structure at the end: strain %.4g J, kinetic %.4g J; interface mismatch %.4g J"
       % (e["fem_strain_end_j"], e["fem_kinetic_end_j"], e["interface_mismatch_j"]))
     p("    created (largest) %.4g J, guard limit %.4g J: %s"

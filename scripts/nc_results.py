@@ -96,6 +96,7 @@ class Fem:
             self.elements = np.array(f["/mesh/elements"]) if "/mesh/elements" in f else None
             self.reference_length = (np.array(f["/mesh/reference_length"])
                                      if "/mesh/reference_length" in f else None)
+            self.element_set = np.array(f["/mesh/element_set"]) if "/mesh/element_set" in f else None
             self.position = np.array(f["/output/position"]) if "/output/position" in f else None
             sets = f["/element_sets"] if "/element_sets" in f else None
             def per_set(name):

@@ -17,9 +17,12 @@ stdout lines (one "key: value" each, numbers in SI units): report, rock, impact,
 deceleration, rope force every step (fem.h5 /element_sets), breaking load (one line per element
 set that has one), rope force (output steps), rope strain, deflection, reaction, energy,
 reliability, contact, iterations, verdict. Ropes above their breaking load are named at the top
-of the report, after the verdict (the model has no rope failure).
+of the report, after the verdict (the model has no rope failure). The rope strain leaves out
+the element sets whose strain is no rope's (fem.json types sliding_cable: per segment, as the
+rope slides through its shackles; brake: the stroke; post) and names them in report.md.
 """
 import argparse
+import json
 import os
 import sys
 
@@ -84,6 +87,12 @@ def load_run(run, dem_json):
     elif r["dem"] is not None:
         r["notes"].append("%s is missing: rock masses and energies unknown (--dem-json FILE)" % cfg)
     r["verdict_line"] = nc_results.run_verdict_line(run)
+    r["set_types"] = None   # element type of each fem.json element set, when readable
+    try:
+        with open(os.path.join(run, "fem.json")) as fh:
+            r["set_types"] = [str(es.get("type", "cable")) for es in json.load(fh).get("element_sets", [])]
+    except (OSError, ValueError, AttributeError, TypeError):
+        pass
     return r
 
 
@@ -326,12 +335,24 @@ def analyse_net(r):
     k, e = np.unravel_index(int(np.argmax(af)), af.shape)
     out["force_series"] = af.max(axis=1)
     out["force_peak"] = (float(af[k, e]), int(e), float(f.time[k]))
-    st = f.strain
+    # rope strain: not of the sets whose strain is no rope's (a sliding rope's is per segment,
+    # as the rope slides through its shackles; a brake's is its stroke; a post's)
+    st = f.strain.copy()
+    out["strain_skipped"] = []
+    types = r.get("set_types")
+    if types and f.element_set is not None and len(f.element_set) == st.shape[1]:
+        for j, kind in enumerate(types):
+            if kind in ("sliding_cable", "brake", "post") and (f.element_set == j).any():
+                st[:, f.element_set == j] = -np.inf
+                out["strain_skipped"].append("%d (%s)" % (j, kind))
+        if not np.isfinite(st).any():
+            st = f.strain.copy()
+            out["strain_skipped"] = []
     ks, es = np.unravel_index(int(np.argmax(st)), st.shape)
     out["strain_series"] = st.max(axis=1)
     out["strain_peak"] = (float(st[ks, es]), int(es), float(f.time[ks]))
     if f.reference_length is not None:
-        el = st * f.reference_length[None, :]
+        el = np.where(np.isfinite(st), st, 0.0) * f.reference_length[None, :]
         ke, ee = np.unravel_index(int(np.argmax(el)), el.shape)
         out["elong_series"] = el.max(axis=1)
         out["elong_peak"] = (float(el[ke, ee]), int(ee), float(f.time[ke]))
@@ -649,7 +670,11 @@ def report(args):
         sp, se, stt = net["strain_peak"]
         md += ["| quantity | value |", "|---|---|",
                "| largest rope force (output steps) | %s in element %d (midpoint%s) at %s |" % (fmt(fp / 1e3, "kN"), fe, where(fe), fmt(ft, "s")),
-               "| largest strain | %s in element %d at %s |" % (fmt(sp, digits=4), se, fmt(stt, "s"))]
+               "| largest strain | %s in element %d at %s%s |" % (
+                   fmt(sp, digits=4), se, fmt(stt, "s"),
+                   "; not counted: element sets %s, whose strain is no rope's (a sliding rope's "
+                   "is per segment, a brake's its stroke)" % ", ".join(net["strain_skipped"])
+                   if net.get("strain_skipped") else "")]
         if "elong_peak" in net:
             ep, ee, et = net["elong_peak"]
             md += ["| largest element elongation (strain × L0) | %s in element %d at %s |" % (fmt(ep * 1e3, "mm"), ee, fmt(et, "s"))]

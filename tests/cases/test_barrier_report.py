@@ -3,7 +3,9 @@ make_barrier.py model (fem.json) with fem.h5, dem.h5 and coupling.h5 holding cho
 (with the FEM's every-step peak forces against the breaking loads in /element_sets),
 so that every printed figure has a known answer (exact up to the JSON's float round trip,
 checked to 1e-12 relative; the braking time's linear interpolation by hand). Then folders
-that lack a file or are not a barrier: exit 2 with a message naming the file.
+that lack a file or are not a barrier: exit 2 with a message naming the file. A block released
+at rest: the impact is taken at its first contact with the net; a block that never reaches it:
+exit 2 saying so.
 The coupled end-to-end run is tests/cases/test_barrier_small.sh.
 """
 import json
@@ -124,7 +126,8 @@ with h5py.File(os.path.join(run, "coupling.h5"), "w") as f:
     f["energy/fem_kinetic"] = np.full(n, 40.0)
     f["energy/fem_elastic"] = np.full(n, 700.0)
     f["energy/fem_dissipated"] = np.full(n, 150.0)          # 1500 J in all
-    f["energy/dem_dissipated"] = np.full(n, 20.0)           # 200 J
+    f["energy/dem_dissipated"] = np.full(n, 20.0)           # 200 J: 40 J before the contact
+    f["energy/dem_potential"] = np.linspace(0.0, 900.0, n)  # climbing 100 J per step
     f["energy/interface_created"] = np.full(n, -1.0)
     f["energy/created"] = np.linspace(0.0, -50.0, n)
     f["energy/limit"] = np.full(n, 300.0)
@@ -168,10 +171,36 @@ close(e["block_kinetic_at_contact_j"], dk[1], "kinetic at contact")
 close(e["block_kinetic_end_j"], 9000.0, "kinetic at end")
 close(e["brakes_j"], 1234.5, "brakes")
 close(e["fem_other_dissipation_j"], 1500.0 - 1234.5, "other FEM dissipation")
-close(e["contact_dissipation_j"], 200.0, "contact dissipation")
+close(e["contact_dissipation_j"], 160.0, "contact dissipation from the first contact on")
+close(e["dissipation_before_contact_j"], 40.0, "dissipation before the first contact")
+close(e["block_potential_change_j"], 800.0, "potential energy from the step before contact to the end")
 close(e["interface_mismatch_j"], -10.0, "mismatch")
 assert e["guard_fired"] is False and e["created_max_j"] == 0.0
 assert "output steps only" in out.stdout and os.path.getsize(os.path.join(tmp, "r.png")) > 0
+
+# a block at rest at the first output step that reaches the net at 12 m/s (a rock released on
+# a slope): the impact is its velocity at the first contact (0.002 s), from the output step
+# before (6 m/s at 0.001 s) and the acceleration since the one before that (6000 m/s²); the
+# braking time runs from the contact, not from the rest at t = 0
+rest = os.path.join(tmp, "rest")
+shutil.copytree(run, rest)
+t2 = np.array([0.0, 0.001, 0.05, 0.1, 0.15])
+va2 = np.array([0.0, 6.0, 6.0, -2.0, -3.0])
+with h5py.File(os.path.join(rest, "dem.h5"), "w") as f:
+    f["time"] = t2
+    f["particles/body"] = np.array([0, 0], dtype=np.int32)
+    f["particles/velocity"] = np.stack([np.outer(va2, d) + side, np.outer(va2, d) - side], axis=1)
+out = subprocess.run([py, script, rest, "--json", os.path.join(tmp, "r3.json")], capture_output=True, text=True)
+assert out.returncode == 0, (out.returncode, out.stderr)
+r3 = json.load(open(os.path.join(tmp, "r3.json")))
+close(r3["impact_speed_m_s"], 12.0, "impact speed of a block released at rest", 1e-9)
+close(float(np.dot(r3["impact_direction"], d)), 1.0, "impact direction", 1e-12)
+close(r3["block_stop_s"], 0.05 + 0.05 * 6.0 / 8.0, "stop time after the contact", 1e-9)
+# a run in which the block never reaches the net: no figures, exit 2 saying so
+with h5py.File(os.path.join(rest, "coupling.h5"), "a") as f:
+    f["steps/in_contact"][...] = 0
+out = subprocess.run([py, script, rest], capture_output=True, text=True)
+assert out.returncode == 2 and "never touched the barrier" in out.stderr, (out.returncode, out.stderr)
 
 # a folder without coupling.h5; a fem.json that is not a barrier
 bad = os.path.join(tmp, "bad")
