@@ -674,9 +674,10 @@ static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *
             if (memcmp(&outs[o][i], &checks[o][i], sizeof(double)) != 0) {
                 nc_error_set(c->err, CPL_ERR_PARTICIPANT,
                              "does not restore its start-of-step state: the same solve sent twice "
-                             "gave %.17g and %.17g at node %zu, component %zu; strong coupling "
-                             "needs a participant that repeats a step exactly (or set "
-                             "\"verify_restore\": false to skip this check)",
+                             "gave %.17g and %.17g at node %zu, component %zu (or its answer "
+                             "depends on where an iteration started: protocol/README.md §3 "
+                             "solve); strong coupling needs a participant that repeats a step "
+                             "exactly (or set \"verify_restore\": false to skip this check)",
                              outs[o][i], checks[o][i], i / 3, i % 3);
                 return fail(c, p, call, "solve");
             }

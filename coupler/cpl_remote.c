@@ -327,7 +327,10 @@ int cpl_read_endpoint_file(const char *path, double timeout_s, char *endpoint, s
                 return 0;
             }
         }
-        if (stop && *stop) return nc_error_set(err, 1, "interrupted while waiting for %s", path);
+        if (stop && *stop)
+            return nc_error_set(err, 1, "stopped while the participants were starting, before "
+                                "%s was written (the launcher stops the coupler when a "
+                                "participant fails, and names it)", path);
         if (nc_clock_now_s() - t0 > timeout_s)
             return nc_error_set(err, 1, "%s: endpoint file did not appear within %.1f s (did "
                                 "the participant start?)", path, timeout_s);

@@ -628,8 +628,9 @@ static void print_impulse_verdict(app *a)
                   "exit status 0)");
 }
 
-/* The guard's verdict when it fired: the last line of the summary. */
-static void print_energy_verdict(app *a)
+/* The guard's verdict when it fired: the last line of the summary (of a run that did not
+ * finish, the line before the error). */
+static void print_energy_verdict(app *a, int finished)
 {
     const cpl_energy *e = cpl_loop_energy(a->loop);
     FILE *o = a->progress.out;
@@ -637,7 +638,8 @@ static void print_energy_verdict(app *a)
             "(t = %.6g s), above the limit %.6g J (%ld steps above it, largest excess %.6g J); "
             "%s\n", e->first_created_j, e->first_step, e->first_time_s, e->first_limit_j,
             e->above_steps, e->max_excess_j,
-            a->cfg.accept_energy_growth
+            !finished ? "before the run stopped"
+            : a->cfg.accept_energy_growth
                 ? "accepted because coupler.json sets accept_energy_growth"
                 : "exit status 3 (coupler.json \"accept_energy_growth\": true accepts it with "
                   "exit status 0)");
@@ -683,7 +685,7 @@ static int print_status(app *a, int *energy_ok, int *impulse_ok)
                 *energy_ok && *impulse_ok ? "results are reliable: " : "", s->tol_abs, work);
     } else if (s->scheme == CPL_SCHEME_STRONG) {
         /* every verdict that applies, the unconverged steps last */
-        if (!*energy_ok) print_energy_verdict(a);
+        if (!*energy_ok) print_energy_verdict(a, 1);
         if (!*impulse_ok) print_impulse_verdict(a);
         reliable = 0;
         char why[256];
@@ -699,7 +701,7 @@ static int print_status(app *a, int *energy_ok, int *impulse_ok)
                     : "exit status 3 (coupler.json \"accept_unconverged\": true accepts them "
                       "with exit status 0)");
     }
-    if (!*energy_ok && reliable) print_energy_verdict(a);
+    if (!*energy_ok && reliable) print_energy_verdict(a, 1);
     if (!*impulse_ok && reliable) print_impulse_verdict(a);
     fflush(o);
     return reliable && *energy_ok && *impulse_ok;
@@ -901,7 +903,15 @@ fail:
             fprintf(stderr, "coupler: warning: %s\n", history_err.message);
     }
     shutdown_all(&a, failure.participant);
-    if (a.loop) print_timing(&a);
+    if (a.loop) {
+        print_timing(&a);
+        /* a run that stopped says whether the energy guard had fired before, in the summary
+         * and in coupling.h5 (energy_growth) */
+        if (cpl_loop_energy(a.loop)->first_step >= 0) {
+            status.energy_growth = 1;
+            print_energy_verdict(&a, 0);
+        }
+    }
     rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;
 
 done:

@@ -569,8 +569,9 @@ static void compare(session *s, const char *row, const double *a, const double *
     char entry[96];
     entry_name(s, first, entry, sizeof entry);
     chk_report_add(s->rep, row, CHK_FAIL, "%s: %zu of %zu values differ, first %s: %.17g vs "
-                   "%.17g (does not restore its start-of-step state; strong coupling will "
-                   "refuse it)", what, d, count, entry, a[first], b[first]);
+                   "%.17g (does not restore its start-of-step state, or its answer depends "
+                   "on where an iteration started: protocol/README.md §3 solve; strong "
+                   "coupling will refuse it)", what, d, count, entry, a[first], b[first]);
 }
 
 static void clean_steps(session *s)

@@ -11,7 +11,8 @@
 #    sphere pumps energy in, the sphere is thrown back with much more than it brought): the
 #    guard fires, its warning names the step and time, the coupler's last line says NOT
 #    reliable because of created energy, exit 3; with "accept_energy_growth": true the same
-#    run exits 0, still NOT reliable;
+#    run exits 0, still NOT reliable; stopped by SIGINT long before its end, its summary still
+#    gives the guard's verdict and coupling.h5's energy_growth is 1;
 #  - the same weak run with the interface Jacobian (the default): stable, reliable, exit 0,
 #    and no step creates more than 1 % of the input energy (iterations.log created_J).
 . tests/e2e_lib.sh
@@ -49,6 +50,19 @@ last_line unstable | grep -q "^coupler: results are NOT reliable: the run create
   || fail "unstable: last line is '$(last_line unstable)'"
 grep -q "^# energy created: step [0-9]*" "$NC_TMP/unstable/iterations.log" \
   || fail "unstable: no '# energy created' line in iterations.log"
+
+# the same run stopped (SIGINT) long before its end, after the guard fired: the summary says
+# so before the error, and coupling.h5's energy_growth is 1 (it was 0 in a stopped run)
+timeout -s INT 8 scripts/run_case.sh cases/cable_impact --out "$NC_TMP/stopped" --quiet \
+  "${weak[@]}" --set coupler.end_time=60 --set fem.analysis.end_time_s=60 > "$NC_TMP/stopped.out" 2>&1
+grep -q "^coupler: results are NOT reliable: the run created energy: .* at step [0-9]* .*before the run stopped" \
+  "$NC_TMP/stopped/coupler.log" || { tail -n 5 "$NC_TMP/stopped/coupler.log"; fail "stopped: no guard verdict"; }
+"$PY" - "$NC_TMP/stopped/coupling.h5" <<'PY' || fail "stopped: coupling.h5 does not say the guard fired"
+import sys, h5py
+a = h5py.File(sys.argv[1], "r").attrs
+print("stopped run: finished %d, energy_growth %d, first step %d" % (a["finished"], a["energy_growth"], a["energy_first_step"]))
+assert a["finished"] == 0 and a["energy_growth"] == 1 and a["energy_first_step"] >= 0
+PY
 
 scripts/run_case.sh cases/cable_impact --out "$NC_TMP/opted_in" --quiet "${weak[@]}" \
   --set coupler.accept_energy_growth=true > "$NC_TMP/opted_in.out" 2>&1
