@@ -48,6 +48,7 @@ another coupler (protocol/README.md §6), 1 after the idle timeout, 130 on Ctrl-
 import json
 import math
 import os
+import signal
 import sys
 
 import numpy as np
@@ -539,9 +540,15 @@ def serve_until_shutdown(participant, handler, name, close_handler):
     """Serves handler until SHUTDOWN and returns the process exit code: 0; 1 when any command
     was answered with an error of this run (a failed handler, a malformed or out-of-place
     command; not a retryable failure, not a refused command of another coupler) or after an
-    idle timeout (logged under name); 130 on Ctrl-C. close_handler() and participant.close()
-    run in every case, so results written so far stay readable."""
+    idle timeout (logged under name); 130 on SIGINT or SIGTERM (protocol/README.md §7: the
+    launcher sends SIGTERM to every program when one fails). close_handler() and
+    participant.close() run in every case, so results written so far stay readable."""
     code = 0
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, stop)
     try:
         participant.serve(handler)
         if participant.errors:
@@ -554,6 +561,7 @@ def serve_until_shutdown(participant, handler, name, close_handler):
     except KeyboardInterrupt:
         code = 130
     finally:
+        signal.signal(signal.SIGTERM, previous)
         close_handler()
         participant.close()
     return code

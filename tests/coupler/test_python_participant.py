@@ -5,9 +5,11 @@ hello negotiates min(2, newest offered) and echoes the session, a version-1 coup
 in version 1, replies echo step and iteration, a command of another session, a version-2
 command before hello and a second hello are refused (exit status still 0), a retryable
 failure carries "retryable": true (exit 0), and malformed commands get an error reply and
-make the participant exit 1 after SHUTDOWN (protocol/README.md §6)."""
+make the participant exit 1 after SHUTDOWN (protocol/README.md §6); SIGTERM inside a run:
+exit 130 with the results written so far readable (§7)."""
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -175,4 +177,23 @@ expect(h["type"] == "shutdown", "shutdown after malformed input: %s" % h)
 code, err = p.finish()
 expect(code == 1, "exit %d after malformed commands (expected 1)" % code)
 expect("answered with an error" in err, "no message on exit: %r" % err)
+
+# 5. SIGTERM inside a run (what the launcher sends every program when one fails): exit 130,
+# the result file closed and readable with the rows of the accepted step
+p = Plate("sigterm")
+p.send({"type": "hello", "version": 1, "versions": [1, 2], "session": SESSION})
+p.send(v2("interface", step=-1))
+p.send(v2("begin_step", step=0, dt=1e-3))
+p.send(v2("solve", step=0, iteration=1, dt=1e-3), [("force", force)])
+p.send(v2("accept_step", step=0, dt=1e-3))
+p.proc.send_signal(signal.SIGTERM)
+code, err = p.finish()
+expect(code == 130, "exit %d after SIGTERM (expected 130): %s" % (code, err))
+written = [n for n in os.listdir(p.dir) if not n.endswith((".json", ".endpoint"))]
+expect(written, "no result file in %s" % p.dir)
+for n in written:
+    with open(os.path.join(p.dir, n)) as f:
+        rows = [l for l in f if l.strip() and not l.startswith("#")]
+    print("%s after SIGTERM: %d lines" % (n, len(rows)))
+    expect(len(rows) >= 2, "%s: the accepted step's row is missing" % n)
 print("PASS")
