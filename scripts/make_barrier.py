@@ -440,10 +440,11 @@ def summary(args, fem, info):
               "they are not one manufacturer's data and no certified system's values were "
               "available here. Fit them to the barrier at hand:",
               "- ropes: six-strand steel-core ropes, metallic area 0.58 pi d^2/4 (EN 12385-4 fill "
-              "factor, fem_solver's default), E 1e11 Pa (the project's rope modulus), minimum "
+              "factor, fem_solver's default), E 1e11 Pa by default (the project's rope modulus; "
+              "this model: %g Pa), minimum "
               "breaking force of grade 1770 about 0.36 x 1770 N/mm^2 x d^2 (EN 12385-4 form); "
               "diameters 8 mm (net), 16-22 mm (edge, upslope, lateral, support ropes) are the usual "
-              "range of such barriers (project estimate);",
+              "range of such barriers (project estimate);" % args.rope_modulus,
               "- brakes: the bilinear elastic-plastic law with a stroke limit (fem_solver README, "
               "after Volkwein, Diss. ETH Zurich 15641, 2004, and Gentilini et al., Engineering "
               "Structures 50, 2013); activation forces 30-40 kN, stroke 1 m are project estimates "
@@ -467,6 +468,9 @@ def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     fem, info = build(args)
     try:
+        for path in (args.output, args.summary):   # their folders too, as run_case.sh's --out
+            if path and os.path.dirname(path):
+                os.makedirs(os.path.dirname(path), exist_ok=True)
         with open(args.output, "w") as f:
             json.dump(fem, f, indent=1)
             f.write("\n")
