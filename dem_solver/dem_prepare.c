@@ -1,6 +1,7 @@
 /* dem_prepare — completing a built model and allocating the step storage: material
  * properties and damping ratios, body mass properties (summed from the spheres, or given for a
- * cluster: dem_mass_override, checked by dem_inertia_check), the overlap check at the start,
+ * cluster: dem_mass_override, checked by dem_inertia_check), the overlap checks at the start
+ * (spheres with spheres, planes and meshes),
  * the critical time step and the contact time of the contact law (dem_contact_law.h) that
  * limit an automatic dt. */
 #include "dem_sim.h"
