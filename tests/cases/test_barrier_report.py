@@ -145,6 +145,10 @@ assert r["max_net_elongation_node"] == other and r["max_net_elongation_time_s"] 
 dd = np.array(r["impact_direction"])
 close(r["max_centre_elongation_m"], float((mdisp[:, 0] @ dd).max()), "centre elongation")
 close(r["max_centre_elongation_time_s"], 0.12, "centre elongation time", 1e-9)
+at_hit = 0.75 * np.sin(np.pi * 0.002 / 0.24)            # monitor sample at the first contact
+close(r["centre_at_contact_m"], at_hit, "net centre at the first contact", 1e-9)
+close(r["max_centre_elongation_from_contact_m"], float((mdisp[:, 0] @ dd).max()) - at_hit,
+      "centre elongation from the first contact", 1e-9)
 vd = vel.mean(axis=1) @ dd                              # 12, 6, -2, -3 (side cancels)
 t_stop = 0.05 + 0.05 * vd[1] / (vd[1] - vd[2])
 close(r["block_stop_s"], t_stop, "stop time")
