@@ -548,7 +548,10 @@ def serve_until_shutdown(participant, handler, name, close_handler):
     def stop(signum, frame):
         raise KeyboardInterrupt
 
-    previous = signal.signal(signal.SIGTERM, stop)
+    try:   # only the main thread may set a handler; elsewhere SIGTERM keeps its default
+        previous = signal.signal(signal.SIGTERM, stop)
+    except ValueError:
+        previous = None
     try:
         participant.serve(handler)
         if participant.errors:
@@ -561,7 +564,8 @@ def serve_until_shutdown(participant, handler, name, close_handler):
     except KeyboardInterrupt:
         code = 130
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
         close_handler()
         participant.close()
     return code

@@ -35,7 +35,8 @@
 #    (shortest segment 0.23 m of 0.5 m); it does in the MEL test (docs/notes/shackle_contact.md)
 #    and in tests/fem_solver/test_element_sliding.c;
 #  - report.py's rope strain leaves out the sliding ropes (per segment) and the brakes
-#    (stroke), names them, and is a steel rope's (< 5 %, overloaded as the net ropes are).
+#    (stroke), names them, equals the largest strain of fem.h5's rope sets (printed to 6
+#    digits: 1e-5 relative) and is a steel rope's (< 5 %, overloaded as the net ropes are).
 . tests/e2e_lib.sh
 case=$NC_TMP/case
 mkdir -p "$case"
@@ -144,11 +145,23 @@ PY
 # sets left out named
 "$PY" scripts/report.py "$NC_TMP/run" > "$NC_TMP/report.out" 2>&1 || fail "report.py failed"
 "$PY" - "$NC_TMP/run" "$NC_TMP/report.out" <<'PY' || exit 1
-import sys
+import json, sys
+import h5py
+import numpy as np
 run, out = sys.argv[1], open(sys.argv[2]).read()
 line = [l for l in out.splitlines() if l.startswith("rope strain:")][0]
-strain = float(line.split()[3].rstrip(","))
+words = line.replace(",", "").split()
+strain, element = float(words[3]), int(words[5])
 print(line)
+# independently: the largest strain of fem.h5 over the elements of the sets that are ropes
+types = [s.get("type", "cable") for s in json.load(open(run + "/fem.json"))["element_sets"]]
+with h5py.File(run + "/fem.h5", "r") as f:
+    st, eset = f["output/strain"][()], f["mesh/element_set"][()]
+ropes = np.isin(eset, [i for i, t in enumerate(types) if t not in ("sliding_cable", "brake", "post")])
+expected = st[:, ropes].max()
+print("largest strain of the rope sets in fem.h5: %.6g (of all elements: %.6g)" % (expected, st.max()))
+assert abs(strain - expected) <= 1e-5 * expected, "report.py %g, fem.h5's rope sets %g" % (strain, expected)
+assert ropes[element], "element %d is not a rope's" % element
 assert 0.0 < strain < 0.05, "rope strain %g: not a steel rope's" % strain
 md = open(run + "/report.md").read()
 assert "(sliding_cable)" in md and "(brake)" in md, "the sets left out are not named"
