@@ -16,7 +16,7 @@ typedef struct cpl_mesh {
     size_t n_nodes;
     size_t n_elements;
     int32_t *node_ids;     /* [n] the FEM's own node indices */
-    double *coordinates;   /* [n × 3] reference positions, m */
+    double *coordinates;   /* [n × 3] positions at the start of the run, m */
     int32_t *elements;     /* [m × 2] 0-based indices into the interface node list */
 } cpl_mesh;
 

@@ -1132,6 +1132,63 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err)
     return 0;
 }
 
+/* The static equilibrium by pseudo-transient continuation: implicit steps from rest, each
+ * M (u - u_n) / (beta h^2) + F_int(u) = F_ext (the velocity and acceleration set to 0 before
+ * it), with h doubling after every converged step and quartered after a failed one. A plain
+ * static Newton from the reference state fails on a barrier: its first iterations slacken
+ * net cables and leave nodes that nothing holds (a singular matrix at 1 % of the load); the
+ * mass term keeps every step's matrix regular, and as h grows it fades (at h = 1e4 s it is
+ * 4e-8 m N/m per kg of a node), so the last steps are Newton's on the equilibrium. */
+#define FEM_SETTLE_H_MAX_S 1e4
+#define FEM_SETTLE_MAX_STEPS 400
+
+int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *steps,
+                                     nc_error *err)
+{
+    const fem_settings *set = &s->m->settings;
+    double h = set->dt_s, last_move = INFINITY;
+    int last_node = -1;
+    *iterations = 0;
+    *steps = 0;
+    for (int k = 0; k < FEM_SETTLE_MAX_STEPS; k++) {
+        memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
+        memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+        const int failed = fem_analysis_step(s, h, err);
+        *iterations += s->stats.iterations;
+        (*steps)++;
+        if (failed) {
+            if (err->code != FEM_ERR_NEWTON) return -1;
+            h *= 0.25;
+            if (h < 1e-6 * set->dt_s)
+                return nc_error_prefix(err, "analysis.initial_state \"static\": no equilibrium "
+                                            "found under the loads at t = 0");
+            continue;
+        }
+        last_move = 0.0;
+        for (int q = 0; q < s->neq; q++) {
+            const int dof = s->dof_of_eq[q];
+            const double d = fabs(s->cur.u[dof] - s->start.u[dof]);
+            if (d > last_move) {
+                last_move = d;
+                last_node = dof / 3;
+            }
+        }
+        if (h >= FEM_SETTLE_H_MAX_S && last_move <= set->displacement_tol_m) {
+            /* the dynamic run starts here, at rest: step 0, t = 0 */
+            memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
+            memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+            s->cur.step = 0;
+            s->cur.time_s = 0.0;
+            return 0;
+        }
+        h = fmin(2.0 * h, FEM_SETTLE_H_MAX_S);
+    }
+    return nc_error_set(err, FEM_ERR_NEWTON, "%s: analysis.initial_state \"static\": no equilibrium "
+                        "under the loads at t = 0 after %d pseudo-time steps: node %d still moved "
+                        "%.3g m in the last one (displacement_tolerance_m %g)", s->m->source,
+                        FEM_SETTLE_MAX_STEPS, last_node, last_move, set->displacement_tol_m);
+}
+
 static void method_weights(const fem_settings *set, double *beta, double *gamma, double *am,
                            double *af)
 {

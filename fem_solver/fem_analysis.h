@@ -119,6 +119,15 @@ void fem_analysis_free(fem_analysis *s);
 /* Static equilibrium under load factor lambda (loads and prescribed displacements scaled),
  * starting Newton from the current displacement. Velocity/acceleration are left at 0. */
 int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
+/* A dynamic run's start at rest in static equilibrium under its loads at t = 0 (self-weight,
+ * point loads, prestress, prescribed displacements), from the current state
+ * (analysis.initial_state "static"): implicit steps from rest with a growing pseudo step,
+ * until a step of 1e4 s moves no node by more than displacement_tol_m; then step 0, t = 0,
+ * v = a = 0. *iterations, *steps: the Newton iterations and pseudo steps it took, failed
+ * ones included. Call before fem_analysis_initial_acceleration, which then finds a_0 = 0
+ * to the Newton tolerance. */
+int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *steps,
+                                     nc_error *err);
 /* Sets a_0 from M a_0 = F_ext(t) - F_int(u) - C v (call once before dynamic steps). */
 int fem_analysis_initial_acceleration(fem_analysis *s, nc_error *err);
 /* One implicit dynamic step of dt_s from the current state. */

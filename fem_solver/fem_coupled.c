@@ -14,6 +14,9 @@
  * and reopens fem.h5 cut back to the rows written at that checkpoint. So that a resumed run
  * finds its results intact, fem.h5 and fem.xdmf are created only at the first BEGIN_STEP
  * (with the initial state as their first rows), never before.
+ * A run that starts in static equilibrium (analysis.initial_state "static") gives the coupler
+ * the interface where that equilibrium has it as its coordinates, and every displacement from
+ * there: for the other programs the net starts at rest where it hangs.
  */
 #include "fem_run.h"
 #include "fem_checkpoint.h"
@@ -35,6 +38,9 @@ typedef struct coupled {
     fem_run_summary *sum;
     int32_t *node_ids;
     double *iface_X, *iface_u, *iface_v;
+    double *iface_u0;         /* [3n] where the start state has the interface nodes (the static
+                                 equilibrium of analysis.initial_state, else 0): the protocol's
+                                 coordinates are X + u0 and its displacements u - u0 */
     double *lin_u, *lin_v;    /* [ndof] the linearisation point on the model's dofs */
     int *lin_nodes;           /* [2 blocks] model node numbers of the received blocks */
     size_t lin_cap;
@@ -139,7 +145,7 @@ static int set_linearisation(coupled *c, const proto_message *cmd, int project, 
     if (project && fem_psd_project(&c->psd, b, c->lin_nodes, K, C, err)) return -1;
     for (size_t i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
-            c->lin_u[3 * m->iface_nodes[i] + d] = u_k[3 * i + d];
+            c->lin_u[3 * m->iface_nodes[i] + d] = u_k[3 * i + d] + c->iface_u0[3 * i + d];
             c->lin_v[3 * m->iface_nodes[i] + d] = v_k[3 * i + d];
         }
     if (!project)
@@ -222,7 +228,7 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
     }
     for (int i = 0; i < n; i++)
         for (int d = 0; d < 3; d++) {
-            c->iface_u[3 * i + d] = s->cur.u[3 * m->iface_nodes[i] + d];
+            c->iface_u[3 * i + d] = s->cur.u[3 * m->iface_nodes[i] + d] - c->iface_u0[3 * i + d];
             c->iface_v[3 * i + d] = s->cur.v[3 * m->iface_nodes[i] + d];
         }
     /* the energy values of protocol/README.md §3 (fem_analysis_step_energy): elastic =
@@ -292,6 +298,21 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
                                &c->run_entries, err);
 }
 
+/* A fresh analysis in its start state (fem_run_initial_state), and the interface's offset
+ * and coordinates from it. */
+static int start_state(coupled *c, nc_error *err)
+{
+    const fem_model *m = c->m;
+    if (fem_analysis_init(&c->s, m, err) || fem_run_initial_state(&c->s, c->sum, err)) return -1;
+    for (int i = 0; i < m->n_iface_nodes; i++)
+        for (int d = 0; d < 3; d++) {
+            const int dof = 3 * m->iface_nodes[i] + d;
+            c->iface_u0[3 * i + d] = c->s.cur.u[dof];
+            c->iface_X[3 * i + d] = m->X[dof] + c->s.cur.u[dof];
+        }
+    return 0;
+}
+
 /* The state of a freshly started solver (what a failed RESUME leaves). */
 static int fresh_state(coupled *c, nc_error *err)
 {
@@ -304,9 +325,7 @@ static int fresh_state(coupled *c, nc_error *err)
     c->sum->failed_solves = 0;
     c->sum->semidefinite_retries = 0;
     c->sum->warm_start_fallbacks = 0;
-    if (fem_analysis_init(&c->s, c->m, err)) return -1;
-    if (c->m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) return -1;
-    return 0;
+    return start_state(c, err);
 }
 
 static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -362,20 +381,17 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->iface_X = malloc(3 * (n + 1) * sizeof(double));
     c->iface_u = calloc(3 * (n + 1), sizeof(double));
     c->iface_v = calloc(3 * (n + 1), sizeof(double));
+    c->iface_u0 = calloc(3 * (n + 1), sizeof(double));
     c->lin_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
     c->lin_v = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
     c->guess_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
-    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->lin_u || !c->lin_v ||
-        !c->guess_u) {
+    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->iface_u0 || !c->lin_u ||
+        !c->lin_v || !c->guess_u) {
         nc_error_set(err, 1, "out of memory");
         goto done;
     }
-    for (size_t i = 0; i < n; i++) {
-        c->node_ids[i] = m->iface_nodes[i];
-        for (int d = 0; d < 3; d++) c->iface_X[3 * i + d] = m->X[3 * m->iface_nodes[i] + d];
-    }
-    if (fem_analysis_init(&c->s, m, err)) goto done;
-    if (m->settings.type == FEM_DYNAMIC && fem_analysis_initial_acceleration(&c->s, err)) goto done;
+    for (size_t i = 0; i < n; i++) c->node_ids[i] = m->iface_nodes[i];
+    if (start_state(c, err)) goto done;
     c->next_output_s = m->settings.output_interval * m->settings.dt_s;
     proto_options po;
     proto_options_default(&po);
@@ -428,7 +444,7 @@ done:
     fem_output_close(&c->out);
     fem_analysis_free(&c->s);
     nc_ckpt_table_free(&c->run_entries);
-    free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v);
+    free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v); free(c->iface_u0);
     free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->guess_u);
     fem_psd_free(&c->psd);
     free(c);

@@ -456,13 +456,14 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
                                        "max_iterations", "residual_tolerance_n",
                                        "relative_tolerance", "displacement_tolerance_m",
                                        "factorization", "newton", "contraction", "coupling_load",
-                                       "fail_on_overload", NULL};
+                                       "fail_on_overload", "initial_state", NULL};
     static const char *const types[] = {"static", "dynamic", NULL};
     static const char *const integrators[] = {"newmark", "generalized_alpha", "bossak", NULL};
     static const char *const factorizations[] = {"auto", "ldlt", "llt", NULL};
     static const char *const newtons[] = {"modified", "full", NULL};
     static const char *const coupling_loads[] = {"end_of_step", "step_constant", NULL};
-    int type, integ, fact, newton, coupling_load;
+    static const char *const initial_states[] = {"reference", "static", NULL};
+    int type, integ, fact, newton, coupling_load, initial_state;
     long steps, iters;
     if (nc_json_check_keys(o, w, keys, err) ||
         nc_json_choice_opt(o, w, "type", types, 1, &type, err) ||
@@ -471,6 +472,7 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
         nc_json_choice_opt(o, w, "factorization", factorizations, 0, &fact, err) ||
         nc_json_choice_opt(o, w, "newton", newtons, 0, &newton, err) ||
         nc_json_choice_opt(o, w, "coupling_load", coupling_loads, 0, &coupling_load, err) ||
+        nc_json_choice_opt(o, w, "initial_state", initial_states, 0, &initial_state, err) ||
         nc_json_bool_opt(o, w, "fail_on_overload", 0, &s->fail_on_overload, err) ||
         nc_json_number_range_opt(o, w, "contraction", 0.2, 0.0, 0.9, &s->contraction, err) ||
         nc_json_number_range_opt(o, w, "beta", 0.25, 1e-6, 0.5, &s->beta, err) ||
@@ -491,9 +493,18 @@ static int parse_analysis(fem_model *m, const cJSON *root, const char *file, nc_
     s->factorization = fact;
     s->modified_newton = newton == 0;
     s->coupling_load_constant = coupling_load == 1;
+    s->initial_static = initial_state == 1;
     s->max_iterations = (int)iters;
     if (s->residual_tol_n == 0 && s->relative_tol == 0)
         return nc_error_set(err, 1, "%s: residual_tolerance_n and relative_tolerance cannot both be 0", w);
+    if (s->initial_static && s->type == FEM_STATIC)
+        return nc_error_set(err, 1, "%s: initial_state \"static\" is for a dynamic analysis (a "
+                            "static one starts from the reference state and is its own equilibrium)", w);
+    if (s->initial_static && s->load_ramp_s > 0)
+        return nc_error_set(err, 1, "%s: initial_state \"static\" with load_ramp_s %g: the loads "
+                            "are 0 at t = 0, so the equilibrium would hold the prestress only and "
+                            "the ramp would then set the net swinging; use one or the other", w,
+                            s->load_ramp_s);
     if (s->type == FEM_DYNAMIC) {
         /* end_time_s / dt_s steps: refuse a step lost in the float spacing of the time and a
          * run that would never end (nc_time.h) */

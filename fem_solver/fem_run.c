@@ -19,6 +19,29 @@ static void newton_hint(nc_error *err)
                  "under its own weight can need either", first);
 }
 
+int fem_run_initial_state(fem_analysis *s, fem_run_summary *sum, nc_error *err)
+{
+    const fem_model *m = s->m;
+    sum->initial_iterations = -1;
+    sum->initial_max_displacement_node = -1;
+    if (m->settings.type != FEM_DYNAMIC) return 0;
+    if (m->settings.initial_static) {
+        if (fem_analysis_initial_equilibrium(s, &sum->initial_iterations, &sum->initial_steps,
+                                             err))
+            return -1;
+        sum->initial_max_displacement_m = 0.0;
+        for (int i = 0; i < m->n_nodes; i++) {
+            const double *u = s->cur.u + 3 * i;
+            double r = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+            if (r > sum->initial_max_displacement_m || sum->initial_max_displacement_node < 0) {
+                sum->initial_max_displacement_m = r;
+                sum->initial_max_displacement_node = i;
+            }
+        }
+    }
+    return fem_analysis_initial_acceleration(s, err);
+}
+
 int fem_run_standalone(const fem_model *m, const char *output_dir,
                        const volatile sig_atomic_t *stop, fem_run_summary *summary,
                        nc_error *err)
@@ -59,7 +82,7 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         }
         sum.final_time_s = 1.0;
     } else {
-        if (fem_analysis_initial_acceleration(&s, err)) goto done;
+        if (fem_run_initial_state(&s, &sum, err)) goto done;
         if (fem_output_monitor(&out, &s, 0.0, err) || fem_output_step(&out, &s, 0.0, err)) goto done;
         written_step = 0;
         long n_steps = (long)ceil(set->end_time_s / set->dt_s - 1e-9);

@@ -32,11 +32,21 @@ typedef struct fem_run_summary {
     int failed_solves;          /* coupled: SOLVE commands answered with an error */
     int semidefinite_retries;   /* coupled: steps solved again with the semi-definite part of
                                    the interface linearisation after a Newton failure */
+    int initial_iterations;     /* dynamic, analysis.initial_state "static": Newton
+                                   iterations of the initial equilibrium (-1: none) */
+    int initial_steps;          /* its pseudo-time steps */
+    double initial_max_displacement_m; /* its largest nodal |u| from the reference */
+    int initial_max_displacement_node;
     int warm_start_fallbacks;   /* coupled: repeated solves whose Newton start from the
                                    previous solution failed, solved again from the start of
                                    the step (their failed iterations are in newton_iterations) */
     fem_stats stats;
 } fem_run_summary;
+
+/* The state a dynamic run starts from, in a freshly initialised analysis: the reference state
+ * or, with analysis.initial_state "static", the static equilibrium under the loads at t = 0
+ * (its iterations and largest displacement into sum); then a_0. A static analysis: nothing. */
+int fem_run_initial_state(fem_analysis *s, fem_run_summary *sum, nc_error *err);
 
 int fem_run_standalone(const fem_model *m, const char *output_dir,
                        const volatile sig_atomic_t *stop, fem_run_summary *summary,

@@ -145,6 +145,12 @@ int main(int argc, char **argv)
         snprintf(where, sizeof where, " at %s %g, node %d",
                  model.settings.type == FEM_STATIC ? "load factor" : "t =",
                  sum.max_displacement_time_s, sum.max_displacement_node);
+    if (model.settings.initial_static && sum.initial_max_displacement_node >= 0)
+        fprintf(stderr, "fem_solver: %s: started at rest in static equilibrium under the loads at "
+                        "t = 0 (analysis.initial_state): %d pseudo-time steps, %d Newton iterations, "
+                        "largest displacement from the reference %.6g m at node %d\n",
+                input, sum.initial_steps, sum.initial_iterations,
+                sum.initial_max_displacement_m, sum.initial_max_displacement_node);
     char ldlt[96] = "";
     if (sum.stats.ldlt_switch_step >= 0)
         snprintf(ldlt, sizeof ldlt, " (LDL^T from step %ld on: the matrix was indefinite)",

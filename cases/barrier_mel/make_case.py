@@ -26,7 +26,7 @@ PY = "/usr/bin/python3"
 BARRIER = ["--modules", "3", "--spacing", "10", "--height", "3", "--mesh-size", "0.3",
            "--rayleigh-tau", "2", "--rayleigh-kappa", "1e-4", "--alpha-b", "-0.1"]
 ENERGY_KJ, SPEED = 100.0, 25.0           # MEL 100 kJ at the EAD's minimum 25 m/s: 320 kg
-CLEARANCE_M = 0.5                        # block centre before the net centre (contact at ~8 ms)
+CLEARANCE_M = 0.5                        # block centre before the net centre (contact at ~14 ms)
 
 
 def main():

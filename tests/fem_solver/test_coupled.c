@@ -3,7 +3,9 @@
  * start of the step and starts Newton from the previous solution: the same reply within
  * Newton's tolerance, to the bit when the force is unchanged) / ACCEPT_STEP, an error reply for a bad force
  * shape while the solver keeps serving, SHUTDOWN, the HDF5 monitor rows, and the exit on
- * idle timeout. The replies are compared with the same model solved in-process. */
+ * idle timeout. The replies are compared with the same model solved in-process. A run that
+ * starts in static equilibrium (analysis.initial_state "static") gives the interface where the
+ * equilibrium holds it and displacements from there. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -58,6 +60,24 @@ static void paths(const char *tag, char *dir, char *epfile, size_t size)
     unlink(epfile);
 }
 
+/* Starts fem_solver on json with its outputs under dir (named by tag), connects as its "fem"
+ * peer and says HELLO; the solver's pid in *pid. */
+static proto_peer *start_fem(const char *json, const char *tag, char *dir, size_t size, pid_t *pid,
+                             proto_message *req, proto_message *rep, nc_error *err)
+{
+    char epfile[600], ep[256];
+    paths(tag, dir, epfile, size < sizeof epfile ? size : sizeof epfile);
+    *pid = fem_test_spawn(json, dir, epfile, "30");
+    assert_true(*pid > 0);
+    if (fem_test_read_endpoint(epfile, ep, sizeof ep)) {
+        kill(*pid, SIGKILL);
+        fail_msg("fem_solver did not write its endpoint file");
+    }
+    proto_peer *peer = connect_fem(ep, req, rep, err);
+    if (proto_peer_hello(peer, rep, err)) fail_msg("%s", err->message);
+    return peer;
+}
+
 static long h5_rows(const char *file, const char *dataset)
 {
     hid_t f = H5Fopen(file, H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -81,18 +101,11 @@ static void test_protocol_session(void **state)
     (void)state;
     if (!getenv("NC_BIN")) skip();
     const char *json = fem_test_write("coupled.json", cable_json);
-    char dir[600], epfile[600], ep[256];
-    paths("session", dir, epfile, sizeof dir);
-    pid_t pid = fem_test_spawn(json, dir, epfile, "30");
-    assert_true(pid > 0);
-    if (fem_test_read_endpoint(epfile, ep, sizeof ep)) {
-        kill(pid, SIGKILL);
-        fail_msg("fem_solver did not write its endpoint file");
-    }
+    char dir[600];
+    pid_t pid;
     nc_error err;
     proto_message req, rep;
-    proto_peer *peer = connect_fem(ep, &req, &rep, &err);
-    if (proto_peer_hello(peer, &rep, &err)) fail_msg("%s", err.message);
+    proto_peer *peer = start_fem(json, "session", dir, sizeof dir, &pid, &req, &rep, &err);
     assert_string_equal(rep.role, "fem");
 
     proto_message_init(&req, PROTO_MSG_INTERFACE);
@@ -205,6 +218,87 @@ static void test_protocol_session(void **state)
     fem_model_free(&model);
 }
 
+/* analysis.initial_state "static" on the cable with self-weight: INTERFACE's coordinates are
+ * the reference plus the equilibrium's displacement (computed in-process, the same code); a
+ * SOLVE without force replies displacement and velocity 0 within 1e-12 (the cable hangs
+ * still where the coordinates say); one with a force replies the in-process step's
+ * displacement less the equilibrium's, within Newton's 1e-9 m. */
+static void test_initial_state_interface(void **state)
+{
+    (void)state;
+    if (!getenv("NC_BIN")) skip();
+    char text[1200];
+    snprintf(text, sizeof text, "%s", cable_json);
+    char *analysis = strstr(text, "\"analysis\"");
+    assert_non_null(analysis);
+    snprintf(analysis, sizeof text - (size_t)(analysis - text),
+             "\"self_weight\": true,\n \"analysis\": {\"type\": \"dynamic\", \"dt_s\": 0.001, "
+             "\"initial_state\": \"static\"}}\n");
+    const char *json = fem_test_write("coupled_settled.json", text);
+    char dir[600];
+    pid_t pid;
+    nc_error err;
+    proto_message req, rep;
+    proto_peer *peer = start_fem(json, "settled", dir, sizeof dir, &pid, &req, &rep, &err);
+
+    fem_model model;
+    assert_int_equal(fem_input_load(json, &model, &err), 0);
+    assert_int_equal(model.settings.initial_static, 1);
+    fem_analysis ref;
+    int iterations, steps;
+    assert_int_equal(fem_analysis_init(&ref, &model, &err), 0);
+    if (fem_analysis_initial_equilibrium(&ref, &iterations, &steps, &err)) fail_msg("%s", err.message);
+    assert_int_equal(fem_analysis_initial_acceleration(&ref, &err), 0);
+    double u0[12];
+    memcpy(u0, ref.cur.u, sizeof u0);
+    assert_below(u0[3 * 1 + 2], -1e-4);   /* the cable sags under its weight */
+
+    proto_message_init(&req, PROTO_MSG_INTERFACE);
+    if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    const double *X;
+    assert_int_equal(proto_message_get_f64(&rep, "coordinates", 4, 3, &X, NULL, &err), 0);
+    for (int i = 0; i < 12; i++) assert_near(X[i], model.X[i] + u0[i], 0.0);
+
+    const double dt = 1e-3;
+    for (int k = 0; k < 2; k++) {
+        proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
+        req.step = k;
+        req.time_s = k * dt;
+        req.dt_s = dt;
+        if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+        double force[12] = {0};
+        if (k == 1) force[3 * 1 + 2] = -200.0;
+        proto_message_init(&req, PROTO_MSG_SOLVE);
+        req.step = k;
+        req.iteration = 1;
+        req.time_s = k * dt;
+        req.dt_s = dt;
+        assert_int_equal(proto_message_add_f64(&req, "force", force, 4, 3, &err), 0);
+        if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("step %d: %s", k, err.message);
+        const double *u, *v;
+        assert_int_equal(proto_message_get_f64(&rep, "displacement", 4, 3, &u, NULL, &err), 0);
+        assert_int_equal(proto_message_get_f64(&rep, "velocity", 4, 3, &v, NULL, &err), 0);
+        for (int i = 0; i < 12; i++) ref.f_coupling[i] = force[i];
+        assert_int_equal(fem_analysis_step(&ref, dt, &err), 0);
+        for (int i = 0; i < 12; i++) {
+            assert_near(u[i], k == 0 ? 0.0 : ref.cur.u[i] - u0[i], k == 0 ? 1e-12 : 1e-9);
+            assert_near(v[i], k == 0 ? 0.0 : ref.cur.v[i], k == 0 ? 1e-12 : 1e-6);
+        }
+        if (k == 1) assert_below(u[3 * 1 + 2], -1e-6);   /* the force moved it from the sag */
+        proto_message_init(&req, PROTO_MSG_ACCEPT_STEP);
+        req.step = k;
+        if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    }
+    proto_message_init(&req, PROTO_MSG_SHUTDOWN);
+    if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("%s", err.message);
+    assert_int_equal(fem_test_wait_exit(pid, 30), 0);
+    proto_message_free(&req);
+    proto_message_free(&rep);
+    proto_peer_close(peer);
+    fem_analysis_free(&ref);
+    fem_model_free(&model);
+}
+
 /* Newton failure (max_iterations = 1, a large force): a retryable error reply naming Newton
  * and the step; the solver rolls back and keeps serving: the same step with no force then
  * succeeds from the untouched start state (cable at rest: zero displacement), and the
@@ -219,14 +313,11 @@ static void test_newton_failure(void **state)
     snprintf(text, sizeof text, "%.*s\"max_iterations\": 1, %s", (int)(at - cable_json),
              cable_json, at);
     const char *json = fem_test_write("newton.json", text);
-    char dir[600], epfile[600], ep[256];
-    paths("newton", dir, epfile, sizeof dir);
-    pid_t pid = fem_test_spawn(json, dir, epfile, "30");
-    assert_int_equal(fem_test_read_endpoint(epfile, ep, sizeof ep), 0);
+    char dir[600];
+    pid_t pid;
     nc_error err;
     proto_message req, rep;
-    proto_peer *peer = connect_fem(ep, &req, &rep, &err);
-    assert_int_equal(proto_peer_hello(peer, &rep, &err), 0);
+    proto_peer *peer = start_fem(json, "newton", dir, sizeof dir, &pid, &req, &rep, &err);
     proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
     req.step = 0;
     req.dt_s = 1e-3;
@@ -291,6 +382,7 @@ int main(void)
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_protocol_session),
+        cmocka_unit_test(test_initial_state_interface),
         cmocka_unit_test(test_newton_failure),
         cmocka_unit_test(test_idle_timeout),
     };

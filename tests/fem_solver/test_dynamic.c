@@ -2,8 +2,9 @@
  * natural frequency, discrete energy conservation of Newmark (1/4, 1/2), Rayleigh decay
  * rate, numerical damping of generalized-alpha/Bossak, bit-identical repetition of a
  * step after restoring the start-of-step state, Newton started from a given guess (the
- * warm start of a repeated coupled solve), and the momentum a coupling force transfers
- * per step (analysis.coupling_load). */
+ * warm start of a repeated coupled solve), the momentum a coupling force transfers
+ * per step (analysis.coupling_load), and the start at rest in static equilibrium
+ * (analysis.initial_state "static") against a load-stepped static analysis. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -381,6 +382,68 @@ static void test_coupling_load_momentum(void **state)
     }
 }
 
+static double max_abs_diff(const double *x, const double *y, int n)
+{
+    double d = 0.0;
+    for (int i = 0; i < n; i++) d = fmax(d, fabs(x[i] - y[i]));
+    return d;
+}
+
+/* analysis.initial_state "static": the pseudo-transient equilibrium of the sagging net under
+ * self-weight equals the one a load-stepped static Newton finds (an independent path) within
+ * 1e-8 m (both stop at displacement_tolerance_m 1e-9 m); a dynamic run from it stays at rest
+ * (every node within 1e-9 m over 0.2 s, a_0 within 1e-6 of g), while the same run from the
+ * reference state falls into the sag and swings past it. */
+static void test_initial_equilibrium(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    damped_net(&m, FEM_BOSSAK, 50);
+    m.settings.alpha_b = -0.3;
+    fem_analysis settled, stepped, fallen;
+    assert_int_equal(fem_analysis_init(&settled, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&stepped, &m, &err), 0);
+    assert_int_equal(fem_analysis_init(&fallen, &m, &err), 0);
+    int iterations = 0, steps = 0;
+    if (fem_analysis_initial_equilibrium(&settled, &iterations, &steps, &err)) fail_msg("%s", err.message);
+    assert_in_range(steps, 1, 100);
+    assert_int_equal(settled.cur.step, 0);
+    assert_near(settled.cur.time_s, 0.0, 0.0);
+    for (int k = 1; k <= 10; k++)
+        if (fem_analysis_static(&stepped, k / 10.0, &err)) fail_msg("%s", err.message);
+    const int n = settled.ndof;
+    const double sag = -settled.cur.u[3 * 40 + 2];   /* the centre node */
+    assert_below(0.01, sag);
+    assert_below(max_abs_diff(settled.cur.u, stepped.cur.u, n), 1e-8);
+
+    double *u0 = malloc((size_t)n * sizeof *u0);
+    memcpy(u0, settled.cur.u, (size_t)n * sizeof *u0);
+    assert_int_equal(fem_analysis_initial_acceleration(&settled, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&fallen, &err), 0);
+    double a_max = 0.0;
+    for (int i = 0; i < n; i++) a_max = fmax(a_max, fabs(settled.cur.a[i]));
+    assert_below(a_max, 1e-6 * 9.81);
+    double still = 0.0, fell = 0.0;
+    for (int k = 0; k < 200; k++) {
+        assert_int_equal(fem_analysis_step(&settled, 1e-3, &err), 0);
+        assert_int_equal(fem_analysis_step(&fallen, 1e-3, &err), 0);
+        still = fmax(still, max_abs_diff(settled.cur.u, u0, n));
+        fell = fmax(fell, -fallen.cur.u[3 * 40 + 2]);
+    }
+    printf("initial equilibrium: %d pseudo-time steps, %d Newton iterations, centre sag %.6g m, "
+           "%.2g m from static Newton's; a_0 %.2g m/s^2; at rest within %.2g m over 0.2 s; "
+           "released from the reference down to %.4g m\n", steps, iterations, sag,
+           max_abs_diff(u0, stepped.cur.u, n), a_max, still, fell);
+    assert_below(still, 1e-9);
+    assert_below(1.2 * sag, fell);   /* released from the reference it overshoots the sag */
+    free(u0);
+    fem_analysis_free(&settled);
+    fem_analysis_free(&stepped);
+    fem_analysis_free(&fallen);
+    fem_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -391,6 +454,7 @@ int main(void)
         cmocka_unit_test(test_restore_bitwise),
         cmocka_unit_test(test_warm_start),
         cmocka_unit_test(test_coupling_load_momentum),
+        cmocka_unit_test(test_initial_equilibrium),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

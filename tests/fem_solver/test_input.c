@@ -139,7 +139,7 @@ static const char *SETS = "\"element_sets\": [{\"name\": \"a\", \"youngs_modulus
 static void test_bad_inputs(void **state)
 {
     (void)state;
-    char t[12][700];
+    char t[15][700];
     snprintf(t[0], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], %s", SETS); /* unterminated */
     snprintf(t[1], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"element_sets\": [{\"area_m2\": 1e-4}]}");
     snprintf(t[2], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"element_sets\": [{\"youngs_modulus_pa\": -3, \"area_m2\": 1e-4}]}");
@@ -152,6 +152,9 @@ static void test_bad_inputs(void **state)
     snprintf(t[9], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"analysis\": {\"type\": \"statics\"}, %s}", SETS);
     snprintf(t[10], 700, "{\"mesh\": {\"file\": \"does-not-exist.msh\"}, %s}", SETS);
     snprintf(t[11], 700, "{\"nodes\": [[0,0,0],[1,0,0],[2,0,0]], \"elements\": [[0,1]], %s}", SETS);
+    snprintf(t[12], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"analysis\": {\"type\": \"static\", \"initial_state\": \"static\"}, %s}", SETS);
+    snprintf(t[13], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"analysis\": {\"initial_state\": \"static\", \"load_ramp_s\": 0.1}, %s}", SETS);
+    snprintf(t[14], 700, "{\"nodes\": [[0,0,0],[1,0,0]], \"elements\": [[0,1]], \"analysis\": {\"initial_state\": \"settled\"}, %s}", SETS);
     bad_case cases[] = {
         {"malformed.json", t[0], {"malformed.json", "malformed JSON", NULL}},
         {"missing.json", t[1], {"element_sets[0].youngs_modulus_pa", "missing", NULL}},
@@ -165,6 +168,9 @@ static void test_bad_inputs(void **state)
         {"choice.json", t[9], {"analysis.type", "statics", NULL}},
         {"nomesh.json", t[10], {"mesh.file", "does-not-exist.msh", "cannot open"}},
         {"unconnected.json", t[11], {"node 2", "not connected", NULL}},
+        {"initialstatic.json", t[12], {"analysis", "initial_state", "dynamic analysis"}},
+        {"initialramp.json", t[13], {"initial_state", "load_ramp_s 0.1", "one or the other"}},
+        {"initialchoice.json", t[14], {"analysis.initial_state", "settled", NULL}},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         const char *path = fem_test_write(cases[i].name, cases[i].text);
