@@ -205,7 +205,34 @@ def test_overload():
           "no warning for fail_on_overload without breaking loads: " + r.stdout + r.stderr)
 
 
-for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm, test_overload):
+def test_undamped_coupling_warning():
+    """A coupled run (--endpoint) whose integrator has no numerical damping and takes the
+    coupling force at the step's end is warned about at start, naming the file and the fix;
+    a damped integrator (Bossak -0.3), the step-constant load or a standalone run are not."""
+    base = {"nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], "elements": [[0, 1], [1, 2]],
+            "element_sets": [{"youngs_modulus_pa": 1e9, "area_m2": 1e-4, "density_kg_m3": 7850,
+                              "prestress_pa": 1e6}],
+            "supports": [{"nodes": [0, 2]}]}
+    cases = [({"type": "dynamic"}, True, True),
+             ({"type": "dynamic", "integrator": "generalized_alpha", "rho_inf": 1.0}, True, True),
+             ({"type": "dynamic", "integrator": "bossak", "alpha_b": -0.3}, True, False),
+             ({"type": "dynamic", "coupling_load": "step_constant"}, True, False),
+             ({"type": "dynamic", "end_time_s": 0.01}, False, False)]
+    for k, (analysis, coupled, warned) in enumerate(cases):
+        path = os.path.join(TMP, "undamped_%d.json" % k)
+        json.dump(dict(base, analysis=analysis), open(path, "w"))
+        args = [path, "--output", os.path.join(TMP, "undamped_%d" % k)]
+        if coupled:   # no coupler comes: the idle timeout ends it
+            args += ["--endpoint", "tcp://127.0.0.1:*", "--idle-timeout", "0.2"]
+        r = run(args)
+        said = "warning: %s: analysis: a coupled run with gamma 0.5" % path in r.stderr
+        check(said == warned and "integrator \"bossak\" with alpha_b -0.3" in r.stderr if warned
+              else not said, "%s coupled=%s: warned %s, expected %s: %s"
+              % (analysis, coupled, said, warned, r.stderr[-300:]))
+
+
+for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm, test_overload,
+             test_undamped_coupling_warning):
     print("--", test.__name__)
     test()
 print("%d failure(s)" % len(failures))
