@@ -160,8 +160,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
 {
     static const char *const keys[] = {
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
-        "relative_tolerance", "work_tolerance", "max_iterations", "on_max_iterations", "relaxation",
-        "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
+        "relative_tolerance", "work_tolerance", "newton_estimate", "max_iterations",
+        "on_max_iterations", "relaxation", "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "impulse_tolerance",
         "accept_impulse_loss", "interface_jacobian",
         "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
@@ -191,6 +191,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                                  &s->tol_rel, err) ||
         nc_json_number_range_opt(root, where, "work_tolerance", s->work_tol, 0.0, 1.0,
                                  &s->work_tol, err) ||
+        nc_json_number_range_opt(root, where, "newton_estimate", s->newton_estimate, 0.0, 0.5,
+                                 &s->newton_estimate, err) ||
         nc_json_int_opt(root, where, "max_iterations", max_it, 1, 100000, &max_it, err) ||
         nc_json_choice_opt(root, where, "on_max_iterations", policies, policy, &policy, err) ||
         nc_json_choice_opt(root, where, "relaxed_quantity", quantities, quantity, &quantity,

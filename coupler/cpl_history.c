@@ -157,6 +157,7 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
                           s->relaxed == CPL_RELAXED_FORCE ? "force" : "displacement_velocity", err) ||
         nc_h5_attr_double(&h->h5, "/", "tolerance", s->tol_abs, err) ||
         nc_h5_attr_double(&h->h5, "/", "work_tolerance", s->work_tol, err) ||
+        nc_h5_attr_double(&h->h5, "/", "newton_estimate", s->newton_estimate, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
         nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||
@@ -292,6 +293,7 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
         nc_h5_attr_double(&h->h5, "/", "slow_rejections", (double)t->slow_rejections, NULL);
         nc_h5_attr_double(&h->h5, "/", "contact_backtracks", (double)t->backtracks, NULL);
         nc_h5_attr_double(&h->h5, "/", "work_test_steps", (double)t->work_test_steps, NULL);
+        nc_h5_attr_double(&h->h5, "/", "estimate_steps", (double)t->estimate_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "jacobian_dropped_steps",
                           (double)t->jacobian_dropped_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "reduced_steps", (double)t->reduced_steps, NULL);

@@ -12,8 +12,8 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
-#define CPL_FINGERPRINT_N 7   /* dt, scheme, relaxed quantity, tolerance, interface size,
-                                 work_tolerance, relaxation method */
+#define CPL_FINGERPRINT_N 8   /* dt, scheme, relaxed quantity, tolerance, interface size,
+                                 work_tolerance, relaxation method, newton_estimate */
 
 struct cpl_loop {
     cpl_loop_settings s;
@@ -69,6 +69,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->tol_abs = 1e-6;
     s->tol_rel = 0.0;
     s->work_tol = 0.0;
+    s->newton_estimate = 0.0;
     s->max_iterations = 50;
     s->on_max_iterations = CPL_MAXIT_ACCEPT;
     s->relaxed = CPL_RELAXED_DISPLACEMENT_VELOCITY;
@@ -165,6 +166,9 @@ int cpl_loop_settings_check(const cpl_loop_settings *s, const char *where, nc_er
     if (!(s->work_tol >= 0.0 && s->work_tol <= 1.0))
         return nc_error_set(err, 1, "%s: work_tolerance must be in [0, 1], got %g", where,
                             s->work_tol);
+    if (!(s->newton_estimate >= 0.0 && s->newton_estimate <= 0.5))
+        return nc_error_set(err, 1, "%s: newton_estimate must be in [0, 0.5], got %g", where,
+                            s->newton_estimate);
     if (s->max_iterations < 1)
         return nc_error_set(err, 1, "%s: max_iterations must be >= 1, got %d", where,
                             s->max_iterations);
@@ -320,6 +324,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     /* a weak step relaxes nothing: its method is none whatever the settings say */
     fp[6] = cpl_relax_method_id(s->scheme == CPL_SCHEME_STRONG
                                     ? cpl_relax_settings_method(&s->relax) : "none");
+    fp[7] = s->newton_estimate;
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
@@ -329,7 +334,7 @@ static int check_fingerprint(const cpl_loop *L, const char *path, nc_error *err)
     fill_fingerprint(&L->s, L->n3, now);
     const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
                                            "interface dofs", "work_tolerance",
-                                           "relaxation.method"};
+                                           "relaxation.method", "newton_estimate"};
     for (int i = 0; i < CPL_FINGERPRINT_N; i++) {
         if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) == 0) continue;
         if (i == 6) {
@@ -409,6 +414,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
     cpl_ckpt_long(t, q, "fem_repeats_skipped", &tm->fem_repeats_skipped);
     cpl_ckpt_long(t, q, "work_test_steps", &tm->work_test_steps);
+    cpl_ckpt_long(t, q, "estimate_steps", &tm->estimate_steps);
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
     cpl_ckpt_long(t, q, "reduced_steps", &tm->reduced_steps);
     cpl_ckpt_f64(t, q, "min_dt", &tm->min_dt_s, 1);
@@ -814,7 +820,8 @@ static double work_ratio(cpl_loop *L)
  * or r_u and the work test (work_tolerance; *by_work_test: it decided). *ratio: r_u's
  * tolerance_ratio or that of the second test passed more nearly (r_u̇'s or the work test's),
  * whichever is larger. */
-static double residual_uv(cpl_loop *L, int *converged, int *by_work_test, double *ratio)
+static double residual_uv(cpl_loop *L, double rv_prev, int *converged, int *by_work_test,
+                          int *by_estimate, double *ratio, double *rv_out)
 {
     const double nu = cpl_scaled_norm(L->u_out, L->n3), nv = cpl_scaled_norm(L->v_out, L->n3);
     double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
@@ -822,9 +829,18 @@ static double residual_uv(cpl_loop *L, int *converged, int *by_work_test, double
     const double work = work_ratio(L);
     const int u_ok = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel);
     const int v_ok = cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel);
-    *converged = u_ok && (v_ok || work <= 1.0);
-    *by_work_test = *converged && !v_ok;
-    *ratio = fmax(tolerance_ratio(L, ru, nu), fmin(tolerance_ratio(L, rv, nv), work));
+    double estimate = INFINITY;
+    if (L->s.newton_estimate > 0.0 && L->use_jacobian && rv_prev > 0.0 && isfinite(rv_prev)) {
+        const double theta = rv / rv_prev;
+        if (theta <= L->s.newton_estimate) estimate = theta / (1.0 - theta) * rv;
+    }
+    const int estimate_ok = cpl_converged(estimate, nv, L->s.tol_abs, L->s.tol_rel);
+    *converged = u_ok && (v_ok || work <= 1.0 || estimate_ok);
+    *by_work_test = *converged && !v_ok && work <= 1.0;
+    *by_estimate = *converged && !v_ok && !(work <= 1.0);
+    *ratio = fmax(tolerance_ratio(L, ru, nu),
+                  fmin(fmin(tolerance_ratio(L, rv, nv), work), tolerance_ratio(L, estimate, nv)));
+    *rv_out = rv;
     return fmax(ru, rv);
 }
 
@@ -859,6 +875,7 @@ typedef struct try_result {
     cpl_solve_info fem_info;    /* of the last FEM solve (when fem_solved) */
     int jacobian_dropped;       /* most particles a linearisation of this try left out */
     int by_work_test;           /* converged by the work test, not by r_u̇ */
+    int by_estimate;            /* converged by the Newton error estimate (newton_estimate) */
 } try_result;
 
 /* A failed request that a smaller step may cure: the participant said so. c->err keeps the
@@ -996,6 +1013,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     t->fem_info = t->dem_info;
     t->jacobian_dropped = 0;
     t->by_work_test = 0;
+    t->by_estimate = 0;
 
     const int lazy_fem = L->s.skip_fem_without_contact;
     if (command_both(c, CPL_COMMAND_BEGIN_STEP, call, !lazy_fem)) return -1;
@@ -1012,6 +1030,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     int free_seen = 0;                      /* an iterate of this try had no contact */
     int contact_required = 0;               /* ... and a later one had contact again */
     double r_prev[3] = {0.0, 0.0, 0.0}, r_pred[3] = {0.0, 0.0, 0.0};
+    double rv_prev = NAN;                   /* r_u̇ of the last iteration when this
+                                               iteration's input is that iteration's FEM
+                                               answer unchanged (α = 1), else NAN */
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
     for (k = 1; k <= max_it; k++) {
@@ -1046,7 +1067,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
                     return try_failed(c, t);
             }
-            if (halvings) cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
+            if (halvings) {
+                cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
+                rv_prev = NAN;
+            }
         }
         if (all_zero(L->f_dem, n3)) free_seen = 1;
         /* the linearisation the FEM solves with is the last DEM solve's */
@@ -1077,8 +1101,9 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             }
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
-            t->residual = residual_uv(L, &converged, &t->by_work_test,
-                                      &ratios[k % (CPL_SLOW_WINDOW + 1)]);
+            double rv;
+            t->residual = residual_uv(L, rv_prev, &converged, &t->by_work_test, &t->by_estimate,
+                                      &ratios[k % (CPL_SLOW_WINDOW + 1)], &rv);
                                                                /* eqs. (28), (29), (35) */
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
             if (!strong || converged || k == max_it || slow) {
@@ -1106,6 +1131,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 return 0;
             }
             unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
+            rv_prev = alpha == 1.0 ? rv : NAN;
             if (backtrack_prev)
                 predicted_resultant(L, L->f_dem, L->u_prev, L->v_prev, L->u_in, L->v_in,
                                     r_pred);
@@ -1255,6 +1281,7 @@ static int advance_step(run_ctx *c)
     if (rejected) L->timing.reduced_steps++;
     if (t.jacobian_dropped > 0) L->timing.jacobian_dropped_steps++;
     if (strong && converged && t.by_work_test) L->timing.work_test_steps++;
+    if (strong && converged && t.by_estimate) L->timing.estimate_steps++;
     cpl_energy_record energy;
     cpl_energy_step(&L->energy, call.step, L->time_s, t.fem_solved ? &t.fem_info.energy : NULL,
                     &t.dem_info.energy, &energy);

@@ -145,6 +145,12 @@ typedef struct cpl_loop_settings {
                                        the linearised force the structure solved with over its
                                        answer; cpl_loop.c work_ratio) is at most work_tol x
                                        the input energy (0 = off: eq. (35)) */
+    double newton_estimate;         /* displacement_velocity with the interface Jacobian: r_u̇
+                                       may stay above tol_abs when the iterate's input was the
+                                       FEM's previous answer (α = 1), the residual contracted
+                                       by θ = r_u̇ / r_u̇_prev <= newton_estimate, and the error
+                                       estimate of the FEM's answer θ / (1 − θ) r_u̇ meets the
+                                       tolerance (0 = off) */
     int max_iterations;             /* per step (strong) */
     cpl_maxit_policy on_max_iterations;
     cpl_relaxed_quantity relaxed;
@@ -287,6 +293,7 @@ typedef struct cpl_timing {
                                        linearisation), so its answer is the one it gave */
     long work_test_steps;           /* accepted steps whose velocity residual was above the
                                        tolerance: converged by the work test (work_tolerance) */
+    long estimate_steps;            /* ... converged by the error estimate (newton_estimate) */
     long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's
                                        linearisation */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last

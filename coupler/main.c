@@ -676,13 +676,27 @@ static int print_status(app *a, int *energy_ok, int *impulse_ok)
                 *energy_ok && *impulse_ok ? "results are reliable: " : "results: ",
                 *energy_ok && *impulse_ok ? "; no guard fired" : "");
     if (s->scheme == CPL_SCHEME_STRONG && t->unconverged_steps == 0) {
-        char work[200] = "";
-        if (s->work_tol > 0.0 && s->relaxed == CPL_RELAXED_DISPLACEMENT_VELOCITY)
-            snprintf(work, sizeof work, " (velocities, or the step's interface work mismatch "
+        /* the tests other than eq. (35)'s velocity half that may have decided a step */
+        char other[400] = "";
+        const int dv = s->relaxed == CPL_RELAXED_DISPLACEMENT_VELOCITY;
+        const int by_work = dv && s->work_tol > 0.0, by_estimate = dv && s->newton_estimate > 0.0;
+        if (by_work && by_estimate)
+            snprintf(other, sizeof other, " (velocities, or the step's interface work mismatch "
+                     "within work_tolerance %.3g of the input energy: %ld of %ld steps by it, or "
+                     "the error estimate of the structure's last answer after a contraction of "
+                     "at most newton_estimate %.3g: %ld steps by it)", s->work_tol,
+                     t->work_test_steps, t->steps, s->newton_estimate, t->estimate_steps);
+        else if (by_work)
+            snprintf(other, sizeof other, " (velocities, or the step's interface work mismatch "
                      "within work_tolerance %.3g of the input energy: %ld of %ld steps by the "
                      "latter)", s->work_tol, t->work_test_steps, t->steps);
+        else if (by_estimate)
+            snprintf(other, sizeof other, " (velocities, or the error estimate of the "
+                     "structure's last answer after a contraction of at most newton_estimate "
+                     "%.3g: %ld of %ld steps by the latter)", s->newton_estimate,
+                     t->estimate_steps, t->steps);
         fprintf(o, "coupler: %severy step converged to the tolerance %.3g%s\n",
-                *energy_ok && *impulse_ok ? "results are reliable: " : "", s->tol_abs, work);
+                *energy_ok && *impulse_ok ? "results are reliable: " : "", s->tol_abs, other);
     } else if (s->scheme == CPL_SCHEME_STRONG) {
         /* every verdict that applies, the unconverged steps last */
         if (!*energy_ok) print_energy_verdict(a, 1);

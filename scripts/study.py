@@ -1206,6 +1206,19 @@ def study_work(out, jobs, end_time):
     compare_variants(out, jobs, end_time, WORK_VARIANTS, "work_table.md")
 
 
+ESTIMATE_VARIANTS = [("paper", "eq. (35)", ["coupler.work_tolerance=0", "coupler.newton_estimate=0"]),
+                     ("estimate", "newton_estimate 0.1",
+                      ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1"]),
+                     ("work_estimate", "work_tolerance %s and newton_estimate 0.1" % WORK_TOLERANCE,
+                      ["coupler.work_tolerance=" + WORK_TOLERANCE, "coupler.newton_estimate=0.1"])]
+
+
+def study_estimate(out, jobs, end_time):
+    """Jacobian + Aitken with eq. (35), with the Newton error estimate (newton_estimate), and
+    with both it and the work test; 8 cases x COR x dt."""
+    compare_variants(out, jobs, end_time, ESTIMATE_VARIANTS, "estimate_table.md")
+
+
 NEWTON_VARIANTS = [("secant", "eq. (34) throughout", ["coupler.relaxation.newton_contraction=0"]),
                    ("theta0.2", "newton_contraction 0.2", ["coupler.relaxation.newton_contraction=0.2"]),
                    ("theta0.5", "newton_contraction 0.5", ["coupler.relaxation.newton_contraction=0.5"]),
@@ -1239,6 +1252,7 @@ STUDIES = {
     "jacobian": study_jacobian,
     "speed": study_speed,
     "work": study_work,
+    "estimate": study_estimate,
     "newton": study_newton,
     "tolerance": study_tolerance,
 }
