@@ -396,6 +396,7 @@ int fem_analysis_init(fem_analysis *s, const fem_model *m, nc_error *err)
 {
     memset(s, 0, sizeof *s);
     s->m = m;
+    s->fixed_load_factor = -1.0;
     s->ndof = 3 * m->n_nodes;
     size_t nd = (size_t)s->ndof, ne = (size_t)m->n_elements;
     s->eq = malloc(nd * sizeof *s->eq);
@@ -499,6 +500,7 @@ void fem_analysis_free(fem_analysis *s)
 
 double fem_analysis_load_factor(const fem_analysis *s, double time_s)
 {
+    if (s->fixed_load_factor >= 0.0) return s->fixed_load_factor;
     double ramp = s->m->settings.load_ramp_s;
     if (ramp <= 0) return 1.0;
     return time_s >= ramp ? 1.0 : (time_s <= 0 ? 0.0 : time_s / ramp);
@@ -1138,30 +1140,34 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err)
  * static Newton from the reference state fails on a barrier: its first iterations slacken
  * net cables and leave nodes that nothing holds (a singular matrix at 1 % of the load); the
  * mass term keeps every step's matrix regular, and as h grows it fades (at h = 1e4 s it is
- * 4e-8 m N/m per kg of a node), so the last steps are Newton's on the equilibrium. */
+ * 4e-8 N/m per kg of a node), so the last steps are Newton's on the equilibrium. */
 #define FEM_SETTLE_H_MAX_S 1e4
 #define FEM_SETTLE_MAX_STEPS 400
 
-int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *steps,
-                                     nc_error *err)
+int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *steps,
+                        nc_error *err)
 {
     const fem_settings *set = &s->m->settings;
+    const double time0 = s->cur.time_s;
+    const long step0 = s->cur.step;
     double h = set->dt_s, last_move = INFINITY;
-    int last_node = -1;
+    int last_node = -1, rc = -1;
     *iterations = 0;
     *steps = 0;
-    for (int k = 0; k < FEM_SETTLE_MAX_STEPS; k++) {
+    s->fixed_load_factor = lambda;
+    for (int k = 0; k < FEM_SETTLE_MAX_STEPS && rc < 0; k++) {
         memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
         memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
         const int failed = fem_analysis_step(s, h, err);
         *iterations += s->stats.iterations;
         (*steps)++;
         if (failed) {
-            if (err->code != FEM_ERR_NEWTON) return -1;
+            if (err->code != FEM_ERR_NEWTON) break;
             h *= 0.25;
-            if (h < 1e-6 * set->dt_s)
-                return nc_error_prefix(err, "analysis.initial_state \"static\": no equilibrium "
-                                            "found under the loads at t = 0");
+            if (h < 1e-6 * set->dt_s) {
+                nc_error_prefix(err, "no equilibrium found by pseudo-time steps");
+                break;
+            }
             continue;
         }
         last_move = 0.0;
@@ -1173,20 +1179,32 @@ int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *step
                 last_node = dof / 3;
             }
         }
-        if (h >= FEM_SETTLE_H_MAX_S && last_move <= set->displacement_tol_m) {
-            /* the dynamic run starts here, at rest: step 0, t = 0 */
-            memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
-            memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
-            s->cur.step = 0;
-            s->cur.time_s = 0.0;
-            return 0;
-        }
+        if (h >= FEM_SETTLE_H_MAX_S && last_move <= set->displacement_tol_m) rc = 0;
         h = fmin(2.0 * h, FEM_SETTLE_H_MAX_S);
     }
-    return nc_error_set(err, FEM_ERR_NEWTON, "%s: analysis.initial_state \"static\": no equilibrium "
-                        "under the loads at t = 0 after %d pseudo-time steps: node %d still moved "
-                        "%.3g m in the last one (displacement_tolerance_m %g)", s->m->source,
-                        FEM_SETTLE_MAX_STEPS, last_node, last_move, set->displacement_tol_m);
+    s->fixed_load_factor = -1.0;
+    if (rc < 0 && err->code != FEM_ERR_NEWTON && err->code != 0) return -1;
+    if (rc < 0 && *steps >= FEM_SETTLE_MAX_STEPS)
+        return nc_error_set(err, FEM_ERR_NEWTON, "%s: no equilibrium under load factor %g after %d "
+                            "pseudo-time steps: node %d still moved %.3g m in the last one "
+                            "(displacement_tolerance_m %g)", s->m->source, lambda,
+                            FEM_SETTLE_MAX_STEPS, last_node, last_move, set->displacement_tol_m);
+    if (rc < 0) return -1;
+    /* at rest in equilibrium, at the time and step it started from */
+    memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
+    memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
+    s->cur.time_s = time0;
+    s->cur.step = step0;
+    return 0;
+}
+
+int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *steps,
+                                     nc_error *err)
+{
+    if (fem_analysis_settle(s, fem_analysis_load_factor(s, 0.0), iterations, steps, err))
+        return nc_error_prefix(err, "analysis.initial_state \"static\": the equilibrium under "
+                                    "the loads at t = 0");
+    return 0;
 }
 
 static void method_weights(const fem_settings *set, double *beta, double *gamma, double *am,

@@ -99,6 +99,8 @@ typedef struct fem_analysis {
     size_t *damping_at;    /* [n_members + 1] */
     double factor_cm, factor_ck;        /* c_m, c_k of the current factorisation */
     double saved_factor_cm, saved_factor_ck;
+    double fixed_load_factor; /* >= 0: the load factor of every step (fem_analysis_settle),
+                              else the one load_ramp_s gives the step's time */
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
     fem_gmres gmres;       /* work space of the Newton steps with lin's skew part */
     double skew_lk, skew_lc; /* the tangent weights of lin during such a step */
@@ -119,13 +121,21 @@ void fem_analysis_free(fem_analysis *s);
 /* Static equilibrium under load factor lambda (loads and prescribed displacements scaled),
  * starting Newton from the current displacement. Velocity/acceleration are left at 0. */
 int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
+/* Static equilibrium under load factor lambda by pseudo-transient continuation, from the
+ * current state: implicit dynamic steps from rest (v = a = 0 before each) with a pseudo step
+ * that doubles after each converged step (from analysis.dt_s) and is quartered after a
+ * failed one, until a step of 1e4 s moves no node by more than displacement_tol_m. The mass
+ * term keeps each step's matrix regular where a static Newton meets nodes held only by slack
+ * cables. On success the state is at rest, its time and step as before the call;
+ * *iterations, *steps: the Newton iterations and pseudo steps it took, failed ones included.
+ * Needs a model with mass at every free dof a load moves. */
+int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *steps,
+                        nc_error *err);
 /* A dynamic run's start at rest in static equilibrium under its loads at t = 0 (self-weight,
  * point loads, prestress, prescribed displacements), from the current state
- * (analysis.initial_state "static"): implicit steps from rest with a growing pseudo step,
- * until a step of 1e4 s moves no node by more than displacement_tol_m; then step 0, t = 0,
- * v = a = 0. *iterations, *steps: the Newton iterations and pseudo steps it took, failed
- * ones included. Call before fem_analysis_initial_acceleration, which then finds a_0 = 0
- * to the Newton tolerance. */
+ * (analysis.initial_state "static"): fem_analysis_settle at the load factor of t = 0.
+ * Call before fem_analysis_initial_acceleration, which then finds a_0 = 0 to the Newton
+ * tolerance. */
 int fem_analysis_initial_equilibrium(fem_analysis *s, int *iterations, int *steps,
                                      nc_error *err);
 /* Sets a_0 from M a_0 = F_ext(t) - F_int(u) - C v (call once before dynamic steps). */

@@ -19,6 +19,46 @@ static void newton_hint(nc_error *err)
                  "under its own weight can need either", first);
 }
 
+/* Whether any element carries mass: the pseudo-time steps of fem_analysis_settle need it. */
+static int model_has_mass(const fem_model *m)
+{
+    for (int e = 0; e < m->n_elements; e++)
+        if (m->rhoA[e] > 0.0) return 1;
+    return 0;
+}
+
+/* A static load increment whose Newton iteration failed (or met a matrix that nothing holds
+ * in some direction: slack cables) solved again by pseudo-time steps from the last
+ * equilibrium (fem_analysis_settle); err keeps Newton's failure when that fails too or the
+ * model has no mass. */
+static int static_increment(fem_analysis *s, double lambda, fem_run_summary *sum, nc_error *err)
+{
+    if (fem_analysis_static(s, lambda, err) == 0) {
+        sum->newton_iterations += s->stats.iterations;
+        return 0;
+    }
+    if (err->code != FEM_ERR_NEWTON && err->code != FEM_ERR_SINGULAR) return -1;
+    char first[NC_ERROR_MESSAGE_MAX];
+    snprintf(first, sizeof first, "%s", err->message);
+    if (!model_has_mass(s->m))
+        return nc_error_set(err, err->code, "%s; the model has no mass (density_kg_m3 0), so the "
+                            "increment cannot be solved by pseudo-time steps either", first);
+    int iterations = 0, steps = 0;
+    nc_error again;
+    nc_error_clear(&again);
+    int rc = fem_analysis_settle(s, lambda, &iterations, &steps, &again);
+    sum->newton_iterations += iterations;
+    if (rc) {
+        nc_error_set(err, again.code, "%s; and by pseudo-time steps: %s", first, again.message);
+        return -1;
+    }
+    nc_error_clear(err);
+    s->cur.step++;
+    s->cur.time_s = lambda;
+    sum->settled_increments++;
+    return 0;
+}
+
 int fem_run_initial_state(fem_analysis *s, fem_run_summary *sum, nc_error *err)
 {
     const fem_model *m = s->m;
@@ -65,13 +105,12 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
         for (int k = 1; k <= set->load_steps; k++) {
             if (stop && *stop) { rc = 1; goto done; }
             double lambda = (double)k / set->load_steps;
-            if (fem_analysis_static(&s, lambda, err)) {
+            if (static_increment(&s, lambda, &sum, err)) {
                 newton_hint(err);
                 goto done;
             }
             fem_analysis_update_axial(&s);
             sum.steps++;
-            sum.newton_iterations += s.stats.iterations;
             sum.final_time_s = lambda;
             if (fem_output_monitor(&out, &s, lambda, err)) goto done;
             if (k % set->output_interval == 0 || k == set->load_steps) {

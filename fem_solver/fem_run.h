@@ -35,6 +35,8 @@ typedef struct fem_run_summary {
     int initial_iterations;     /* dynamic, analysis.initial_state "static": Newton
                                    iterations of the initial equilibrium (-1: none) */
     int initial_steps;          /* its pseudo-time steps */
+    int settled_increments;     /* static: load increments whose Newton iteration failed,
+                                   solved by pseudo-time steps instead (fem_analysis_settle) */
     double initial_max_displacement_m; /* its largest nodal |u| from the reference */
     int initial_max_displacement_node;
     int warm_start_fallbacks;   /* coupled: repeated solves whose Newton start from the

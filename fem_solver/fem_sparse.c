@@ -155,11 +155,11 @@ int fem_sparse_factorize(fem_sparse *s, int *bad_eq, nc_error *err)
         double d = s->x[s->diag[i]];
         if (!isfinite(d)) {
             *bad_eq = i;
-            return nc_error_set(err, 2, "the system matrix has a non-finite diagonal entry");
+            return nc_error_set(err, FEM_ERR_SINGULAR, "the system matrix has a non-finite diagonal entry");
         }
         if (fabs(d) <= 1e-14 * dmax || dmax == 0) {
             *bad_eq = i;
-            return nc_error_set(err, 2, "the system matrix is singular (zero stiffness)");
+            return nc_error_set(err, FEM_ERR_SINGULAR, "the system matrix is singular (zero stiffness)");
         }
     }
     s->use_lu = 0;
@@ -199,7 +199,7 @@ int fem_sparse_factorize(fem_sparse *s, int *bad_eq, nc_error *err)
     if (status == UMFPACK_WARNING_singular_matrix || status != UMFPACK_OK) {
         int *perm = s->L->Perm;
         *bad_eq = (minor >= 0 && minor < s->n && perm) ? perm[minor] : 0;
-        return nc_error_set(err, 2, "the system matrix is singular (not positive definite, and LU found a zero pivot)");
+        return nc_error_set(err, FEM_ERR_SINGULAR, "the system matrix is singular (not positive definite, and LU found a zero pivot)");
     }
     s->use_lu = 1;
     s->have_factor = 1;

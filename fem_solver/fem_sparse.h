@@ -19,6 +19,10 @@
 #include <cholmod.h>
 #include "nc_error.h"
 
+/* nc_error code of a matrix that cannot be factorised: singular (a dof nothing holds) or
+ * with a non-finite entry. */
+#define FEM_ERR_SINGULAR 2
+
 typedef struct fem_sparse {
     int n;                    /* number of equations */
     int nnz;                  /* stored entries (upper triangle incl. diagonal) */

@@ -174,6 +174,10 @@ int main(int argc, char **argv)
                         "largest displacement from the reference %.6g m at node %d\n",
                 input, sum.initial_steps, sum.initial_iterations,
                 sum.initial_max_displacement_m, sum.initial_max_displacement_node);
+    if (sum.settled_increments > 0)
+        fprintf(stderr, "fem_solver: %s: %d of %ld load steps solved by pseudo-time steps (their "
+                        "static Newton iteration failed or met dofs that only slack cables "
+                        "hold)\n", input, sum.settled_increments, sum.steps);
     char ldlt[96] = "";
     if (sum.stats.ldlt_switch_step >= 0)
         snprintf(ldlt, sizeof ldlt, " (LDL^T from step %ld on: the matrix was indefinite)",
