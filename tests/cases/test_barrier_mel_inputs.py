@@ -36,9 +36,10 @@ for name in ("fem.json", "dem.json", "coupler.json"):
 fem = json.load(open(os.path.join(case, "fem.json")))
 dem = json.load(open(os.path.join(case, "dem.json")))
 coupler = json.load(open(os.path.join(case, "coupler.json")))
-check(coupler["tolerance"] == 1e-6 and coupler.get("work_tolerance") == 1e-6,
-      "tolerance 1e-6 with the work test, work_tolerance 1e-6: %s, %s"
-      % (coupler["tolerance"], coupler.get("work_tolerance")))
+check(coupler["tolerance"] == 1e-6 and coupler.get("work_tolerance") == 1e-6
+      and coupler.get("newton_estimate") == 0.1,
+      "tolerance 1e-6 with the work test, work_tolerance 1e-6, and newton_estimate 0.1: %s, %s, %s"
+      % (coupler["tolerance"], coupler.get("work_tolerance"), coupler.get("newton_estimate")))
 check(fem["rayleigh"] == {"tau_per_s": 2.0, "kappa_s": 1e-4}, "Rayleigh tau 2 /s, kappa 1e-4 s: %s" % fem["rayleigh"])
 check(fem["analysis"]["integrator"] == "bossak" and fem["analysis"]["alpha_b"] == -0.1,
       "Bossak alpha -0.1: %s" % fem["analysis"])
