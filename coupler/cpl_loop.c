@@ -673,6 +673,9 @@ static int verify_restore(run_ctx *c, const cpl_participant *p, const cpl_call *
     *wait_of(c, p) += nc_clock_now_s() - t0;
     cpl_jacobian_free(&scratch);
     if (rc) return fail(c, p, call, "solve (repeated to verify restore)");
+    /* a SOLVE the participant answered like any other: counted with them */
+    if (p == c->fem) L->timing.fem_solves++;
+    else L->timing.dem_solves++;
     const double *outs[2] = {out0, out1}, *checks[2] = {L->check0, L->check1};
     for (int o = 0; o < 2; o++) {
         if (!outs[o]) continue;
