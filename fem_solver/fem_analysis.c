@@ -1154,6 +1154,7 @@ int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *st
     int last_node = -1, rc = -1;
     *iterations = 0;
     *steps = 0;
+    nc_error_clear(err);   /* what it holds at the end is this call's */
     s->fixed_load_factor = lambda;
     for (int k = 0; k < FEM_SETTLE_MAX_STEPS && rc < 0; k++) {
         memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
