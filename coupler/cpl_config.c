@@ -162,7 +162,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "fem", "dem", "scheme", "dt", "start_time", "end_time", "max_steps", "tolerance",
         "relative_tolerance", "work_tolerance", "newton_estimate", "max_iterations",
         "on_max_iterations", "relaxation", "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
-        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth", "impulse_tolerance",
+        "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth",
+        "stop_on_energy_growth", "impulse_tolerance",
         "accept_impulse_loss", "interface_jacobian",
         "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
         "comment", NULL};
@@ -209,6 +210,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                                  INFINITY, &s->energy.tol_abs_j, err) ||
         nc_json_bool_opt(root, where, "accept_energy_growth", c->accept_energy_growth,
                          &c->accept_energy_growth, err) ||
+        nc_json_bool_opt(root, where, "stop_on_energy_growth", s->stop_on_energy_growth,
+                         &s->stop_on_energy_growth, err) ||
         nc_json_number_range_opt(root, where, "impulse_tolerance", s->impulse.tol_rel, 0.0, 1.0,
                                  &s->impulse.tol_rel, err) ||
         nc_json_bool_opt(root, where, "accept_impulse_loss", c->accept_impulse_loss,
@@ -225,6 +228,10 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         parse_output(root, where, c, err) ||
         parse_checkpoint(root, where, s, err))
         return -1;
+    if (s->stop_on_energy_growth && c->accept_energy_growth)
+        return nc_error_set(err, 1, "%s: stop_on_energy_growth and accept_energy_growth are both "
+                            "true: a run cannot both stop and accept when the energy guard "
+                            "fires", where);
     s->scheme = (cpl_scheme)scheme;
     s->on_max_iterations = (cpl_maxit_policy)policy;
     s->relaxed = (cpl_relaxed_quantity)quantity;

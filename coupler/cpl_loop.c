@@ -1316,6 +1316,13 @@ static int advance_step(run_ctx *c)
         rec.in_contact = cpl_max_abs(L->f_dem, n3) > L->s.contact_force_threshold_n;
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");
     }
+    /* the step is accepted and recorded: the results up to it stay readable */
+    if (L->s.stop_on_energy_growth && energy.above) {
+        nc_error_set(c->err, CPL_ERR_ENERGY_GROWTH, "the energy guard fired: the run has created "
+                     "%.6g J of energy, above the limit %.6g J; stopped here "
+                     "(coupler.json stop_on_energy_growth)", energy.created_j, energy.limit_j);
+        return fail(c, NULL, &call, "energy guard");
+    }
     return 0;
 }
 

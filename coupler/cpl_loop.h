@@ -168,6 +168,9 @@ typedef struct cpl_loop_settings {
                                        cannot reach the tolerance by max_iterations, if a
                                        smaller Δt is left (default 1; CPL_SLOW_* below) */
     cpl_energy_settings energy;     /* the energy guard (cpl_energy.h) */
+    int stop_on_energy_growth;      /* 1: the run stops (CPL_ERR_ENERGY_GROWTH) at the first
+                                       step at which the guard fires, once that step is
+                                       accepted and recorded */
     cpl_impulse_settings impulse;   /* the interface's momentum balance (cpl_impulse.h) */
     int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
                                        both participants can (default 1) */
@@ -312,7 +315,7 @@ typedef struct cpl_failure {
  * failure), it may succeed with a smaller Δt" -- the loop then rejects and retries the step.
  * Any other error code from a participant ends the run. */
 enum { CPL_ERR_INTERRUPTED = 40, CPL_ERR_NOT_CONVERGED = 41, CPL_ERR_PARTICIPANT = 42,
-       CPL_ERR_STEP_FAILED = 43 };
+       CPL_ERR_STEP_FAILED = 43, CPL_ERR_ENERGY_GROWTH = 44 };
 
 typedef struct cpl_loop cpl_loop;
 

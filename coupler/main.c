@@ -927,6 +927,8 @@ fail:
         }
     }
     rc = *a.stop_signal == SIGINT ? 130 : *a.stop_signal == SIGTERM ? 143 : 1;
+    /* stopped by its own energy guard: the results so far are written and not reliable */
+    if (rc == 1 && err.code == CPL_ERR_ENERGY_GROWTH) rc = EXIT_UNRELIABLE;
 
 done:
     status.accept_unconverged = a.cfg.accept_unconverged;

@@ -184,6 +184,9 @@ static void test_bad_input_messages(void **state)
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"newton_estimate\": 0.7}", "newton_estimate");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
+                 " \"stop_on_energy_growth\": true, \"accept_energy_growth\": true}",
+                 "stop_on_energy_growth and accept_energy_growth");
+    expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"accept_energy_growth\": \"yes\"}", "accept_energy_growth");
     expect_error("{\"scheme\": \"strong\", \"dt\": 0.1, \"end_time\": 1,"
                  " \"jacobian_check\": -1}", "jacobian_check");

@@ -12,7 +12,9 @@
 #    guard fires, its warning names the step and time, the coupler's last line says NOT
 #    reliable because of created energy, exit 3; with "accept_energy_growth": true the same
 #    run exits 0, still NOT reliable; stopped by SIGINT long before its end, its summary still
-#    gives the guard's verdict and coupling.h5's energy_growth is 1;
+#    gives the guard's verdict and coupling.h5's energy_growth is 1; with
+#    "stop_on_energy_growth": true it ends at the step the guard fired at, exit 3, its results
+#    up to that step written;
 #  - the same weak run with the interface Jacobian (the default): stable, reliable, exit 0,
 #    and no step creates more than 1 % of the input energy (iterations.log created_J).
 . tests/e2e_lib.sh
@@ -62,6 +64,28 @@ import sys, h5py
 a = h5py.File(sys.argv[1], "r").attrs
 print("stopped run: finished %d, energy_growth %d, first step %d" % (a["finished"], a["energy_growth"], a["energy_first_step"]))
 assert a["finished"] == 0 and a["energy_growth"] == 1 and a["energy_first_step"] >= 0
+PY
+
+# the same run with stop_on_energy_growth: it ends at the step the guard fired at, exit 3,
+# the results up to that step written (fem.h5's last monitor row is that step's end)
+scripts/run_case.sh cases/cable_impact --out "$NC_TMP/stop" --quiet "${weak[@]}" \
+  --set coupler.stop_on_energy_growth=true > "$NC_TMP/stop.out" 2>&1
+rc=$?
+[ "$rc" -eq 3 ] || { tail -n 20 "$NC_TMP/stop.out"; fail "stop: exit $rc, expected 3"; }
+grep -q "^coupler: error: .*energy guard: the energy guard fired: .*stopped here (coupler.json stop_on_energy_growth)" \
+  "$NC_TMP/stop/coupler.log" || fail "stop: no error line naming stop_on_energy_growth"
+last_line stop | grep -q "^coupler: results are NOT reliable: the run created energy: .*before the run stopped" \
+  || fail "stop: last line is '$(last_line stop)'"
+"$PY" - "$NC_TMP/stop" "$NC_TMP/unstable" <<'PY' || fail "stop: did not end at the guard's step"
+import sys, h5py
+stop, full = (h5py.File(d + "/coupling.h5", "r") for d in sys.argv[1:3])
+a, b = stop.attrs, full.attrs
+t_end = float(h5py.File(sys.argv[1] + "/fem.h5", "r")["/monitor/time"][-1])
+steps = len(stop["/steps/iterations"])
+print("stopped at step %d of %d, fem.h5 to t = %g s, guard's step %d" % (steps - 1, len(full["/steps/iterations"]) - 1, t_end, a["energy_first_step"]))
+assert a["finished"] == 0 and a["energy_growth"] == 1 and a["energy_first_step"] == b["energy_first_step"]
+assert steps == a["energy_first_step"] + 1 < len(full["/steps/iterations"])
+assert abs(t_end - float(stop["/steps/time"][-1])) < 1e-9
 PY
 
 scripts/run_case.sh cases/cable_impact --out "$NC_TMP/opted_in" --quiet "${weak[@]}" \
