@@ -5,7 +5,8 @@
 # run_case.sh (exit 130) and one killed with its whole process group (SIGKILL) are continued
 # with `run_case.sh --resume DIR`; every dataset of fem.h5, dem.h5 and coupling.h5 (except
 # the wall-clock ones, tests/coupler/resume_lib.sh) must be identical to the uninterrupted
-# run's, with the same shapes.
+# run's, with the same shapes; also for a net that starts at rest in its static equilibrium
+# under its own weight (the FEM's interface then starts where that equilibrium holds it).
 # Skipped (exit 77) while fem_solver or dem_solver does not announce the capability
 # 'checkpoint' (the coupler then says "checkpoints off" at start-up, naming it).
 . tests/e2e_lib.sh
@@ -25,4 +26,8 @@ fi
 
 resume_check net_int "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
 resume_check net_kill "$case_dir" kill "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
+# a net that starts at rest in its static equilibrium under its own weight (fem.json
+# analysis.initial_state): the resumed FEM finds the same start and interface again
+resume_check net_settled "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet \
+  "${args[@]}" --set fem.self_weight=true --set fem.analysis.initial_state=static
 echo "PASS"
