@@ -912,6 +912,18 @@ static int same_values(const double *a, const double *b, size_t n)
     return 1;
 }
 
+/* a == b up to the rounding of a full relaxation step, a + 1 (b − a): within 1e-12 of the
+ * largest |b| */
+static int same_within(const double *a, const double *b, size_t n)
+{
+    double scale = 0.0, diff = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        scale = fmax(scale, fabs(b[i]));
+        diff = fmax(diff, fabs(a[i] - b[i]));
+    }
+    return diff <= 1e-12 * scale;
+}
+
 /* The resultant that the linearisation L->jac about (u0, v0), with force f0 there, predicts
  * at (u1, v1): Σ [f0 − K (u1 − u0) − C (v1 − v0)], what the FEM solved with (without
  * interface-Jacobian coupling: the constant force f0). */
@@ -1090,7 +1102,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         if (!force_mode) {
             /* weak, or algorithm 2: forces go to the structure unrelaxed, eq. (39) */
             const int plain_input = !L->use_jacobian || L->jac.n_blocks == 0;
-            int solved;
+            int solved, fem_answer = 1;   /* u_out, v_out are the FEM's answer to this input */
             if (fem_answer_plain && plain_input && same_values(L->f_dem, L->f_in, n3)) {
                 /* the FEM's input is the one it last solved with in this try (typically no
                  * contact in either iteration): a participant answers the same input with
@@ -1101,11 +1113,13 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved, &t->fem_info);
                 if (solved < 0) return try_failed(c, t);
                 if (solved) fem_answer_plain = plain_input;
+                fem_answer = solved;   /* skipped without contact: the accepted motion */
             }
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
             double rv;
-            t->residual = residual_uv(L, rv_prev, &converged, &t->by_work_test, &t->by_estimate,
+            t->residual = residual_uv(L, fem_answer ? rv_prev : NAN, &converged,
+                                      &t->by_work_test, &t->by_estimate,
                                       &ratios[k % (CPL_SLOW_WINDOW + 1)], &rv);
                                                                /* eqs. (28), (29), (35) */
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
@@ -1134,7 +1148,12 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 return 0;
             }
             unpack(L, L->x_in, L->u_in, L->v_in);              /* eqs. (40), (41) */
-            rv_prev = alpha == 1.0 ? rv : NAN;
+            /* the estimate's contraction is that of Newton's iterates: only when the next
+             * input is this answer itself (a full step of every block, not a restart from an
+             * older iterate, whatever α the method reports) */
+            rv_prev = fem_answer && same_within(L->u_in, L->u_out, n3) &&
+                              same_within(L->v_in, L->v_out, n3)
+                          ? rv : NAN;
             if (backtrack_prev)
                 predicted_resultant(L, L->f_dem, L->u_prev, L->v_prev, L->u_in, L->v_in,
                                     r_pred);
@@ -1317,7 +1336,8 @@ static int advance_step(run_ctx *c)
         if (c->obs->on_step(c->obs->ctx, &rec, c->err)) return fail(c, NULL, &call, "history");
     }
     /* the step is accepted and recorded: the results up to it stay readable */
-    if (L->s.stop_on_energy_growth && energy.above) {
+    if (L->s.stop_on_energy_growth && energy.above &&
+        L->time_s < L->s.end_time_s - 1e-9 * L->s.dt_s) {   /* the last step simply ends */
         nc_error_set(c->err, CPL_ERR_ENERGY_GROWTH, "the energy guard fired: the run has created "
                      "%.6g J of energy, above the limit %.6g J; stopped here "
                      "(coupler.json stop_on_energy_growth)", energy.created_j, energy.limit_j);

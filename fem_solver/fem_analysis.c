@@ -1184,6 +1184,9 @@ int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *st
         h = fmin(2.0 * h, FEM_SETTLE_H_MAX_S);
     }
     s->fixed_load_factor = -1.0;
+    /* at its time and step again; at rest in equilibrium when it succeeded */
+    s->cur.time_s = time0;
+    s->cur.step = step0;
     if (rc < 0 && err->code != FEM_ERR_NEWTON && err->code != 0) return -1;
     if (rc < 0 && *steps >= FEM_SETTLE_MAX_STEPS)
         return nc_error_set(err, FEM_ERR_NEWTON, "%s: no equilibrium under load factor %g after %d "
@@ -1191,11 +1194,9 @@ int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *st
                             "(displacement_tolerance_m %g)", s->m->source, lambda,
                             FEM_SETTLE_MAX_STEPS, last_node, last_move, set->displacement_tol_m);
     if (rc < 0) return -1;
-    /* at rest in equilibrium, at the time and step it started from */
+    nc_error_clear(err);   /* a pseudo step that failed on the way is not a failure */
     memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
     memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
-    s->cur.time_s = time0;
-    s->cur.step = step0;
     return 0;
 }
 

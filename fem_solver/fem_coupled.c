@@ -41,6 +41,8 @@ typedef struct coupled {
     double *iface_u0;         /* [3n] where the start state has the interface nodes (the static
                                  equilibrium of analysis.initial_state, else 0): the protocol's
                                  coordinates are X + u0 and its displacements u - u0 */
+    double *ckpt_u0;          /* [3n] iface_u0 as a checkpoint holds it: a resumed run must
+                                 start from the same u0 as the run it continues */
     double *lin_u, *lin_v;    /* [ndof] the linearisation point on the model's dofs */
     int *lin_nodes;           /* [2 blocks] model node numbers of the received blocks */
     size_t lin_cap;
@@ -294,6 +296,7 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
     /* checkpointed before its first step: the run's results start now */
     /* the rows the checkpoint counts are in fem.h5 before it names them */
     if (start_output(c, err) || fem_output_sync(&c->out, err)) return -1;
+    memcpy(c->ckpt_u0, c->iface_u0, 3 * (size_t)c->m->n_iface_nodes * sizeof(double));
     return fem_checkpoint_save(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
                                &c->run_entries, err);
 }
@@ -328,6 +331,21 @@ static int fresh_state(coupled *c, nc_error *err)
     return start_state(c, err);
 }
 
+/* The interface start of the checkpoint just loaded against this run's: the other programs'
+ * coordinates and displacements are measured from it. */
+static int same_start(coupled *c, nc_error *err)
+{
+    const size_t n3 = 3 * (size_t)c->m->n_iface_nodes;
+    for (size_t i = 0; i < n3; i++)
+        if (memcmp(&c->ckpt_u0[i], &c->iface_u0[i], sizeof(double)) != 0)
+            return nc_error_set(err, 1, "the checkpoint was written by a run that started from "
+                                "another state: interface node %zu at %.9g m, this run at "
+                                "%.9g m (analysis.initial_state, the loads or the analysis "
+                                "settings changed since)", i / 3, c->ckpt_u0[i],
+                                c->iface_u0[i]);
+    return 0;
+}
+
 static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
     (void)reply;
@@ -335,7 +353,7 @@ static int on_resume(void *ctx, const proto_message *cmd, proto_message *reply, 
     c->guess_dt_s = 0;
     if (fem_checkpoint_load(c->dir, cmd->text, cmd->step, cmd->time_s, &c->s, &c->out,
                             &c->run_entries, err) ||
-        fem_output_reopen(&c->out, c->m, c->dir, err)) {
+        same_start(c, err) || fem_output_reopen(&c->out, c->m, c->dir, err)) {
         nc_error again;
         if (fresh_state(c, &again)) nc_error_prefix(err, "and starting afresh failed (%s)", again.message);
         return -1;
@@ -382,14 +400,16 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->iface_u = calloc(3 * (n + 1), sizeof(double));
     c->iface_v = calloc(3 * (n + 1), sizeof(double));
     c->iface_u0 = calloc(3 * (n + 1), sizeof(double));
+    c->ckpt_u0 = calloc(3 * (n + 1), sizeof(double));
     c->lin_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
     c->lin_v = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
     c->guess_u = calloc(3 * (size_t)m->n_nodes + 1, sizeof(double));
-    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->iface_u0 || !c->lin_u ||
-        !c->lin_v || !c->guess_u) {
+    if (!c->node_ids || !c->iface_X || !c->iface_u || !c->iface_v || !c->iface_u0 ||
+        !c->ckpt_u0 || !c->lin_u || !c->lin_v || !c->guess_u) {
         nc_error_set(err, 1, "out of memory");
         goto done;
     }
+    nc_ckpt_add(&c->run_entries, NULL, "run/interface_start", NC_CKPT_F64, c->ckpt_u0, 3 * n);
     for (size_t i = 0; i < n; i++) c->node_ids[i] = m->iface_nodes[i];
     if (start_state(c, err)) goto done;
     c->next_output_s = m->settings.output_interval * m->settings.dt_s;
@@ -444,7 +464,7 @@ done:
     fem_output_close(&c->out);
     fem_analysis_free(&c->s);
     nc_ckpt_table_free(&c->run_entries);
-    free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v); free(c->iface_u0);
+    free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v); free(c->iface_u0); free(c->ckpt_u0);
     free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->guess_u);
     fem_psd_free(&c->psd);
     free(c);

@@ -51,8 +51,7 @@ typedef struct fem_settings {
     double alpha_b;              /* Bossak alpha (<= 0) */
     double dt_s, end_time_s;     /* dynamic step and end time */
     double load_ramp_s;          /* dynamic: loads ramp linearly from 0 over this time (0 = step) */
-    int load_steps;              /* static: number of load increments; dynamic with
-                                    initial_static: those of the initial equilibrium */
+    int load_steps;              /* static: number of load increments */
     int initial_static;          /* dynamic: start at rest in static equilibrium under the
                                     loads at t = 0 (1), or at the reference state (0) */
     int max_iterations;          /* Newton iterations per step / load increment */

@@ -91,8 +91,9 @@ static void warn_undamped_coupling(const fem_model *m, const char *input)
                     "coupling force as the load at the end of the step: the DEM's step-averaged "
                     "contact force then acts as a spring delayed by half a step and feeds energy "
                     "into the net (cases/steel_net with Newmark's trapezoid: 10 times its input "
-                    "energy by 0.16 s); the cases use integrator \"bossak\" with alpha_b -0.3 "
-                    "(docs/notes/rest_position.md)", input);
+                    "energy by 0.16 s); the cases use integrator \"bossak\" with alpha_b -0.3 (the "
+                    "barrier cases -0.1 with the ropes' kappa damping; "
+                    "docs/notes/rest_position.md)", input);
 }
 
 int main(int argc, char **argv)

@@ -463,11 +463,13 @@ def summary(args, fem, info):
               "Structures 50, 2013); activation forces 30-40 kN, stroke 1 m are project estimates "
               "to be fitted to a manufacturer's force-stroke curve;",
               "- posts: an HEA 160 section (A 38.8 cm^2, 30.5 kg/m), hinged at the base;",
-              "- damping (dynamic): Rayleigh tau 2 1/s, kappa 1e-4 s on every element and Bossak "
-              "alpha -0.1, the MEL test's recipe (cases/barrier_mel/README.md): the ropes, not the "
-              "integrator, damp the light net's highest modes (what no mechanism of the model "
-              "accounts for: 0.36 % of the small barrier test's impact energy against 0.9 % with "
-              "Bossak -0.3 alone); kappa is a project estimate, not a measured rope property;",
+              "- damping (dynamic): by default Rayleigh tau 2 1/s, kappa 1e-4 s on every element "
+              "and Bossak alpha -0.1, the MEL test's recipe (cases/barrier_mel/README.md): the "
+              "ropes, not the integrator, damp the light net's highest modes (what no mechanism of "
+              "the model accounts for: 0.36 %% of the small barrier test's impact energy against "
+              "0.9 %% with Bossak -0.3 alone); kappa is a project estimate, not a measured rope "
+              "property (this model: tau %g 1/s, kappa %g s, Bossak %g);"
+              % (args.rayleigh_tau, args.rayleigh_kappa, args.alpha_b),
               "- shackles: two neighbours on a sliding rope (or a shackle and a post top or anchor) "
               "stop %g m apart (--shackle-gap; the default 5 cm is about the size of a shackle for "
               "these ropes, a project estimate), with the contact stiffness EA / gap (fem_solver's "

@@ -6,7 +6,8 @@
 # with `run_case.sh --resume DIR`; every dataset of fem.h5, dem.h5 and coupling.h5 (except
 # the wall-clock ones, tests/coupler/resume_lib.sh) must be identical to the uninterrupted
 # run's, with the same shapes; also for a net that starts at rest in its static equilibrium
-# under its own weight (the FEM's interface then starts where that equilibrium holds it).
+# under its own weight (the FEM's interface then starts where that equilibrium holds it),
+# whose resume with another start state is refused.
 # Skipped (exit 77) while fem_solver or dem_solver does not announce the capability
 # 'checkpoint' (the coupler then says "checkpoints off" at start-up, naming it).
 . tests/e2e_lib.sh
@@ -30,4 +31,18 @@ resume_check net_kill "$case_dir" kill "coupling.h5 fem.h5 dem.h5 iterations.log
 # analysis.initial_state): the resumed FEM finds the same start and interface again
 resume_check net_settled "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet \
   "${args[@]}" --set fem.self_weight=true --set fem.analysis.initial_state=static
+# resumed with another start (initial_state changed in the run's fem.json): the FEM refuses
+# the checkpoint, naming the cause, instead of continuing from a start 0.0076 m elsewhere
+cp -r "$NC_TMP/net_settled.b" "$NC_TMP/net_moved"
+"$PY" - "$NC_TMP/net_moved/fem.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["analysis"]["initial_state"] = "reference"
+json.dump(d, open(sys.argv[1], "w"))
+PY
+if scripts/run_case.sh --resume "$NC_TMP/net_moved" > "$NC_TMP/net_moved.out" 2>&1; then
+  fail "net_moved: a resume from another start state was accepted"
+fi
+grep -q "the checkpoint was written by a run that started from another state" "$NC_TMP/net_moved/fem.log" \
+  || { tail -n 5 "$NC_TMP/net_moved/fem.log" "$NC_TMP/net_moved.out"; fail "net_moved: the FEM did not name the changed start"; }
 echo "PASS"

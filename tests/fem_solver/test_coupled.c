@@ -220,9 +220,11 @@ static void test_protocol_session(void **state)
 
 /* analysis.initial_state "static" on the cable with self-weight: INTERFACE's coordinates are
  * the reference plus the equilibrium's displacement (computed in-process, the same code); a
- * SOLVE without force replies displacement and velocity 0 within 1e-12 (the cable hangs
- * still where the coordinates say); one with a force replies the in-process step's
- * displacement less the equilibrium's, within Newton's 1e-9 m. */
+ * SOLVE without force, with a contact linearisation about the start position (jacobian
+ * displacement 0), replies displacement and velocity 0 within 1e-12 (the cable hangs still
+ * where the coordinates say, and the linearisation point is taken in the protocol's
+ * displacements); one with a force replies the in-process step's displacement less the
+ * equilibrium's, within Newton's 1e-9 m. */
 static void test_initial_state_interface(void **state)
 {
     (void)state;
@@ -274,6 +276,17 @@ static void test_initial_state_interface(void **state)
         req.time_s = k * dt;
         req.dt_s = dt;
         assert_int_equal(proto_message_add_f64(&req, "force", force, 4, 3, &err), 0);
+        if (k == 0) {
+            /* a contact linearisation about the interface's start position (0 in the
+             * protocol's displacements): no force there, so the cable stays put; an FEM that
+             * took the point in its own displacements would feel K u0 */
+            const int32_t nodes[2] = {1, 1};
+            const double K[9] = {1e5, 0, 0, 0, 1e5, 0, 0, 0, 1e5}, zero[12] = {0};
+            assert_int_equal(proto_message_add_i32(&req, "jacobian_nodes", nodes, 1, 2, &err), 0);
+            assert_int_equal(proto_message_add_f64(&req, "jacobian_stiffness", K, 1, 9, &err), 0);
+            assert_int_equal(proto_message_add_f64(&req, "jacobian_displacement", zero, 4, 3, &err), 0);
+            assert_int_equal(proto_message_add_f64(&req, "jacobian_velocity", zero, 4, 3, &err), 0);
+        }
         if (proto_peer_request(peer, &req, &rep, &err)) fail_msg("step %d: %s", k, err.message);
         const double *u, *v;
         assert_int_equal(proto_message_get_f64(&rep, "displacement", 4, 3, &u, NULL, &err), 0);
