@@ -262,6 +262,9 @@ static void test_initial_state_interface(void **state)
     for (int i = 0; i < 12; i++) assert_near(X[i], model.X[i] + u0[i], 0.0);
 
     const double dt = 1e-3;
+    /* the arrays a request refers to (it does not copy them) live until it is sent */
+    const int32_t nodes[2] = {1, 1};
+    const double K[9] = {1e5, 0, 0, 0, 1e5, 0, 0, 0, 1e5}, zero[12] = {0};
     for (int k = 0; k < 2; k++) {
         proto_message_init(&req, PROTO_MSG_BEGIN_STEP);
         req.step = k;
@@ -280,8 +283,6 @@ static void test_initial_state_interface(void **state)
             /* a contact linearisation about the interface's start position (0 in the
              * protocol's displacements): no force there, so the cable stays put; an FEM that
              * took the point in its own displacements would feel K u0 */
-            const int32_t nodes[2] = {1, 1};
-            const double K[9] = {1e5, 0, 0, 0, 1e5, 0, 0, 0, 1e5}, zero[12] = {0};
             assert_int_equal(proto_message_add_i32(&req, "jacobian_nodes", nodes, 1, 2, &err), 0);
             assert_int_equal(proto_message_add_f64(&req, "jacobian_stiffness", K, 1, 9, &err), 0);
             assert_int_equal(proto_message_add_f64(&req, "jacobian_displacement", zero, 4, 3, &err), 0);
