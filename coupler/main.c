@@ -13,7 +13,8 @@
  * unconverged steps, with energy created beyond energy_tolerance or with interface impulse
  * the structure missed beyond impulse_tolerance (results not reliable; 0 instead when
  * coupler.json sets accept_unconverged, accept_energy_growth, respectively
- * accept_impulse_loss), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
+ * accept_impulse_loss), or stopped at the step its energy guard fired at
+ * (stop_on_energy_growth), 130 interrupted (SIGINT), 143 terminated (SIGTERM). See
  * coupler/README.md.
  */
 #include <math.h>

@@ -3,6 +3,8 @@
  *
  * Contract: fem_analysis_init() builds the equation numbering (supported dofs are eliminated,
  * so the pattern never changes), the sparse pattern and CHOLMOD's symbolic analysis once.
+ * fem_analysis_settle() (static equilibrium by pseudo-time steps) allocates nothing;
+ * on failure it leaves the last pseudo step's state, at its own time and step.
  * fem_analysis_static() and fem_analysis_step() allocate nothing; on Newton failure they leave
  * the state as it was before the call and return -1 with a message naming step/time,
  * iterations and residual. The extra nodal force f_coupling (N, per dof) is added to the

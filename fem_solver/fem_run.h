@@ -1,6 +1,9 @@
 /* fem_run — the two ways the FEM program runs: standalone (static load steps or a dynamic
  * run to end_time with the model's own loads) and coupled (serving the netcouple protocol
- * as participant "fem").
+ * as participant "fem"). A static load step whose Newton iteration fails or meets a singular
+ * matrix is solved again by pseudo-time steps (fem_analysis_settle); a dynamic run starts
+ * from the reference state or, with analysis.initial_state "static", at rest in its static
+ * equilibrium (fem_run_initial_state), and a coupled one then gives the interface from there.
  *
  * Both write DIR/fem.h5 + DIR/fem.xdmf (fem_output.h), check *stop between steps (set by
  * the program's signal handler) and then finish cleanly: the results written so far are
