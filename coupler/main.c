@@ -722,6 +722,30 @@ static int print_status(app *a, int *energy_ok, int *impulse_ok)
     return reliable && *energy_ok && *impulse_ok;
 }
 
+/* Convergence options that the run's scheme or exchange leaves without effect are accepted
+ * (a case may set them for the variants it is run in) but said, also with --quiet: a user
+ * who set them expects them to act. */
+static void warn_idle_options(app *a, int both_jacobian)
+{
+    const cpl_loop_settings *s = &a->cfg.loop;
+    const int strong = s->scheme == CPL_SCHEME_STRONG;
+    const int force_residual = strong && s->relaxed == CPL_RELAXED_FORCE;
+    const char *why_not = !strong ? "the weak scheme exchanges once per step, nothing converges"
+                          : force_residual ? "relaxed_quantity \"force\" converges on the "
+                                             "forces, eq. (36)"
+                                           : NULL;
+    if (s->work_tol > 0.0 && why_not)
+        cpl_progress_message(&a->progress, "coupler: warning: %s: work_tolerance has no "
+                             "effect: %s", a->config_path, why_not);
+    if (!(s->newton_estimate > 0.0)) return;
+    if (!why_not && !s->interface_jacobian) why_not = "interface_jacobian is false";
+    if (!why_not && !both_jacobian) why_not = "a participant lacks the capability 'jacobian'";
+    if (why_not)
+        cpl_progress_message(&a->progress, "coupler: warning: %s: newton_estimate has no "
+                             "effect: it judges the structure's Newton step with the interface "
+                             "Jacobian, and %s", a->config_path, why_not);
+}
+
 int main(int argc, char **argv)
 {
     app a;
@@ -859,6 +883,7 @@ int main(int argc, char **argv)
                                  ? "on: the FEM solves with the DEM's contact linearisation"
                                  : "not available (a participant lacks the capability "
                                    "'jacobian'): plain exchange");
+    warn_idle_options(&a, fem.can_jacobian && dem.can_jacobian);
     cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject, observe_checkpoint};
     if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of

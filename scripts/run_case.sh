@@ -327,15 +327,15 @@ report() {
     echo "run_case: ropes above their breaking load (the model has no rope failure):" >&2
     grep "exceeded breaking_load_n" fem.log | sed 's/^fem_solver: warning: /  /' >&2
   fi
-  # the solvers' warnings about their input (a value outside its plausible range: a modulus
-  # in GPa written in Pa, a diameter in mm): the run went on with the input as given, and
-  # the warnings sit in the solvers' logs, which run_case.sh does not show while it runs
-  input_warnings=""
-  if [ -f fem.log ] || [ -f dem.log ]; then
-    input_warnings=$(grep -h "^warning: [^ ]*\.json: " fem.log dem.log 2>/dev/null)
-  fi
+  # the programs' warnings about their input (a value outside its plausible range: a modulus
+  # in GPa written in Pa, a diameter in mm; an option the run's set-up leaves without
+  # effect): the run went on with the input as given, and the warnings sit in the logs,
+  # which run_case.sh does not show while it runs (nor the coupler's with --quiet)
+  input_warnings=$( { grep -h "^warning: [^ ]*\.json: " fem.log dem.log
+                      grep -h "^coupler: warning: [^ ]*\.json: " coupler.log | sed 's/^coupler: //'
+                    } 2>/dev/null)
   if [ -n "$input_warnings" ]; then
-    echo "run_case: the solvers warned about their input (the results are those of the input as given):" >&2
+    echo "run_case: the programs warned about their input (the results are those of the input as given):" >&2
     sed 's/^warning: /  /' <<< "$input_warnings" >&2
   fi
   # the coupler's verdict (the last line of its summary) also when an accept_* key let it

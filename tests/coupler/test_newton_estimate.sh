@@ -17,7 +17,10 @@
 #  - the peak deflection of node 220 agrees within 0.5 %, the summed interface mismatch
 #    within 0.1 % of the input energy;
 #  - the impulse the structure solved with stays within 0.5 % of the particles' (the impulse
-#    guard's own limit is 5 %).
+#    guard's own limit is 5 %);
+#  - where it cannot act (interface_jacobian false, the weak scheme; work_tolerance with
+#    relaxed_quantity "force") the coupler warns and run_case.sh lists the warning before its
+#    verdict, also with --quiet; the committed set-up has no such warning.
 . tests/e2e_lib.sh
 [ -d cases/steel_net ] || { echo "SKIP: cases/steel_net missing"; exit 77; }
 common=(--set coupler.end_time=0.15 --set fem.analysis.end_time_s=0.15)
@@ -27,6 +30,22 @@ for r in paper estimate; do
   grep -v '^$' "$NC_TMP/$r/coupler.log" | tail -n 1 | grep -q "^coupler: results are reliable" \
     || fail "$r: not reliable: $(tail -n 1 "$NC_TMP/$r/coupler.log")"
 done
+# the options' warnings, on 3 steps each
+short=(--set coupler.end_time=0.003 --set fem.analysis.end_time_s=0.003)
+run_case jac_off cases/steel_net "${short[@]}" --set coupler.newton_estimate=0.1 \
+  --set coupler.interface_jacobian=false
+run_case weak cases/steel_net "${short[@]}" --set coupler.newton_estimate=0.1 --set coupler.scheme=weak
+run_case force cases/steel_net "${short[@]}" --set coupler.work_tolerance=1e-6 \
+  --set coupler.relaxed_quantity=force
+expect_warning() {
+  grep -q "^  coupler.json: $2 has no effect: .*$3" "$NC_TMP/$1.out" \
+    || fail "$1: no warning that $2 has no effect ($3): $(grep warning "$NC_TMP/$1.out")"
+}
+expect_warning jac_off newton_estimate "interface_jacobian is false"
+expect_warning weak newton_estimate "the weak scheme"
+expect_warning force work_tolerance 'relaxed_quantity "force"'
+! grep -q "has no effect" "$NC_TMP/estimate.out" || fail "estimate: a warning on the committed set-up"
+
 grep -Eq "newton_estimate 0.1: [1-9][0-9]* of [0-9]+ steps by the latter" "$NC_TMP/estimate/coupler.log" \
   || fail "estimate: the summary does not name the Newton error estimate and count its steps"
 

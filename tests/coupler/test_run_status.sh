@@ -75,7 +75,7 @@ grep -q "done\|failed" "$NC_TMP/overload_fails.out" && fail "overload_fails: sai
 # 1.26e-4 m²): the FEM's plausibility warning, which only its log had, is listed too, and the
 # run is done "with the warnings about the input above"
 status_run kilo 0 --set fem.element_sets.0.breaking_load_n=100
-grep -q "^run_case: the solvers warned about their input" "$NC_TMP/kilo.out" \
+grep -q "^run_case: the programs warned about their input" "$NC_TMP/kilo.out" \
   || fail "kilo: the input warnings are not listed"
 grep -q "^  fem.json: element_sets\[0\].breaking_load_n: 100 N over the area .* kN given as N" "$NC_TMP/kilo.out" \
   || fail "kilo: the FEM's plausibility warning is not listed"
