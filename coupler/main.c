@@ -46,6 +46,7 @@ static void usage(FILE *out)
             "usage: coupler coupler.json [--output DIR] [--fem-endpoint EP] [--dem-endpoint EP]\n"
             "               [--fem-endpoint-file PATH] [--dem-endpoint-file PATH]\n"
             "               [--endpoint-wait S] [--quiet] [--progress-file PATH] [--resume]\n"
+            "       coupler coupler.json --check\n"
             "Couples a FEM and a DEM participant (weak or strong scheme, see coupler/README.md).\n"
             "  --output DIR        results folder (coupling.h5, iterations.log); default '.'\n"
             "  --fem-endpoint EP   override fem.endpoint of coupler.json (e.g. tcp://127.0.0.1:5555)\n"
@@ -61,7 +62,9 @@ static void usage(FILE *out)
             "                      waiting for a participant; scripts/run_case.sh reads it)\n"
             "  --resume            continue the run in --output DIR from its last complete\n"
             "                      checkpoint (DIR/checkpoint/latest.json); the participants\n"
-            "                      must be started as for the original run\n");
+            "                      must be started as for the original run\n"
+            "  --check             read and check coupler.json, print its warnings and run\n"
+            "                      nothing: exit 0 when it is valid, 1 with the error\n");
 }
 
 /* A run that finished with accepted unconverged steps or created energy (not opted in). */
@@ -97,6 +100,7 @@ typedef struct app {
     char ckpt_name[64];             /* the checkpoint resumed from (--resume) */
     char ckpt_newest[64];           /* the newest checkpoint (kept with the next one) */
     long ckpt_step;
+    int check_only;                 /* --check: read and check coupler.json, run nothing */
 } app;
 
 static int observe_iteration(void *ctx, const cpl_iteration_record *rec, nc_error *err)
@@ -383,6 +387,8 @@ static int parse_args(app *a, int argc, char **argv)
             a->quiet = 1;
         } else if (!strcmp(arg, "--resume")) {
             a->resume = 1;
+        } else if (!strcmp(arg, "--check")) {
+            a->check_only = 1;
         } else if (!strcmp(arg, "--output") && has_value) {
             a->output_dir = argv[++i];
         } else if (!strcmp(arg, "--fem-endpoint") && has_value) {
@@ -746,12 +752,31 @@ static void warn_idle_options(app *a, int both_jacobian)
                              "Jacobian, and %s", a->config_path, why_not);
 }
 
+/* --check: coupler.json read and checked as a run would (the participants' capabilities
+ * are not known: the warnings that need them assume both can linearise). */
+static int check_config(app *a)
+{
+    nc_error err;
+    nc_error_clear(&err);
+    cpl_config_default(&a->cfg);
+    if (cpl_config_load(&a->cfg, a->config_path, &err)) {
+        fprintf(stderr, "coupler: error: %s\n", err.message);
+        return 1;
+    }
+    cpl_progress_init(&a->progress, stdout, 0, 0, a->cfg.progress_interval_s,
+                      a->cfg.loop.start_time_s, a->cfg.loop.end_time_s, a->cfg.loop.dt_s);
+    warn_idle_options(a, 1);
+    printf("coupler: %s: valid (checked only, nothing run)\n", a->config_path);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     app a;
     memset(&a, 0, sizeof a);
     if (parse_args(&a, argc, argv)) return 1;
     setvbuf(stdout, NULL, _IOLBF, 0);
+    if (a.check_only) return check_config(&a);
 
     a.stop_signal = nc_signal_catch_stop();   /* a blocking wait returns on Ctrl-C */
     signal(SIGPIPE, SIG_IGN);

@@ -250,13 +250,19 @@ static void on_report(void *ctx, const char *message)
     if (c->opt->problems) fprintf(c->opt->problems, "dem_solver: %s\n", message);
 }
 
-int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
-                        const volatile sig_atomic_t *stop, nc_error *err)
+int dem_participant_check_input(const dem_sim *s, nc_error *err)
 {
     if (!(s->model.net.youngs_modulus_pa > 0.0))
         return nc_error_set(err, 1, "%s: net_wall: missing (the coupled mode needs the net wall "
                                     "material: youngs_modulus_pa, poisson_ratio, friction)",
                             s->model.source);
+    return 0;
+}
+
+int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
+                        const volatile sig_atomic_t *stop, nc_error *err)
+{
+    if (dem_participant_check_input(s, err)) return -1;
     proto_options popt;
     proto_options_default(&popt);
     popt.idle_timeout_ms = opt->idle_timeout_ms;

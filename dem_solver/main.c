@@ -3,6 +3,7 @@
  *
  *   dem_solver dem.json --output DIR
  *   dem_solver dem.json --endpoint EP --output DIR [--endpoint-file FILE] [--idle-timeout S]
+ *   dem_solver dem.json --check [--endpoint EP]
  *
  * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 130 interrupted (SIGINT/SIGTERM;
  * the results written so far are complete and readable).
@@ -27,15 +28,20 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: dem_solver dem.json --output DIR [--endpoint EP] [--endpoint-file FILE]\n"
             "                  [--idle-timeout SECONDS]\n"
+            "       dem_solver dem.json --check [--endpoint EP]\n"
             "  without --endpoint: standalone run with rigid walls (planes, STL meshes) until\n"
             "  end_time_s; with --endpoint: coupling participant (role \"dem\") serving the\n"
             "  coupler; results in DIR/dem.h5 with DIR/particles.xdmf (the particles) and,\n"
-            "  coupled, DIR/dem_net.xdmf (the net wall). See dem_solver/README.md.\n");
+            "  coupled, DIR/dem_net.xdmf (the net wall). --check reads and checks dem.json\n"
+            "  (and the STL files it names; with --endpoint also what the coupled mode\n"
+            "  needs), prints the summary and its warnings and runs nothing: exit 0 when it\n"
+            "  is valid, 1 with the error. See dem_solver/README.md.\n");
 }
 
 typedef struct options {
     const char *input, *output, *endpoint, *endpoint_file;
     double idle_timeout_s;
+    int check_only;     /* --check: read and check the input, run nothing */
 } options;
 
 static int parse_args(int argc, char **argv, options *o)
@@ -49,7 +55,8 @@ static int parse_args(int argc, char **argv, options *o)
             exit(0);
         }
         int has_value = k + 1 < argc;
-        if (strcmp(a, "--output") == 0 && has_value) o->output = argv[++k];
+        if (strcmp(a, "--check") == 0) o->check_only = 1;
+        else if (strcmp(a, "--output") == 0 && has_value) o->output = argv[++k];
         else if (strcmp(a, "--endpoint") == 0 && has_value) o->endpoint = argv[++k];
         else if (strcmp(a, "--endpoint-file") == 0 && has_value) o->endpoint_file = argv[++k];
         else if (strcmp(a, "--idle-timeout") == 0 && has_value) {
@@ -72,7 +79,7 @@ static int parse_args(int argc, char **argv, options *o)
         fprintf(stderr, "dem_solver: missing input file dem.json\n");
         return -1;
     }
-    if (!o->output) {
+    if (!o->output && !o->check_only) {
         fprintf(stderr, "dem_solver: missing --output DIR\n");
         return -1;
     }
@@ -251,7 +258,11 @@ int main(int argc, char **argv)
     dem_config_options copt = {.warnings = stderr};
     int built = dem_config_load_opt(&s, o.input, &copt, &err) == 0 && dem_sim_prepare(&s, &err) == 0;
     if (built) print_summary(&s, o.input, stdout, stderr);
-    if (!built || nc_file_make_dirs(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
+    if (built && o.check_only && o.endpoint && dem_participant_check_input(&s, &err)) {
+        rc = -1;
+    } else if (built && o.check_only) {
+        printf("dem_solver: %s: valid (checked only, nothing run)\n", o.input);
+    } else if (!built || nc_file_make_dirs(o.output, &err) || dem_output_open(&out, &s, o.output, &err)) {
         rc = -1;
     } else {
         rc = o.endpoint ? run_coupled(&s, &out, &o, stop, &err)

@@ -3,6 +3,7 @@
  *
  *   fem_solver fem.json --output DIR
  *   fem_solver fem.json --endpoint EP --output DIR [--endpoint-file FILE] [--idle-timeout S]
+ *   fem_solver fem.json --check
  *
  * SIGINT/SIGTERM stop the run after the current step; results so far are kept.
  * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 3 finished but an axial force
@@ -26,9 +27,13 @@ static void usage(FILE *f)
             "usage: fem_solver INPUT.json --output DIR\n"
             "       fem_solver INPUT.json --endpoint EP --output DIR [--endpoint-file FILE]\n"
             "                  [--idle-timeout SECONDS]\n"
+            "       fem_solver INPUT.json --check [--endpoint EP]\n"
             "Standalone: runs the analysis of INPUT.json (static load steps or dynamics) and\n"
             "writes DIR/fem.h5 and DIR/fem.xdmf. With --endpoint it serves the netcouple\n"
             "protocol as participant \"fem\" (EP e.g. tcp://127.0.0.1:5555 or tcp://127.0.0.1:*).\n"
+            "--check reads and checks INPUT.json (and the files it names), prints the\n"
+            "summary and its warnings (with --endpoint: also those of a coupled run), and\n"
+            "runs nothing: exit 0 when it is valid, 1 with the error.\n"
             "Input keys: fem_solver/README.md.\n");
 }
 
@@ -100,12 +105,15 @@ int main(int argc, char **argv)
 {
     const char *input = NULL, *output = NULL, *endpoint = NULL, *endpoint_file = NULL;
     double idle_s = 300.0;
+    int check_only = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has_value = i + 1 < argc;
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             usage(stdout);
             return 0;
+        } else if (strcmp(a, "--check") == 0) {
+            check_only = 1;
         } else if (strcmp(a, "--output") == 0 && has_value) {
             output = argv[++i];
         } else if (strcmp(a, "--endpoint") == 0 && has_value) {
@@ -130,7 +138,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!input || !output) {
+    if (!input || (!output && !check_only)) {
         fprintf(stderr, "fem_solver: %s is required\n", !input ? "an input file" : "--output DIR");
         usage(stderr);
         return 2;
@@ -148,6 +156,11 @@ int main(int argc, char **argv)
     }
     print_summary(&model, input, stdout);
     if (endpoint) warn_undamped_coupling(&model, input);
+    if (check_only) {
+        printf("fem_solver: %s: valid (checked only, nothing run)\n", input);
+        fem_model_free(&model);
+        return 0;
+    }
     if (nc_file_make_dirs(output, &err)) {
         fprintf(stderr, "fem_solver: --output: %s\n", err.message);
         fem_model_free(&model);

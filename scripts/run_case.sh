@@ -53,28 +53,29 @@ there: fem.h5, dem.h5, coupling.h5, their XDMF files, iterations.log, one log pe
                           (default 75, or $NC_STALL_LIMIT_S)
   --resume DIR            continue a stopped or crashed run in DIR from its last complete
                           checkpoint (coupler.json "checkpoint"; old logs kept as *.log.N)
-Progress: on a terminal one live status line (time, remaining wall time at the recent rate,
-contact, rock speed/energy, net deflection, iterations) under the coupler's messages;
-otherwise the coupler's log as it grows, with a plain status line every progress_interval s.
+Progress: on a terminal a live status line (time, remaining wall time, contact, rock speed and
+energy, net deflection, iterations) under the coupler's messages; else the coupler's log.
 The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoint, so
-parallel runs never collide; the coupler, started with them, reads them from there.
-Programs come from $NC_BIN if set, else <repo>/bin.
+parallel runs never collide; the coupler, started with them, reads them from there. Programs
+come from $NC_BIN if set, else <repo>/bin.
 $NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
 $NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their endpoints.
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps,
 created energy or lost impulse at the interface (results NOT reliable; 0 with coupler.json
 "accept_unconverged" / "accept_energy_growth" / "accept_impulse_loss": true, still NOT
-reliable); 1 a program failed (named, the others stopped) or stalled; 2 bad arguments or case,
-or --resume DIR without a complete checkpoint; 130 stopped by the user (Ctrl-C or SIGTERM), all
-programs stopped, the results so far readable. A finished run whose ropes exceeded their
-breaking_load_n lists the FEM's warnings before "done" (no rope failure in the model; exit 0),
-or with fem.json "analysis": {"fail_on_overload": true} ends NOT reliable with exit status 3
-(a solver's own exit status 3 after a finished coupling is such a verdict).
+reliable); 1 a program failed (named, the others stopped) or stalled; 2 bad arguments or case
+(the programs check their inputs with --check before any starts; not a --fem-program or
+--dem-program replacement), or --resume DIR without a complete checkpoint; 130 stopped by the
+user (Ctrl-C or SIGTERM), all programs stopped, the results so far readable. A finished run
+whose ropes exceeded breaking_load_n lists the FEM's warnings before "done" (no rope failure
+in the model; exit 0), or with fem.json "analysis": {"fail_on_overload": true} ends NOT
+reliable with exit 3 (a solver's own exit 3 after a finished coupling is such a verdict).
 EOF
 }
 
 die() { echo "run_case: $*" >&2; exit 2; }
 
+declare -A check_pid=()
 case_dir=""; out=""; sets=(); quiet=0; resume_dir=""; fem_given=0; dem_given=0
 stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}; endpoint_wait=${NC_ENDPOINT_WAIT_S:-60}
 fem_program="$bin/fem_solver"; dem_program="$bin/dem_solver"
@@ -175,6 +176,34 @@ remove_files "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
 if [ ${#sets[@]} -gt 0 ]; then
   "$bin/netcouple-set" "$out" "${sets[@]}" || exit 2
 fi
+
+# ---- the inputs, checked before anything starts ------------------------------------------
+# Each program reads and checks its input with --check (all three at once): a mistake in the
+# case or in a --set value stops here with exit 2, naming the file and the key, instead of
+# one program failing after the others started. A replacement solver (--fem-program,
+# --dem-program) checks its own input when it starts.
+checks=()
+[ $fem_given -eq 1 ] || checks+=("fem:$bin/fem_solver:fem.json")
+[ $dem_given -eq 1 ] || checks+=("dem:$bin/dem_solver:dem.json")
+checks+=("coupler:$bin/coupler:coupler.json")
+for c in "${checks[@]}"; do
+  IFS=: read -r name program input <<< "$c"
+  coupled=(--endpoint 'tcp://127.0.0.1:*')   # the solvers check what a coupled run needs
+  [ "$name" = coupler ] && coupled=()
+  ( cd "$out" && exec "$program" "$input" --check "${coupled[@]}" > /dev/null 2> "$name.check" ) &
+  check_pid[$name]=$!
+done
+bad_input=0
+for c in "${checks[@]}"; do
+  name=${c%%:*}
+  if ! wait "${check_pid[$name]}"; then
+    echo "run_case: $name: its input is not valid, nothing was started:" >&2
+    grep -v "^warning: " "$out/$name.check" >&2
+    bad_input=1
+  fi
+  rm -f "$out/$name.check"
+done
+[ $bad_input -eq 0 ] || exit 2
 
 # ---- supervision helpers ----------------------------------------------------------------
 # pid[P] and rc[P] for P in fem, dem, coupler; rc is "" while P runs.

@@ -15,9 +15,9 @@
 #  8. run_case.sh itself killed (SIGKILL) while it waits for the endpoints, before the
 #     coupler connects -> the programs already started do not outlive it (no orphan waiting
 #     for a coupler until its idle timeout): gone within a few seconds;
-#  9. a coupler.json the coupler refuses, a DEM slow to start -> the coupler, started with the
-#     solvers, tells them to go (both exit 0, not stopped after the grace time) and only the
-#     coupler is named as failed;
+#  9. a coupler.json the coupler refuses -> run_case.sh's check of the inputs stops with exit 2
+#     before starting anything; started by hand with the solvers (a DEM slow to start), the
+#     coupler tells them to go (both exit 0, not left to their idle timeout);
 # 10. a case folder given as a symbolic link, and one that is read-only -> the output folder is
 #     a folder of its own (writable for a user other than root) and --set changes its copies,
 #     not the case's files;
@@ -175,19 +175,42 @@ took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv
 rpid=""
 echo "8 ok: the solvers ended $took s after run_case.sh was killed"
 
-# 9. a coupler.json the coupler refuses: the coupler, started with the solvers, reads their
-# endpoint files all the same and tells them to go (exit 0), instead of leaving them to be
-# stopped after the grace time (exit 143); the FEM, gone with exit 0 while the DEM takes 4 s
-# (more than the grace time) to publish its endpoint, is not blamed
+# 9. a coupler.json the coupler refuses. run_case.sh checks the three inputs first (--check):
+# exit 2, the key named, nothing started. The coupler started by hand with the solvers (as
+# run_case.sh did before the check, or a user's own launcher) reads their endpoint files all
+# the same and tells them to go (both exit 0, not left to their idle timeout), the DEM taking
+# 4 s to publish its endpoint
 launch bad_config --set coupler.dt=-1 --dem-program tests/coupler/participants/slow_start.sh
 t0=$start_s
-finish "$t0" 20
-[ "$rc" -eq 1 ] || fail "bad coupler.json: exit $rc, expected 1"
-failed_line | grep -Eq "^run_case: failed: coupler \(exit 1: coupler.json: dt: .*; stopped: fem \(exit 0\), dem \(exit 0\)$" \
-  || fail "bad coupler.json: '$(failed_line)'"
-awk "BEGIN {exit !($took < 12)}" || fail "bad coupler.json: reported after $took s (limit 12 s)"
-no_leftovers
-echo "9 ok ($took s): $(failed_line)"
+finish "$t0" 10
+[ "$rc" -eq 2 ] || fail "bad coupler.json: exit $rc, expected 2"
+grep -q "^run_case: coupler: its input is not valid, nothing was started:" "$out.out" \
+  && grep -q "coupler.json: dt: " "$out.out" || fail "bad coupler.json: the check's message"
+[ ! -e "$out/fem.log" ] && [ ! -e "$out/coupler.log" ] || fail "bad coupler.json: a program was started"
+rpid=""
+echo "9 ok ($took s): run_case.sh: $(grep 'coupler.json: dt: ' "$out.out")"
+by_hand=$NC_TMP/bad_config_by_hand
+mkdir -p "$by_hand"
+cp "$case_dir"/*.json "$by_hand"/
+"$PY" - "$by_hand/coupler.json" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1])); c["dt"] = -1; json.dump(c, open(sys.argv[1], "w"))
+PY
+t0=$EPOCHREALTIME
+(cd "$by_hand" && exec "$PY" "$OLDPWD/scripts/participants/spring_plate.py" fem.json --endpoint 'tcp://127.0.0.1:*' --output . \
+   --endpoint-file fem.endpoint > fem.log 2>&1) & fem_pid=$!
+(cd "$by_hand" && exec "$OLDPWD/tests/coupler/participants/slow_start.sh" dem.json \
+   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint > dem.log 2>&1) & dem_pid=$!
+(cd "$by_hand" && "$NC_BIN/coupler" coupler.json --output . --fem-endpoint-file fem.endpoint \
+   --dem-endpoint-file dem.endpoint > coupler.log 2>&1); cpl_rc=$?
+wait "$fem_pid"; fem_rc=$?
+wait "$dem_pid"; dem_rc=$?
+took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv[1])))" "$t0" "$EPOCHREALTIME")
+[ "$cpl_rc" -eq 1 ] && grep -q "coupler.json: dt: " "$by_hand/coupler.log" \
+  || fail "bad coupler.json by hand: coupler exit $cpl_rc: $(cat "$by_hand/coupler.log")"
+[ "$fem_rc" -eq 0 ] && [ "$dem_rc" -eq 0 ] || fail "bad coupler.json by hand: fem exit $fem_rc, dem exit $dem_rc"
+awk "BEGIN {exit !($took < 12)}" || fail "bad coupler.json by hand: the solvers ended after $took s (limit 12 s)"
+echo "9 ok ($took s): by hand, the coupler exits 1 and the solvers 0"
 
 # 10. a case folder given as a symbolic link, and a read-only one
 case_sum=$(cksum < cases/rest_position/coupler.json)

@@ -115,6 +115,18 @@ check(r.returncode == 2, "unknown option: usage error")
 r = run([os.path.join(examples, "drop.json"), "--output", os.path.join(tmp, "c"),
          "--endpoint", "tcp://127.0.0.1:*"])
 check(r.returncode == 1 and "net_wall" in r.stderr, "coupled without net_wall: " + r.stderr)
+# --check: the input read and checked, nothing run (no --output needed, no folder made);
+# with --endpoint also what the coupled mode needs, nothing bound
+out = os.path.join(tmp, "check_out")
+r = run([os.path.join(examples, "drop.json"), "--check", "--output", out])
+check(r.returncode == 0 and "valid (checked only, nothing run)" in r.stdout
+      and not os.path.exists(out), "--check valid: %d %s %s" % (r.returncode, r.stdout, r.stderr))
+r = run([os.path.join(examples, "drop.json"), "--check", "--endpoint", "tcp://127.0.0.1:*"])
+check(r.returncode == 1 and "net_wall" in r.stderr, "--check --endpoint without net_wall: " + r.stderr)
+write("bad_check.json", '{"materials": [], "dt": 1}')
+r = run([os.path.join(tmp, "bad_check.json"), "--check"])
+check(r.returncode == 1 and "bad_check.json" in r.stderr and "dt: unknown key" in r.stderr,
+      "--check bad: %d %s" % (r.returncode, r.stderr))
 
 print("%d failure(s)" % len(failures))
 sys.exit(1 if failures else 0)

@@ -244,8 +244,28 @@ def test_undamped_coupling_warning():
               % (analysis, coupled, said, warned, r.stderr[-300:]))
 
 
+def test_check():
+    """--check reads and checks the input and runs nothing: exit 0 and the summary for a valid
+    input (no --output needed, no folder made), exit 1 naming file and field for a bad one;
+    with --endpoint the coupled run's warnings come too, and nothing is bound."""
+    out = os.path.join(TMP, "check_out")
+    r = run([os.path.join(EX, "cable_static.json"), "--check", "--output", out])
+    check(r.returncode == 0 and "valid (checked only, nothing run)" in r.stdout
+          and not os.path.exists(out), "--check valid: exit %d: %s %s" % (r.returncode, r.stdout, r.stderr))
+    bad = os.path.join(TMP, "bad_check.json")
+    open(bad, "w").write('{"nodes": [[0,0,0],[1,0,0]], "elements": [[0,1]], "element_sets": '
+                         '[{"youngs_modulus_pa": 1e11, "area_m2": 1e-4}], "analysis": {"dt": 1}}')
+    r = run([bad, "--check"])
+    check(r.returncode == 1 and "bad_check.json" in r.stderr and "analysis.dt: unknown key" in r.stderr
+          and "valid" not in r.stdout, "--check bad: exit %d: %s" % (r.returncode, r.stderr))
+    path = os.path.join(TMP, "undamped_0.json")   # written by test_undamped_coupling_warning
+    r = run([path, "--check", "--endpoint", "tcp://127.0.0.1:*"], timeout=10)
+    check(r.returncode == 0 and "a coupled run with gamma 0.5" in r.stderr,
+          "--check --endpoint: exit %d: %s" % (r.returncode, r.stderr[-300:]))
+
+
 for test in (test_static_example, test_dynamic_and_gmsh, test_errors, test_sigterm, test_overload,
-             test_undamped_coupling_warning):
+             test_undamped_coupling_warning, test_check):
     print("--", test.__name__)
     test()
 print("%d failure(s)" % len(failures))
