@@ -47,7 +47,7 @@ there: fem.h5, dem.h5, coupling.h5, their XDMF files, iterations.log, one log pe
                           (numbers index lists, also as materials[0]; VALUE is JSON if it
                           parses as JSON, else a string)
   --fem-program CMD       replace a solver by another participant taking the same arguments
-  --dem-program CMD       (e.g. "/usr/bin/python3 scripts/participants/spring_plate.py")
+  --dem-program CMD       (e.g. "/usr/bin/python3 'my dir/plate.py'", split as a shell would)
   --quiet                 print only warnings, errors and the verdict
   --stall-limit SECONDS   stop the coupler as stalled when its heartbeat is older than this
                           (default 75, or $NC_STALL_LIMIT_S)
@@ -75,7 +75,7 @@ EOF
 
 die() { echo "run_case: $*" >&2; exit 2; }
 
-declare -A check_pid=()
+declare -A check_pid=()   # the input checks (below), by program
 case_dir=""; out=""; sets=(); quiet=0; resume_dir=""; fem_given=0; dem_given=0
 stall_limit=${NC_STALL_LIMIT_S:-75}; grace=${NC_STOP_GRACE_S:-3}; endpoint_wait=${NC_ENDPOINT_WAIT_S:-60}
 fem_program="$bin/fem_solver"; dem_program="$bin/dem_solver"
@@ -176,34 +176,6 @@ remove_files "$out"/fem.endpoint "$out"/dem.endpoint "$out"/*.endpoint.tmp
 if [ ${#sets[@]} -gt 0 ]; then
   "$bin/netcouple-set" "$out" "${sets[@]}" || exit 2
 fi
-
-# ---- the inputs, checked before anything starts ------------------------------------------
-# Each program reads and checks its input with --check (all three at once): a mistake in the
-# case or in a --set value stops here with exit 2, naming the file and the key, instead of
-# one program failing after the others started. A replacement solver (--fem-program,
-# --dem-program) checks its own input when it starts.
-checks=()
-[ $fem_given -eq 1 ] || checks+=("fem:$bin/fem_solver:fem.json")
-[ $dem_given -eq 1 ] || checks+=("dem:$bin/dem_solver:dem.json")
-checks+=("coupler:$bin/coupler:coupler.json")
-for c in "${checks[@]}"; do
-  IFS=: read -r name program input <<< "$c"
-  coupled=(--endpoint 'tcp://127.0.0.1:*')   # the solvers check what a coupled run needs
-  [ "$name" = coupler ] && coupled=()
-  ( cd "$out" && exec "$program" "$input" --check "${coupled[@]}" > /dev/null 2> "$name.check" ) &
-  check_pid[$name]=$!
-done
-bad_input=0
-for c in "${checks[@]}"; do
-  name=${c%%:*}
-  if ! wait "${check_pid[$name]}"; then
-    echo "run_case: $name: its input is not valid, nothing was started:" >&2
-    grep -v "^warning: " "$out/$name.check" >&2
-    bad_input=1
-  fi
-  rm -f "$out/$name.check"
-done
-[ $bad_input -eq 0 ] || exit 2
 
 # ---- supervision helpers ----------------------------------------------------------------
 # pid[P] and rc[P] for P in fem, dem, coupler; rc is "" while P runs.
@@ -386,30 +358,81 @@ report() {
   exit 0
 }
 
-# commands run inside $out: make relative paths in them absolute first
-absolute_words() {   # VAR: the words of $VAR, those naming existing files made absolute
-  local word result=""
-  for word in ${!1}; do
-    if [ "${word#/}" = "$word" ] && [ -e "$word" ]; then word="$PWD/$word"; fi
-    result="$result $word"
-  done
-  printf -v "$1" '%s' "${result# }"
+# The solvers' commands as words: a built-in program is one word (a folder with spaces in its
+# name included); a --fem-program / --dem-program command is split as the shell would split it,
+# quotes and backslashes kept ("/usr/bin/python3 'my dir/plate.py'" is two words). Commands
+# run inside $out: relative paths in them are made absolute first.
+command_words() {   # ARRAY COMMAND
+  local -n words_=$1
+  local split
+  if [[ $2 == *[\"\'\\]* ]]; then
+    split=$("$python" -c 'import shlex, sys; print("\n".join(shlex.split(sys.argv[1])))' "$2" 2>/dev/null) \
+      || die "cannot split the command '$2' into words (unbalanced quotes?)"
+    mapfile -t words_ <<< "$split"
+  else
+    read -ra words_ <<< "$2"
+  fi
+  [ ${#words_[@]} -gt 0 ] || die "an empty program command"
 }
-absolute_words fem_program
-absolute_words dem_program
+absolute_words() {   # ARRAY: its words that name existing files made absolute
+  local -n words_=$1
+  local k
+  for k in "${!words_[@]}"; do
+    if [ "${words_[k]#/}" = "${words_[k]}" ] && [ -e "${words_[k]}" ]; then
+      words_[k]="$PWD/${words_[k]}"
+    fi
+  done
+}
+fem_cmd=("$fem_program"); dem_cmd=("$dem_program")
+[ $fem_given -eq 0 ] || command_words fem_cmd "$fem_program"
+[ $dem_given -eq 0 ] || command_words dem_cmd "$dem_program"
+absolute_words fem_cmd
+absolute_words dem_cmd
 cd "$out" || die "$out: cannot enter"
-# the programs of a run, for --resume (which starts the same ones unless told otherwise)
+# the programs of a run, for --resume (which starts the same ones unless told otherwise),
+# one line each: the role, then the command's words quoted as the shell reads them
 if [ -n "$resume_dir" ]; then
   if [ -f run_case.programs ]; then
     { IFS= read -r saved_fem; IFS= read -r saved_dem; } < run_case.programs
-    [ $fem_given -eq 1 ] || fem_program=${saved_fem#fem }
-    [ $dem_given -eq 1 ] || dem_program=${saved_dem#dem }
+    [ $fem_given -eq 1 ] || command_words fem_cmd "${saved_fem#fem }"
+    [ $dem_given -eq 1 ] || command_words dem_cmd "${saved_dem#dem }"
   fi
   # the earlier run's logs stay, numbered
   n=1; while [ -e "coupler.log.$n" ] || [ -e "fem.log.$n" ] || [ -e "dem.log.$n" ]; do n=$((n + 1)); done
   for p in fem dem coupler; do [ -f "$p.log" ] && mv "$p.log" "$p.log.$n"; done
 fi
-printf 'fem %s\ndem %s\n' "$fem_program" "$dem_program" > run_case.programs
+printf -v fem_line '%q ' "${fem_cmd[@]}"; printf -v dem_line '%q ' "${dem_cmd[@]}"
+printf 'fem %s\ndem %s\n' "${fem_line% }" "${dem_line% }" > run_case.programs
+
+# ---- the inputs, checked before anything starts ------------------------------------------
+# Each program reads and checks its input with --check (all three at once): a mistake in the
+# case or in a --set value stops here with exit 2, naming the file and the key, instead of
+# one program failing after the others started. Another solver (--fem-program,
+# --dem-program, or the one a resumed run was started with) checks its own input when it
+# starts: only netcouple's fem_solver and dem_solver are asked.
+check_pid=()
+check_input() {   # NAME WORDS...: WORDS --check in the background, its stderr in NAME.check
+  local name=$1; shift
+  ( exec "$@" --check > /dev/null 2> "$name.check" ) &
+  check_pid[$name]=$!
+}
+[ ${#fem_cmd[@]} -eq 1 ] && [ "${fem_cmd[0]##*/}" = fem_solver ] &&
+  check_input fem "${fem_cmd[0]}" fem.json --endpoint 'tcp://127.0.0.1:*'
+[ ${#dem_cmd[@]} -eq 1 ] && [ "${dem_cmd[0]##*/}" = dem_solver ] &&
+  check_input dem "${dem_cmd[0]}" dem.json --endpoint 'tcp://127.0.0.1:*'
+check_input coupler "$bin/coupler" coupler.json
+bad_input=0
+for name in fem dem coupler; do
+  [ -n "${check_pid[$name]:-}" ] || continue
+  if ! wait "${check_pid[$name]}"; then
+    echo "run_case: $name: its input is not valid, nothing was started:" >&2
+    grep -v "^warning: " "$name.check" >&2
+    bad_input=1
+  fi
+  rm -f "$name.check"
+done
+[ $bad_input -eq 0 ] || exit 2
+
 remove_files coupler.progress coupler.progress.tmp
 status_shown=0; show_pid=""
 
@@ -439,12 +462,10 @@ exec_closing() {   # "FD ..." CMD...: execs CMD with this shell's file descripto
   shift
   exec "$@"
 }
-# shellcheck disable=SC2086   # the program may be a command with arguments
-exec_closing "$nap_fd $alive_fd" "${guard[@]}" $fem_program fem.json \
+exec_closing "$nap_fd $alive_fd" "${guard[@]}" "${fem_cmd[@]}" fem.json \
   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file fem.endpoint >fem.log 2>&1 &
 pid[fem]=$!
-# shellcheck disable=SC2086
-exec_closing "$nap_fd $alive_fd" "${guard[@]}" $dem_program dem.json \
+exec_closing "$nap_fd $alive_fd" "${guard[@]}" "${dem_cmd[@]}" dem.json \
   --endpoint 'tcp://127.0.0.1:*' --output . --endpoint-file dem.endpoint >dem.log 2>&1 &
 pid[dem]=$!
 

@@ -73,6 +73,7 @@ out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/bad" "${participants[@]}" \
 echo "$out" | grep -q "not an index" || fail "unclear --set message: $out"
 # a typo in coupler.json is refused naming file and key
 out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/typo" "${participants[@]}" \
-      --set coupler.tolerence=1e-3 2>&1) && fail "typo accepted"
-grep -q "tolerence: unknown key" "$NC_TMP/typo/coupler.log" || fail "typo message: $(cat "$NC_TMP/typo/coupler.log")"
+      --set coupler.tolerence=1e-3 2>&1); rc=$?
+[ $rc -eq 2 ] || fail "typo: exit $rc, expected 2 (the input check before the start): $out"
+grep -q "coupler.json: tolerence: unknown key" <<< "$out" || fail "typo message: $out"
 echo "PASS"
