@@ -5,7 +5,8 @@
 # deflection is w = -m g / k = -9.81e-3 m (1 kg, 1000 N/m); tolerance 1 % (the 30 % damped
 # system has settled to < 0.1 % after 1.5 s). Also checks the history file layout and that
 # weak, strong with Aitken on u/u̇ and strong with IQN-ILS on forces all run, and that both
-# participants speak protocol version 2 with the coupler.
+# participants speak protocol version 2 with the coupler; a misspelt key stops at the input
+# check (exit 2); a participant command with a quoted path holding a space runs.
 set -u
 : "${NC_BIN:?}" "${NC_TMP:?}"
 PY=${PYTHON:-/usr/bin/python3}
@@ -76,4 +77,15 @@ out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/typo" "${participants[@]}" 
       --set coupler.tolerence=1e-3 2>&1); rc=$?
 [ $rc -eq 2 ] || fail "typo: exit $rc, expected 2 (the input check before the start): $out"
 grep -q "coupler.json: tolerence: unknown key" <<< "$out" || fail "typo message: $out"
+# a participant command whose script lies in a folder with a space in its name, quoted as in
+# a shell; run_case.programs keeps it in words a --resume reads back the same way
+spaced="$NC_TMP/my participants"
+mkdir -p "$spaced" && cp scripts/participants/*.py "$spaced"/
+out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/spaced" --quiet --set coupler.end_time=0.05 \
+      --fem-program "$PY '$spaced/spring_plate.py'" --dem-program "$PY \"$spaced/ball_dem.py\"" 2>&1) \
+  || fail "a quoted program path with a space: $out"
+grep -qF "fem $PY ${spaced// /\\ }/spring_plate.py" "$NC_TMP/spaced/run_case.programs" \
+  || fail "run_case.programs: $(cat "$NC_TMP/spaced/run_case.programs")"
+out=$(scripts/run_case.sh "$case_dir" --out "$NC_TMP/unbalanced" --fem-program "$PY '$spaced/x.py" 2>&1)
+[ $? -eq 2 ] && grep -q "cannot split the command" <<< "$out" || fail "an unbalanced quote: $out"
 echo "PASS"
