@@ -1156,7 +1156,13 @@ int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *st
     *steps = 0;
     nc_error_clear(err);   /* what it holds at the end is this call's */
     s->fixed_load_factor = lambda;
+    const fem_settle_watch *watch = &s->settle_watch;
     for (int k = 0; k < FEM_SETTLE_MAX_STEPS && rc < 0; k++) {
+        if (watch->stop && *watch->stop) {
+            nc_error_set(err, FEM_ERR_STOPPED, "%s: stopped by a signal while settling under "
+                         "load factor %g (pseudo-time step %d)", s->m->source, lambda, k + 1);
+            break;
+        }
         memset(s->cur.v, 0, (size_t)s->ndof * sizeof(double));
         memset(s->cur.a, 0, (size_t)s->ndof * sizeof(double));
         const int failed = fem_analysis_step(s, h, err);
@@ -1180,6 +1186,7 @@ int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *st
                 last_node = dof / 3;
             }
         }
+        if (watch->on_step) watch->on_step(watch->ctx, *steps, h, last_move, last_node);
         if (h >= FEM_SETTLE_H_MAX_S && last_move <= set->displacement_tol_m) rc = 0;
         h = fmin(2.0 * h, FEM_SETTLE_H_MAX_S);
     }

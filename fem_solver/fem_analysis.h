@@ -20,6 +20,8 @@
 #ifndef FEM_ANALYSIS_H
 #define FEM_ANALYSIS_H
 
+#include <signal.h>
+
 #include "fem_gmres.h"
 #include "fem_interface_jacobian.h"
 #include "fem_model.h"
@@ -27,6 +29,8 @@
 
 /* nc_error code of a step whose Newton iterations did not converge (a smaller step may). */
 #define FEM_ERR_NEWTON 3
+/* fem_analysis_settle stopped by its watch's stop flag (a signal) */
+#define FEM_ERR_STOPPED 4
 
 typedef struct fem_state {
     double time_s;
@@ -57,6 +61,16 @@ typedef struct fem_stats {
                                   (within FEM_ROUNDOFF_TOL_FACTOR of it) */
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
 } fem_stats;
+
+/* Who watches fem_analysis_settle (all members may be NULL): on_step after each pseudo step
+ * (its number from 1, its size h_s, the largest nodal move in it and that node), stop: ends
+ * the settling with FEM_ERR_STOPPED when it turns non-zero (a signal). A large barrier takes
+ * a minute or more to settle: the caller shows progress and can be stopped. */
+typedef struct fem_settle_watch {
+    void (*on_step)(void *ctx, int step, double h_s, double move_m, int node);
+    void *ctx;
+    const volatile sig_atomic_t *stop;
+} fem_settle_watch;
 
 typedef struct fem_analysis {
     const fem_model *m;
@@ -103,6 +117,7 @@ typedef struct fem_analysis {
     double saved_factor_cm, saved_factor_ck;
     double fixed_load_factor; /* >= 0: the load factor of every step (fem_analysis_settle),
                               else the one load_ramp_s gives the step's time */
+    fem_settle_watch settle_watch; /* progress and stop of fem_analysis_settle (zero: none) */
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
     fem_gmres gmres;       /* work space of the Newton steps with lin's skew part */
     double skew_lk, skew_lc; /* the tangent weights of lin during such a step */
@@ -130,7 +145,8 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
  * term keeps each step's matrix regular where a static Newton meets nodes held only by slack
  * cables. On success the state is at rest, its time and step as before the call;
  * *iterations, *steps: the Newton iterations and pseudo steps it took, failed ones included.
- * Needs a model with mass at every free dof a load moves. */
+ * Needs a model with mass at every free dof a load moves. s->settle_watch sees each pseudo
+ * step and can stop it (FEM_ERR_STOPPED; the time and step as before the call). */
 int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *steps,
                         nc_error *err);
 /* A dynamic run's start at rest in static equilibrium under its loads at t = 0 (self-weight,

@@ -36,6 +36,7 @@ typedef struct coupled {
     fem_analysis s;
     fem_output out;
     fem_run_summary *sum;
+    fem_settle_watch settle_watch; /* progress and stop of the initial equilibrium */
     int32_t *node_ids;
     double *iface_X, *iface_u, *iface_v;
     double *iface_u0;         /* [3n] where the start state has the interface nodes (the static
@@ -306,7 +307,9 @@ static int on_checkpoint(void *ctx, const proto_message *cmd, proto_message *rep
 static int start_state(coupled *c, nc_error *err)
 {
     const fem_model *m = c->m;
-    if (fem_analysis_init(&c->s, m, err) || fem_run_initial_state(&c->s, c->sum, err)) return -1;
+    if (fem_analysis_init(&c->s, m, err)) return -1;
+    c->s.settle_watch = c->settle_watch;
+    if (fem_run_initial_state(&c->s, c->sum, err)) return -1;
     for (int i = 0; i < m->n_iface_nodes; i++)
         for (int d = 0; d < 3; d++) {
             const int dof = 3 * m->iface_nodes[i] + d;
@@ -379,6 +382,8 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     c->m = m;
     c->dir = output_dir;
     c->sum = &sum;
+    if (opt->settle_watch) c->settle_watch = *opt->settle_watch;
+    c->settle_watch.stop = stop;
     c->written_step = -1;
     c->out.max_u_node = -1;
     nc_ckpt_add(&c->run_entries, NULL, "run/written_step", NC_CKPT_LONG, &c->written_step, 1);

@@ -83,8 +83,8 @@ int fem_run_initial_state(fem_analysis *s, fem_run_summary *sum, nc_error *err)
 }
 
 int fem_run_standalone(const fem_model *m, const char *output_dir,
-                       const volatile sig_atomic_t *stop, fem_run_summary *summary,
-                       nc_error *err)
+                       const volatile sig_atomic_t *stop, const fem_settle_watch *watch,
+                       fem_run_summary *summary, nc_error *err)
 {
     double t0 = nc_clock_now_s();
     fem_run_summary sum;
@@ -95,6 +95,8 @@ int fem_run_standalone(const fem_model *m, const char *output_dir,
     out.max_u_node = -1;
     int rc = -1;
     if (fem_analysis_init(&s, m, err)) goto done;
+    if (watch) s.settle_watch = *watch;
+    s.settle_watch.stop = stop;
     if (fem_output_open(&out, m, output_dir, err)) goto done;
     const fem_settings *set = &m->settings;
     long written_step = -1;

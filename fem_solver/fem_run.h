@@ -53,14 +53,18 @@ typedef struct fem_run_summary {
  * (its iterations and largest displacement into sum); then a_0. A static analysis: nothing. */
 int fem_run_initial_state(fem_analysis *s, fem_run_summary *sum, nc_error *err);
 
+/* The runners below watch fem_analysis_settle (the initial equilibrium, and static
+ * increments solved by pseudo-time steps) with `watch` (NULL: no progress), its stop flag
+ * being the run's `stop`: a settling stopped by a signal fails with FEM_ERR_STOPPED. */
 int fem_run_standalone(const fem_model *m, const char *output_dir,
-                       const volatile sig_atomic_t *stop, fem_run_summary *summary,
-                       nc_error *err);
+                       const volatile sig_atomic_t *stop, const fem_settle_watch *watch,
+                       fem_run_summary *summary, nc_error *err);
 
 typedef struct fem_coupled_options {
     const char *endpoint;
     const char *endpoint_file;  /* NULL or a file to write the bound endpoint into */
     int idle_timeout_ms;        /* <= 0 waits forever */
+    const fem_settle_watch *settle_watch; /* NULL: no progress while settling */
 } fem_coupled_options;
 
 int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_coupled_options *opt,

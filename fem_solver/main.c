@@ -13,6 +13,7 @@
 #include "fem_element.h"
 #include "fem_input.h"
 #include "fem_run.h"
+#include "nc_clock.h"
 #include "nc_file.h"
 #include "nc_plausible.h"
 #include "nc_signal.h"
@@ -101,6 +102,27 @@ static void warn_undamped_coupling(const fem_model *m, const char *input)
                     "docs/notes/rest_position.md)", input);
 }
 
+/* Progress of a settling that takes a while (the initial equilibrium of a large barrier takes
+ * a minute and more): a line on stdout every SETTLE_REPORT_S from SETTLE_QUIET_S on, so a log
+ * and a launcher see that the solver is working before it publishes its endpoint. */
+enum { SETTLE_QUIET_S = 2, SETTLE_REPORT_S = 5 };
+typedef struct settle_progress {
+    const char *input;
+    double t0_s, last_s;
+} settle_progress;
+
+static void settle_step(void *ctx, int step, double h_s, double move_m, int node)
+{
+    settle_progress *p = ctx;
+    const double now = nc_clock_now_s();
+    if (now - p->t0_s < SETTLE_QUIET_S || now - p->last_s < SETTLE_REPORT_S) return;
+    p->last_s = now;
+    printf("fem_solver: %s: settling in static equilibrium: pseudo-time step %d of %g s, "
+           "largest move %.3g m (node %d), %.0f s so far\n", p->input, step, h_s, move_m, node,
+           now - p->t0_s);
+    fflush(stdout);
+}
+
 int main(int argc, char **argv)
 {
     const char *input = NULL, *output = NULL, *endpoint = NULL, *endpoint_file = NULL;
@@ -171,11 +193,13 @@ int main(int argc, char **argv)
     sum.max_displacement_node = -1;
     sum.overload = calloc((size_t)model.n_sets, sizeof *sum.overload);   /* NULL: not reported */
     int rc;
+    settle_progress progress = {input, nc_clock_now_s(), 0.0};
+    const fem_settle_watch watch = {settle_step, &progress, stop};
     if (endpoint) {
-        fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0)};
+        fem_coupled_options opt = {endpoint, endpoint_file, (int)(idle_s * 1000.0), &watch};
         rc = fem_run_coupled(&model, output, &opt, stop, &sum, &err);
     } else {
-        rc = fem_run_standalone(&model, output, stop, &sum, &err);
+        rc = fem_run_standalone(&model, output, stop, &watch, &sum, &err);
     }
     char where[96] = "";
     if (sum.max_displacement_node >= 0)
@@ -224,6 +248,10 @@ int main(int argc, char **argv)
     fem_model_free(&model);
     if (rc == 1) {
         fprintf(stderr, "fem_solver: stopped by a signal; results so far are in %s\n", output);
+        return 130;
+    }
+    if (rc && err.code == FEM_ERR_STOPPED) {
+        fprintf(stderr, "fem_solver: %s\n", err.message);
         return 130;
     }
     if (rc) {

@@ -59,7 +59,7 @@ The solvers bind free ports (tcp://127.0.0.1:*) and publish them in DIR/*.endpoi
 parallel runs never collide; the coupler, started with them, reads them from there. Programs
 come from $NC_BIN if set, else <repo>/bin.
 $NC_STOP_GRACE_S (default 3): seconds between SIGTERM and SIGKILL when programs are stopped.
-$NC_ENDPOINT_WAIT_S (default 60): how long the solvers may take to publish their endpoints.
+$NC_ENDPOINT_WAIT_S (default 60): how long a solver may go silent before its endpoint.
 Exit status: 0 all three programs succeeded; 3 the run finished but accepted unconverged steps,
 created energy or lost impulse at the interface (results NOT reliable; 0 with coupler.json
 "accept_unconverged" / "accept_energy_growth" / "accept_impulse_loss": true, still NOT
@@ -473,10 +473,11 @@ pid[dem]=$!
 quiet_arg=""; [ $quiet -eq 1 ] && quiet_arg="--quiet"
 resume_arg=""; [ -n "$resume_dir" ] && resume_arg="--resume"
 : >coupler.log
-# it waits 10 s longer than this script for the endpoints: a solver that never publishes
-# one is reported by this script, naming it
+# This script decides when a solver that has not published its endpoint has failed (below:
+# one that keeps writing to its log is still starting, a large barrier settling for minutes),
+# so the coupler is told to wait a day: it never gives up first.
 ms endpoint_wait_ms "$endpoint_wait"
-printf -v coupler_wait '%d.%03d' $(( (endpoint_wait_ms + 10000) / 1000 )) $(( endpoint_wait_ms % 1000 ))
+coupler_wait=86400
 # shellcheck disable=SC2206   # the empty arguments vanish
 coupler_cmd=("${guard[@]}" "$bin/coupler" coupler.json --output . --fem-endpoint-file fem.endpoint
              --dem-endpoint-file dem.endpoint --endpoint-wait "$coupler_wait"
@@ -487,7 +488,11 @@ pid[coupler]=$!
 [ -z "$alive_w" ] || exec {alive_w}>&-
 
 # ---- the solvers' endpoints (or the coupler ended, e.g. on a bad coupler.json) -------------
-now_ms; endpoint_until=$((NOW_MS + endpoint_wait_ms)); told_ms=""
+# a solver without an endpoint fails after NC_ENDPOINT_WAIT_S without a new line in its log
+# (fem_solver reports the progress of a long initial equilibrium every few seconds)
+now_ms; told_ms=""
+declare -A log_size=([fem]=-1 [dem]=-1) log_grew_ms=([fem]=$NOW_MS [dem]=$NOW_MS)
+logs_checked_ms=0
 while { [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; } && [ -z "${rc[coupler]:-}" ]; do
   reap
   [ -n "${rc[coupler]:-}" ] && break
@@ -510,11 +515,16 @@ while { [ ! -s fem.endpoint ] || [ ! -s dem.endpoint ]; } && [ -z "${rc[coupler]
   done
   [ -n "$failed" ] || [ -n "$interrupted" ] && report
   now_ms
-  if [ "$NOW_MS" -gt "$endpoint_until" ]; then
+  if [ $((NOW_MS - logs_checked_ms)) -ge 1000 ]; then   # (a stat a second, not each pause)
+    logs_checked_ms=$NOW_MS
     for p in fem dem; do
-      [ -s "$p.endpoint" ] || fail_first "$p" "did not publish its endpoint in $endpoint_wait s (NC_ENDPOINT_WAIT_S)"
+      [ -s "$p.endpoint" ] && continue
+      size=$(stat -c %s "$p.log" 2>/dev/null) || size=0
+      if [ "$size" != "${log_size[$p]}" ]; then log_size[$p]=$size; log_grew_ms[$p]=$NOW_MS; fi
+      [ $((NOW_MS - log_grew_ms[$p])) -le "$endpoint_wait_ms" ] ||
+        fail_first "$p" "did not publish its endpoint, and wrote nothing to $p.log, in $endpoint_wait s (NC_ENDPOINT_WAIT_S)"
     done
-    report
+    [ -n "$failed" ] && report
   fi
   nap 0.01
 done

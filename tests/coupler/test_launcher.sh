@@ -21,6 +21,8 @@
 # 10. a case folder given as a symbolic link, and one that is read-only -> the output folder is
 #     a folder of its own (writable for a user other than root) and --set changes its copies,
 #     not the case's files;
+# 11. a solver that publishes its endpoint after NC_ENDPOINT_WAIT_S -> failed, named, when it
+#     wrote nothing meanwhile; waited for when it reports its progress;
 #  7. on a terminal (a pseudo-terminal from script(1)) the coupler's live status line is shown
 #     (time, remaining time, contact, deflection) with its messages, the final status line
 #     stays, and coupler.log still holds everything without terminal control characters.
@@ -211,6 +213,25 @@ took=$("$PY" -c "import sys; print('%.1f' % (float(sys.argv[2]) - float(sys.argv
 [ "$fem_rc" -eq 0 ] && [ "$dem_rc" -eq 0 ] || fail "bad coupler.json by hand: fem exit $fem_rc, dem exit $dem_rc"
 awk "BEGIN {exit !($took < 12)}" || fail "bad coupler.json by hand: the solvers ended after $took s (limit 12 s)"
 echo "9 ok ($took s): by hand, the coupler exits 1 and the solvers 0"
+
+# 11. a solver slow to publish its endpoint (4 s, NC_ENDPOINT_WAIT_S 2): one that says nothing
+# meanwhile has failed, named with the limit; one that writes progress to its log is still
+# starting and the run goes on (a large barrier's initial equilibrium takes minutes)
+export NC_ENDPOINT_WAIT_S=2
+launch silent_start --set coupler.end_time=0.2 --dem-program tests/coupler/participants/slow_start.sh
+finish "$start_s" 15
+[ "$rc" -eq 1 ] || fail "silent slow start: exit $rc, expected 1"
+failed_line | grep -q "^run_case: failed: dem (did not publish its endpoint, and wrote nothing to dem.log, in 2 s (NC_ENDPOINT_WAIT_S)" \
+  || fail "silent slow start: '$(failed_line)'"
+no_leftovers
+echo "11 ok ($took s): $(failed_line)"
+launch talking_start --set coupler.end_time=0.2 \
+  --dem-program tests/coupler/participants/slow_talking_start.sh
+finish "$start_s" 30
+[ "$rc" -eq 0 ] || fail "slow start with progress: exit $rc, expected 0"
+no_leftovers
+unset NC_ENDPOINT_WAIT_S
+echo "11 ok ($took s): a solver that reports its progress is waited for"
 
 # 10. a case folder given as a symbolic link, and a read-only one
 case_sum=$(cksum < cases/rest_position/coupler.json)

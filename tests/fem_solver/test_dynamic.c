@@ -444,6 +444,63 @@ static void test_initial_equilibrium(void **state)
     fem_model_free(&m);
 }
 
+/* fem_analysis_settle's watch: on_step sees every pseudo step in order with its size and the
+ * largest move, and its stop flag ends the settling with FEM_ERR_STOPPED between pseudo steps,
+ * the analysis at its time and step as before (a signal while a large barrier settles). */
+typedef struct settle_seen {
+    int calls, last_step, node;
+    double last_h, last_move;
+    volatile sig_atomic_t stop;
+    int stop_after;
+} settle_seen;
+
+static void settle_seen_step(void *ctx, int step, double h_s, double move_m, int node)
+{
+    settle_seen *w = ctx;
+    assert_int_equal(step, w->last_step + 1);   /* (no failed pseudo step on this net) */
+    assert_true(h_s > 0.0 && move_m >= 0.0);
+    w->calls++;
+    w->last_step = step;
+    w->last_h = h_s;
+    w->last_move = move_m;
+    w->node = node;
+    if (w->stop_after > 0 && w->calls == w->stop_after) w->stop = 1;
+}
+
+static void test_settle_watch(void **state)
+{
+    (void)state;
+    fem_model m;
+    nc_error err;
+    damped_net(&m, FEM_BOSSAK, 50);
+    m.settings.alpha_b = -0.3;
+    fem_analysis s;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    settle_seen seen = {0};
+    s.settle_watch = (fem_settle_watch){settle_seen_step, &seen, &seen.stop};
+    int iterations = 0, steps = 0;
+    if (fem_analysis_initial_equilibrium(&s, &iterations, &steps, &err)) fail_msg("%s", err.message);
+    assert_int_equal(seen.calls, steps);
+    assert_near(seen.last_h, 1e4, 0.0);                 /* the last pseudo step is the largest */
+    assert_below(seen.last_move, m.settings.displacement_tol_m * (1 + 1e-12));
+    fem_analysis_free(&s);
+
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    settle_seen stopped = {.stop_after = 3};
+    s.settle_watch = (fem_settle_watch){settle_seen_step, &stopped, &stopped.stop};
+    assert_int_equal(fem_analysis_initial_equilibrium(&s, &iterations, &steps, &err), -1);
+    assert_int_equal(err.code, FEM_ERR_STOPPED);
+    assert_non_null(strstr(err.message, "stopped by a signal"));
+    assert_int_equal(stopped.calls, 3);
+    assert_int_equal(steps, 3);
+    assert_int_equal(s.cur.step, 0);
+    assert_near(s.cur.time_s, 0.0, 0.0);
+    printf("settle watch: %d pseudo steps seen, the last of %g s moving %.2g m; stopped after 3: "
+           "%s\n", seen.calls, seen.last_h, seen.last_move, err.message);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -455,6 +512,7 @@ int main(void)
         cmocka_unit_test(test_warm_start),
         cmocka_unit_test(test_coupling_load_momentum),
         cmocka_unit_test(test_initial_equilibrium),
+        cmocka_unit_test(test_settle_watch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

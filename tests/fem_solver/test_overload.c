@@ -116,7 +116,7 @@ static void test_static_closed_form(void **state)
         memset(&sum, 0, sizeof sum);
         sum.overload = r;
         nc_error err;
-        if (fem_run_standalone(&m, dir, NULL, &sum, &err)) fail_msg("%s", err.message);
+        if (fem_run_standalone(&m, dir, NULL, NULL, &sum, &err)) fail_msg("%s", err.message);
         assert_ptr_equal(sum.overload, r);
         assert_int_equal(sum.overloaded_elements, cases[c].exceeded);
         /* rope: peak 4 P in element 0 at λ = 1 */
