@@ -25,14 +25,15 @@ typedef struct dem_participant_options {
     FILE *problems;             /* NULL or where failed commands are logged (stderr) */
 } dem_participant_options;
 
-/* Serves the coupler with the prepared simulation s, writing results through out.
- * Returns 0 after SHUTDOWN with every command answered, 1 after SHUTDOWN when a command was
- * answered with an error (err says how many), 130 when *stop was set, -1 on an error (idle
- * timeout, transport failure, missing net wall material; err). */
 /* What the coupled mode needs of the input beyond dem_config's checks (the net wall
  * material); 0, or -1 with err naming the file and field. dem_participant_run checks it
  * first. */
 int dem_participant_check_input(const dem_sim *s, nc_error *err);
+
+/* Serves the coupler with the prepared simulation s, writing results through out.
+ * Returns 0 after SHUTDOWN with every command answered, 1 after SHUTDOWN when a command was
+ * answered with an error (err says how many), 130 when *stop was set, -1 on an error (idle
+ * timeout, transport failure, missing net wall material; err). */
 int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_options *opt,
                         const volatile sig_atomic_t *stop, nc_error *err);
 

@@ -3,7 +3,7 @@
  *
  *   fem_solver fem.json --output DIR
  *   fem_solver fem.json --endpoint EP --output DIR [--endpoint-file FILE] [--idle-timeout S]
- *   fem_solver fem.json --check
+ *   fem_solver fem.json --check [--endpoint EP]
  *
  * SIGINT/SIGTERM stop the run after the current step; results so far are kept.
  * Exit codes: 0 success, 1 error (message on stderr), 2 usage, 3 finished but an axial force
