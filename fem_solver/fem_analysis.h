@@ -145,7 +145,9 @@ int fem_analysis_static(fem_analysis *s, double lambda, nc_error *err);
  * term keeps each step's matrix regular where a static Newton meets nodes held only by slack
  * cables. On success the state is at rest, its time and step as before the call;
  * *iterations, *steps: the Newton iterations and pseudo steps it took, failed ones included.
- * Needs a model with mass at every free dof a load moves. s->settle_watch sees each pseudo
+ * Needs a model with mass at every free dof a load moves. Its Newton iterations take a step
+ * whose residual is up to 3 times the last (slack cables: a non-monotone line search, the
+ * dynamic steps keep the monotone one). s->settle_watch sees each pseudo
  * step and can stop it (FEM_ERR_STOPPED; the time and step as before the call). */
 int fem_analysis_settle(fem_analysis *s, double lambda, int *iterations, int *steps,
                         nc_error *err);

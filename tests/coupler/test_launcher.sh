@@ -229,6 +229,10 @@ launch talking_start --set coupler.end_time=0.2 \
   --dem-program tests/coupler/participants/slow_talking_start.sh
 finish "$start_s" 30
 [ "$rc" -eq 0 ] || fail "slow start with progress: exit $rc, expected 0"
+# it was waited for past the limit, because it said it was still starting
+grep -q "still starting (4 s)" "$out/dem.log" || fail "slow start with progress: dem.log: $(cat "$out/dem.log")"
+grep -q "^coupler: results are reliable" "$out/coupler.log" || fail "slow start with progress: no verdict"
+awk "BEGIN {exit !($took >= 4)}" || fail "slow start with progress: finished after $took s, before the DEM could start"
 no_leftovers
 unset NC_ENDPOINT_WAIT_S
 echo "11 ok ($took s): a solver that reports its progress is waited for"
