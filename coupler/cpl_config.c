@@ -164,7 +164,7 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "on_max_iterations", "relaxation", "relaxed_quantity", "predictor", "efficiency", "step_control", "accept_unconverged",
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth",
         "stop_on_energy_growth", "impulse_tolerance",
-        "accept_impulse_loss", "interface_jacobian",
+        "accept_impulse_loss", "interface_jacobian", "interface_compliance",
         "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
         "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
@@ -218,6 +218,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                          &c->accept_impulse_loss, err) ||
         nc_json_bool_opt(root, where, "interface_jacobian", s->interface_jacobian,
                          &s->interface_jacobian, err) ||
+        nc_json_bool_opt(root, where, "interface_compliance", s->interface_compliance,
+                         &s->interface_compliance, err) ||
         nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,
                          err) ||
         nc_json_int_opt(root, where, "contact_backtracking", backtracking, 0, 30, &backtracking,

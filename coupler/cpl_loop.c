@@ -12,8 +12,17 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
-#define CPL_FINGERPRINT_N 8   /* dt, scheme, relaxed quantity, tolerance, interface size,
-                                 work_tolerance, relaxation method, newton_estimate */
+#define CPL_FINGERPRINT_N 9   /* dt, scheme, relaxed quantity, tolerance, interface size,
+                                 work_tolerance, relaxation method, newton_estimate,
+                                 interface_compliance */
+
+/* interface_compliance: a try goes on without the structure's compliance once an iteration
+ * with it ends with a residual above this many times the last one. Newton with a good
+ * linearisation does not do that; a move too large for the structure's linearisation does
+ * (cable_impact at restitution 0.1 and 5× Δt: with the compliance throughout, iterates
+ * cycling between 1.7e5 and 3.0e5 N, then a FEM Newton failure at dt_min; reliable at 2 and
+ * at 4; docs/notes/interface_jacobian.md "The structure's compliance in the DEM") */
+#define CPL_COMPLIANCE_GROWTH 2.0
 
 struct cpl_loop {
     cpl_loop_settings s;
@@ -47,6 +56,13 @@ struct cpl_loop {
     int verified_fem, verified_dem;
     int use_jacobian;       /* interface-Jacobian coupling in this run */
     cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
+    int use_compliance;     /* the structure's compliance in the DEM's solves in this run */
+    cpl_compliance comp;    /* the FEM's last compliance, and where the DEM's wall ended */
+    double *comp_u_lin, *comp_f_lin; /* the linearisation point and force of the FEM's last
+                                        solve ... */
+    cpl_jacobian comp_jac;  /* ... and its K: the structure's force at the DEM's next input */
+    double *v_answer;       /* the iteration's input velocity before the DEM moved its wall:
+                               the last answer, when the input was that */
     cpl_timing timing;
     cpl_energy energy;
     cpl_impulse impulse;
@@ -86,9 +102,30 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     cpl_energy_settings_default(&s->energy);
     cpl_impulse_settings_default(&s->impulse);
     s->interface_jacobian = 1;
+    s->interface_compliance = 0;
     s->verify_restore = 1;
     s->contact_backtracking = 4;
     s->checkpoint_interval_s = 0.0;
+}
+
+int cpl_compliance_reserve(cpl_compliance *c, size_t n_nodes, nc_error *err)
+{
+    if (n_nodes > c->cap || !c->nodes) {
+        int32_t *nodes = malloc((n_nodes + 1) * sizeof *nodes);
+        double *S = malloc((9 * n_nodes * n_nodes + 1) * sizeof *S);
+        if (!nodes || !S) {
+            free(nodes);
+            free(S);
+            return nc_error_set(err, 1, "out of memory for the compliance of %zu nodes", n_nodes);
+        }
+        free(c->nodes);
+        free(c->S);
+        c->nodes = nodes;
+        c->S = S;
+        c->cap = n_nodes;
+    }
+    c->n_nodes = n_nodes;
+    return 0;
 }
 
 int cpl_jacobian_set(cpl_jacobian *j, size_t n, const int32_t *nodes, const double *stiffness,
@@ -222,7 +259,8 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
                           &L->u_out, &L->v_out, &L->r, &L->check0, &L->check1,
                           &L->u_prev, &L->v_prev, &L->u_before, &L->lin_u, &L->lin_v,
                           &L->du, &L->dv, &L->df, &L->probe_u, &L->probe_v, &L->probe_plus,
-                          &L->probe_minus, &L->correction};
+                          &L->probe_minus, &L->correction, &L->comp.force_ref,
+                          &L->comp_u_lin, &L->comp_f_lin, &L->comp.u_wall, &L->v_answer};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
@@ -277,6 +315,9 @@ void cpl_loop_free(cpl_loop *L)
     for (size_t i = 0; i < sizeof check_vectors / sizeof *check_vectors; i++)
         free(check_vectors[i]);
     cpl_jacobian_free(&L->jac);
+    cpl_jacobian_free(&L->comp_jac);
+    free(L->comp.force_ref); free(L->comp.nodes); free(L->comp.S);
+    free(L->comp_u_lin); free(L->comp_f_lin); free(L->comp.u_wall); free(L->v_answer);
     free(L);
 }
 
@@ -299,6 +340,7 @@ double cpl_loop_time(const cpl_loop *L) { return L->time_s; }
 const cpl_energy *cpl_loop_energy(const cpl_loop *L) { return &L->energy; }
 const cpl_impulse *cpl_loop_impulse(const cpl_loop *L) { return &L->impulse; }
 int cpl_loop_uses_jacobian(const cpl_loop *L) { return L->use_jacobian; }
+int cpl_loop_uses_compliance(const cpl_loop *L) { return L->use_compliance; }
 const cpl_jacobian_check *cpl_loop_jacobian_check(const cpl_loop *L) { return &L->jac_check; }
 long cpl_loop_step(const cpl_loop *L) { return L->step; }
 
@@ -325,6 +367,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     fp[6] = cpl_relax_method_id(s->scheme == CPL_SCHEME_STRONG
                                     ? cpl_relax_settings_method(&s->relax) : "none");
     fp[7] = s->newton_estimate;
+    fp[8] = (double)s->interface_compliance;
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
@@ -334,7 +377,8 @@ static int check_fingerprint(const cpl_loop *L, const char *path, nc_error *err)
     fill_fingerprint(&L->s, L->n3, now);
     const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
                                            "interface dofs", "work_tolerance",
-                                           "relaxation.method", "newton_estimate"};
+                                           "relaxation.method", "newton_estimate",
+                                           "interface_compliance"};
     for (int i = 0; i < CPL_FINGERPRINT_N; i++) {
         if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) == 0) continue;
         if (i == 6) {
@@ -396,6 +440,13 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_add(t, p, "jacobian_nodes", CPL_CKPT_INT, L->jac.nodes, 2 * L->jac.n_blocks);
     cpl_ckpt_f64(t, p, "jacobian_stiffness", L->jac.stiffness, 9 * L->jac.n_blocks);
     cpl_ckpt_f64(t, p, "jacobian_damping", L->jac.damping, 9 * L->jac.n_blocks);
+    /* the structure's compliance of the last FEM solve: a resumed step starts with it */
+    cpl_ckpt_size(t, p, "compliance_nodes", &L->comp.n_nodes);
+    cpl_ckpt_add(t, p, "compliance_node_list", CPL_CKPT_INT, L->comp.nodes, L->comp.n_nodes);
+    cpl_ckpt_f64(t, p, "compliance", L->comp.S, 9 * L->comp.n_nodes * L->comp.n_nodes);
+    cpl_ckpt_f64(t, p, "compliance_dt", &L->comp.dt_s, 1);
+    cpl_ckpt_f64(t, p, "compliance_velocity_per_m", &L->comp.velocity_per_m, 1);
+    cpl_ckpt_int(t, p, "compliance_valid", &L->comp.valid);
     /* the summary's counters (the wall-clock ones too: they keep adding up) */
     cpl_timing *tm = &L->timing;
     const char *q = "timing";
@@ -413,6 +464,8 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "slow_rejections", &tm->slow_rejections);
     cpl_ckpt_long(t, q, "backtracks", &tm->backtracks);
     cpl_ckpt_long(t, q, "fem_repeats_skipped", &tm->fem_repeats_skipped);
+    cpl_ckpt_long(t, q, "compliance_tries", &tm->compliance_tries);
+    cpl_ckpt_long(t, q, "compliance_dropped", &tm->compliance_dropped);
     cpl_ckpt_long(t, q, "work_test_steps", &tm->work_test_steps);
     cpl_ckpt_long(t, q, "estimate_steps", &tm->estimate_steps);
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
@@ -473,7 +526,12 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
                                            path, n);
     free(nodes);
     free(zeros);
-    return rc;
+    if (rc) return rc;
+    if (nc_ckpt_read_scalar(path, "/loop/compliance_nodes", NC_CKPT_SIZE, &n, err)) return -1;
+    if (n > 100000u)
+        return nc_error_set(err, 1, "%s: /loop/compliance_nodes = %zu is not a node count", path,
+                            n);
+    return cpl_compliance_reserve(&L->comp, n, err);
 }
 
 void cpl_loop_resumed(cpl_loop *L, const char *name)
@@ -823,19 +881,24 @@ static double work_ratio(cpl_loop *L)
  * or r_u and the work test (work_tolerance; *by_work_test: it decided). *ratio: r_u's
  * tolerance_ratio or that of the second test passed more nearly (r_u̇'s or the work test's),
  * whichever is larger. */
-static double residual_uv(cpl_loop *L, double rv_prev, int *converged, int *by_work_test,
-                          int *by_estimate, double *ratio, double *rv_out)
+static double residual_uv(cpl_loop *L, double rv_prev, const double *v_answer_prev,
+                          int *converged, int *by_work_test, int *by_estimate, double *ratio,
+                          double *rv_out)
 {
     const double nu = cpl_scaled_norm(L->u_out, L->n3), nv = cpl_scaled_norm(L->v_out, L->n3);
-    double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
-    double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
+    const double ru = cpl_residual(L->u_out, L->u_in, L->r, L->n3);
+    const double rv = cpl_residual(L->v_out, L->v_in, L->r, L->n3);
+    /* the step between the structure's answers, which the estimate's contraction is about:
+     * r_u̇ itself when the input was the last answer, else (the DEM moved its wall from
+     * there: interface_compliance) measured from the last answer */
+    const double step = v_answer_prev ? cpl_residual(L->v_out, v_answer_prev, L->dv, L->n3) : rv;
     const double work = work_ratio(L);
     const int u_ok = cpl_converged(ru, nu, L->s.tol_abs, L->s.tol_rel);
     const int v_ok = cpl_converged(rv, nv, L->s.tol_abs, L->s.tol_rel);
     double estimate = INFINITY;
     if (L->s.newton_estimate > 0.0 && L->use_jacobian && rv_prev > 0.0 && isfinite(rv_prev)) {
-        const double theta = rv / rv_prev;
-        if (theta <= L->s.newton_estimate) estimate = theta / (1.0 - theta) * rv;
+        const double theta = step / rv_prev;
+        if (theta <= L->s.newton_estimate) estimate = theta / (1.0 - theta) * step;
     }
     const int estimate_ok = cpl_converged(estimate, nv, L->s.tol_abs, L->s.tol_rel);
     *converged = u_ok && (v_ok || work <= 1.0 || estimate_ok);
@@ -843,8 +906,24 @@ static double residual_uv(cpl_loop *L, double rv_prev, int *converged, int *by_w
     *by_estimate = *converged && !v_ok && !(work <= 1.0);
     *ratio = fmax(tolerance_ratio(L, ru, nu),
                   fmin(fmin(tolerance_ratio(L, rv, nv), work), tolerance_ratio(L, estimate, nv)));
-    *rv_out = rv;
+    *rv_out = step;
     return fmax(ru, rv);
+}
+
+/* The force the structure balanced at the DEM's input u_in (interface_compliance): at
+ * iteration 1 the last step's, else the FEM's last solve's linearised force there,
+ * F^k - K (u_in - u^k). */
+static void compliance_reference(cpl_loop *L, int k)
+{
+    const size_t n3 = L->n3;
+    if (k == 1) {
+        memcpy(L->comp.force_ref, L->f, n3 * sizeof(double));
+        return;
+    }
+    for (size_t i = 0; i < n3; i++) L->du[i] = L->u_in[i] - L->comp_u_lin[i];
+    memset(L->dv, 0, n3 * sizeof(double));
+    cpl_jacobian_apply(&L->comp_jac, L->du, L->dv, n3, L->df);
+    for (size_t i = 0; i < n3; i++) L->comp.force_ref[i] = L->comp_f_lin[i] + L->df[i];
 }
 
 /* How one try of a step ended (the step is not accepted yet); TRY_SLOW: given up early by
@@ -991,8 +1070,13 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     cpl_jacobian_apply(&L->jac, L->du, L->dv, n3, L->df);
     cpl_jacobian *jacobian_out = call->jacobian_out;
     const cpl_jacobian *jacobian_in = call->jacobian_in;
+    cpl_compliance *compliance_out = call->compliance_out;
+    const cpl_compliance *compliance_in = call->compliance_in;
     call->jacobian_out = NULL;
     call->jacobian_in = NULL;
+    /* the probes ask for the DEM's force at their own positions */
+    call->compliance_out = NULL;
+    call->compliance_in = NULL;
     for (int side = 0; side < 2; side++) {
         const double sign = side ? -1.0 : 1.0;
         for (size_t i = 0; i < n3; i++) {
@@ -1007,6 +1091,8 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     }
     call->jacobian_out = jacobian_out;
     call->jacobian_in = jacobian_in;
+    call->compliance_out = compliance_out;
+    call->compliance_in = compliance_in;
     *miss = cpl_jacobian_check_miss(L->probe_plus, L->probe_minus, eps, L->df, n3);
     cpl_jacobian_check_add(&L->jac_check, *miss, call->step, call->iteration, call->time_s);
     return 0;
@@ -1048,6 +1134,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     double rv_prev = NAN;                   /* r_u̇ of the last iteration when this
                                                iteration's input is that iteration's FEM
                                                answer unchanged (α = 1), else NAN */
+    int compliance_on = L->use_compliance;  /* off for the rest of the try once an iteration
+                                               with it made the residual grow */
+    L->timing.compliance_tries += compliance_on;
+    double residual_before = INFINITY;
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
     for (k = 1; k <= max_it; k++) {
@@ -1058,16 +1148,38 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
          * linearisation, which the FEM then solves with: interface-Jacobian coupling) */
         call->jacobian_out = L->use_jacobian ? &L->jac : NULL;
         call->jacobian_in = NULL;
+        if (compliance_on) {
+            call->compliance_in = &L->comp;
+            call->compliance_out = &L->comp;
+            compliance_reference(L, k);
+        } else {
+            call->compliance_in = NULL;
+            call->compliance_out = NULL;
+            L->comp.wall_valid = 0;
+        }
         if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
             return try_failed(c, t);
+        /* with the structure's compliance the DEM chose where its wall ends: that is the
+         * iteration's interface position, its velocity the structure's at that position
+         * (protocol/README.md §3.4); the error estimate then measures the step between the
+         * structure's answers from the last answer, where the input came from */
+        const int wall_moved = compliance_on && L->comp.wall_valid;
+        if (wall_moved) {
+            memcpy(L->v_answer, L->v_in, n3 * sizeof(double));
+            for (size_t i = 0; i < n3; i++) {
+                L->v_in[i] += L->comp.velocity_per_m * (L->comp.u_wall[i] - L->u_in[i]);
+                L->u_in[i] = L->comp.u_wall[i];
+            }
+        }
         /* the step went past the contact boundary: the iterate has no contact at all
          * although the linearisation about the last iterate with contact still predicted a
          * force of the same sense, or although this step's contact-free answer was already
          * seen to collide; halve the step back towards that iterate (the DEM alone is solved
-         * again) so that the FEM keeps a linearisation of the contact */
+         * again) so that the FEM keeps a linearisation of the contact (not after a move of
+         * the DEM's own: its no-contact answer is then the one it found consistent) */
         const int no_contact = all_zero(L->f_dem, n3);
         if (!no_contact && free_seen) contact_required = 1;
-        if (backtrack_prev && no_contact) {
+        if (backtrack_prev && no_contact && !wall_moved) {
             int halvings = 0;
             while (halvings < L->s.contact_backtracking && all_zero(L->f_dem, n3) &&
                    (contact_required ||
@@ -1079,6 +1191,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 for (int d = 0; d < 3; d++) r_pred[d] = 0.5 * (r_prev[d] + r_pred[d]);
                 halvings++;
                 L->timing.backtracks++;
+                if (compliance_on) compliance_reference(L, k);
                 if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
                     return try_failed(c, t);
             }
@@ -1112,16 +1225,33 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             } else {
                 solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved, &t->fem_info);
                 if (solved < 0) return try_failed(c, t);
+                if (solved && compliance_on) {
+                    memcpy(L->comp_u_lin, L->u_in, n3 * sizeof(double));
+                    memcpy(L->comp_f_lin, L->f_dem, n3 * sizeof(double));
+                    if (cpl_jacobian_set(&L->comp_jac, L->jac.n_blocks, L->jac.nodes,
+                                         L->jac.stiffness, NULL, c->err))
+                        return try_failed(c, t);
+                }
                 if (solved) fem_answer_plain = plain_input;
                 fem_answer = solved;   /* skipped without contact: the accepted motion */
             }
             t->fem_solved |= solved;
             memcpy(L->f_in, L->f_dem, n3 * sizeof(double));
             double rv;
-            t->residual = residual_uv(L, fem_answer ? rv_prev : NAN, &converged,
+            t->residual = residual_uv(L, fem_answer ? rv_prev : NAN,
+                                      wall_moved ? L->v_answer : NULL, &converged,
                                       &t->by_work_test, &t->by_estimate,
                                       &ratios[k % (CPL_SLOW_WINDOW + 1)], &rv);
                                                                /* eqs. (28), (29), (35) */
+            if (wall_moved && k > 1 && !converged &&
+                t->residual > CPL_COMPLIANCE_GROWTH * residual_before) {
+                /* the structure's linearisation misled the DEM (a move too large for it):
+                 * the rest of this try without it, the plain interface-Jacobian iteration */
+                compliance_on = 0;
+                L->comp.valid = 0;
+                L->timing.compliance_dropped++;
+            }
+            residual_before = t->residual;
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
             if (!strong || converged || k == max_it || slow) {
                 if (report_iteration(c, call, t->residual, NAN, solved, NAN)) return -1;
@@ -1360,6 +1490,8 @@ int cpl_loop_run(cpl_loop *L, const cpl_participant *fem, const cpl_participant 
     L->use_jacobian = cpl_loop_settings_jacobian_applies(&L->s) && fem->can_jacobian &&
                       dem->can_jacobian;
     if (L->relax) cpl_relax_set_linearised(L->relax, L->use_jacobian);
+    L->use_compliance = L->use_jacobian && L->s.interface_compliance && fem->can_compliance &&
+                        dem->can_compliance;
     int rc = 0;
     if (L->resume_pending) {
         cpl_call call = {.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = 0.0};

@@ -74,6 +74,24 @@ void cpl_jacobian_free(cpl_jacobian *j);
 void cpl_jacobian_apply(const cpl_jacobian *j, const double *du, const double *dv, size_t n3,
                         double *out);
 
+/* The structure's interface compliance S = du/dF over the interface nodes its last
+ * linearisation touched, as the FEM returned it (protocol/README.md §3.4), the force the
+ * structure balanced at the DEM's next input, and where the DEM's wall then ended. */
+typedef struct cpl_compliance {
+    size_t n_nodes, cap;
+    int32_t *nodes;         /* [n_nodes] interface indices */
+    double *S;              /* [3 n_nodes x 3 n_nodes] m/N */
+    double dt_s;            /* the step it belongs to */
+    double velocity_per_m;  /* the structure's dv/du at the step's end (gamma / (beta dt)) */
+    int valid;
+    double *force_ref;      /* [n3] */
+    double *u_wall;         /* [n3] where the DEM's wall ended in the last DEM solve */
+    int wall_valid;
+} cpl_compliance;
+
+/* Room for n_nodes nodes (kept when there is), n_nodes set; 0 or -1 (out of memory). */
+int cpl_compliance_reserve(cpl_compliance *c, size_t n_nodes, nc_error *err);
+
 /* What a participant is asked to do: step, iteration (1-based; 0 outside solve), the
  * start time and size of the step; with interface-Jacobian coupling, what to linearise. */
 typedef struct cpl_call {
@@ -86,6 +104,10 @@ typedef struct cpl_call {
     const cpl_jacobian *jacobian_in;    /* FEM solve: solve with the force linearised about
                                            jacobian_u, jacobian_v (NULL: constant force) */
     const double *jacobian_u, *jacobian_v;   /* n × 3: where the DEM evaluated the force */
+    cpl_compliance *compliance_out;          /* FEM solve: fill with its compliance; DEM
+                                                solve: with where its wall ended (NULL: not
+                                                used) */
+    const cpl_compliance *compliance_in;     /* DEM solve: solve with it (NULL: not used) */
 } cpl_call;
 
 /* Extra information a participant returns with a solve. */
@@ -125,6 +147,8 @@ typedef struct cpl_participant {
      * begin_step and accept. */
     int (*post)(void *ctx, cpl_command command, const cpl_call *call, nc_error *err);
     int (*await)(void *ctx, nc_error *err);
+    int can_compliance;     /* FEM: can return its interface compliance; DEM: can solve with
+                               it (capability "compliance", protocol/README.md §3.4) */
 } cpl_participant;
 
 typedef enum { CPL_SCHEME_WEAK = 0, CPL_SCHEME_STRONG } cpl_scheme;
@@ -174,6 +198,9 @@ typedef struct cpl_loop_settings {
     cpl_impulse_settings impulse;   /* the interface's momentum balance (cpl_impulse.h) */
     int interface_jacobian;         /* use the DEM's linearisation in the FEM's solves when
                                        both participants can (default 1) */
+    int interface_compliance;       /* with the interface Jacobian, also the structure's
+                                       compliance in the DEM's solves when both can
+                                       (default 0; docs/notes/interface_jacobian.md) */
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */
@@ -299,6 +326,10 @@ typedef struct cpl_timing {
     long estimate_steps;            /* ... converged by the error estimate (newton_estimate) */
     long jacobian_dropped_steps;    /* accepted steps with particles left out of the DEM's
                                        linearisation */
+    long compliance_tries;          /* tries with the structure's compliance at the start
+                                       (interface_compliance) ... */
+    long compliance_dropped;        /* ... that went on without it after an iteration with it
+                                       made the residual grow */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;
@@ -367,6 +398,8 @@ long cpl_loop_step(const cpl_loop *loop);
 /* 1 when the run uses interface-Jacobian coupling (set by cpl_loop_run: the setting is on
  * and both participants can). */
 int cpl_loop_uses_jacobian(const cpl_loop *loop);
+/* 1 when the run gives the DEM the structure's compliance (interface_compliance, both can). */
+int cpl_loop_uses_compliance(const cpl_loop *loop);
 /* What jacobian_check found so far. */
 const cpl_jacobian_check *cpl_loop_jacobian_check(const cpl_loop *loop);
 

@@ -223,6 +223,35 @@ static int read_jacobian(cpl_remote *r, cpl_jacobian *j, nc_error *err)
     return cpl_jacobian_set(j, b, nodes, K, C, err);
 }
 
+static int read_compliance(cpl_remote *r, cpl_compliance *cp, double dt_s, nc_error *err)
+{
+    cp->valid = 0;
+    if (!proto_message_find(&r->reply, "compliance_nodes")) return 0;
+    const int32_t *nodes;
+    const double *S;
+    size_t k = 0;
+    if (proto_message_get_i32(&r->reply, "compliance_nodes", 0, 1, &nodes, &k, err) ||
+        proto_message_get_f64(&r->reply, "compliance", 3 * k, 3 * k, &S, NULL, err))
+        return -1;
+    if (cpl_compliance_reserve(cp, k, err)) return -1;
+    memcpy(cp->nodes, nodes, k * sizeof *nodes);
+    memcpy(cp->S, S, 9 * k * k * sizeof *S);
+    cp->dt_s = dt_s;
+    cp->velocity_per_m = proto_message_value(&r->reply, "compliance_velocity_per_m", 0.0);
+    cp->valid = 1;
+    return 0;
+}
+
+static int add_compliance(cpl_remote *r, const cpl_call *call, nc_error *err)
+{
+    const cpl_compliance *cp = call->compliance_in;
+    if (!cp || !cp->valid || cp->dt_s != call->dt_s || !cp->force_ref) return 0;
+    const size_t k = cp->n_nodes;
+    return proto_message_add_i32(&r->request, "compliance_nodes", cp->nodes, k, 1, err) ||
+           proto_message_add_f64(&r->request, "compliance", cp->S, 3 * k, 3 * k, err) ||
+           proto_message_add_f64(&r->request, "compliance_force", cp->force_ref, r->n_nodes, 3, err);
+}
+
 static int remote_solve(void *ctx, const cpl_call *call, const double *in0, const double *in1,
                         double *out0, double *out1, cpl_solve_info *info, nc_error *err)
 {
@@ -231,16 +260,27 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
     const size_t n = r->n_nodes;
     if (r->kind == CPL_REMOTE_FEM) {
         if (proto_message_add_f64(&r->request, "force", in0, n, 3, err) ||
-            (call->jacobian_in && add_jacobian(r, call, err)) || request(r, err) ||
-            copy_array(r, "displacement", out0, err) || copy_array(r, "velocity", out1, err))
+            (call->jacobian_in && add_jacobian(r, call, err)) ||
+            (call->compliance_out && proto_message_set_value(&r->request, "compliance", 1.0, err)) ||
+            request(r, err) ||
+            copy_array(r, "displacement", out0, err) || copy_array(r, "velocity", out1, err) ||
+            (call->compliance_out && read_compliance(r, call->compliance_out, call->dt_s, err)))
             return -1;
     } else {
         if (proto_message_add_f64(&r->request, "displacement", in0, n, 3, err) ||
             proto_message_add_f64(&r->request, "velocity", in1, n, 3, err) ||
             (call->jacobian_out && proto_message_set_value(&r->request, "jacobian", 1.0, err)) ||
+            (call->jacobian_out && add_compliance(r, call, err)) ||
             request(r, err) || copy_array(r, "force", out0, err) ||
             (call->jacobian_out && read_jacobian(r, call->jacobian_out, err)))
             return -1;
+        if (call->compliance_out) {
+            call->compliance_out->wall_valid = 0;
+            if (proto_message_find(&r->reply, "compliance_displacement")) {
+                if (copy_array(r, "compliance_displacement", call->compliance_out->u_wall, err)) return -1;
+                call->compliance_out->wall_valid = 1;
+            }
+        }
         info->near_interface = proto_message_value(&r->reply, "near_interface", 1.0) != 0.0;
         info->min_gap_m = proto_message_value(&r->reply, "min_gap_m", INFINITY);
         info->contacts = proto_message_value(&r->reply, "contacts", 0.0);
@@ -284,7 +324,8 @@ cpl_participant cpl_remote_participant(cpl_remote *r)
     cpl_participant p = {r->name, r, remote_begin, remote_solve, remote_accept,
                          r->version >= 2 && proto_has_capability(r->capabilities, "jacobian"),
                          ckpt ? remote_checkpoint : NULL, ckpt ? remote_resume : NULL,
-                         remote_post, remote_await};
+                         remote_post, remote_await,
+                         r->version >= 2 && proto_has_capability(r->capabilities, "compliance")};
     return p;
 }
 

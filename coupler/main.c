@@ -219,7 +219,8 @@ static cpl_participant watch_participant(app *a, watched *w, cpl_remote *r)
                          w->inner.can_jacobian,
                          w->inner.checkpoint ? watched_checkpoint : NULL,
                          w->inner.resume ? watched_resume : NULL,
-                         two_halves ? watched_post : NULL, two_halves ? watched_await : NULL};
+                         two_halves ? watched_post : NULL, two_halves ? watched_await : NULL,
+                         w->inner.can_compliance};
     return p;
 }
 
@@ -552,6 +553,10 @@ static void print_timing(app *a)
     if (t->backtracks > 0)
         fprintf(o, "coupler: contact backtracking: %ld extra DEM solves halfway back to an "
                 "iterate with contact\n", t->backtracks);
+    if (cpl_loop_uses_compliance(a->loop))
+        fprintf(o, "coupler: interface compliance: the DEM solved with the structure's "
+                "compliance; %ld of %ld tries went on without it after it made the residual "
+                "grow\n", t->compliance_dropped, t->compliance_tries);
     if (t->jacobian_dropped_steps > 0)
         fprintf(o, "coupler: interface Jacobian incomplete in %ld steps: the DEM left particles "
                 "out of its linearisation\n", t->jacobian_dropped_steps);
@@ -731,7 +736,7 @@ static int print_status(app *a, int *energy_ok, int *impulse_ok)
 /* Convergence options that the run's scheme or exchange leaves without effect are accepted
  * (a case may set them for the variants it is run in) but said, also with --quiet: a user
  * who set them expects them to act. */
-static void warn_idle_options(app *a, int both_jacobian)
+static void warn_idle_options(app *a, int both_jacobian, int both_compliance)
 {
     const cpl_loop_settings *s = &a->cfg.loop;
     const int strong = s->scheme == CPL_SCHEME_STRONG;
@@ -743,9 +748,22 @@ static void warn_idle_options(app *a, int both_jacobian)
     if (s->work_tol > 0.0 && why_not)
         cpl_progress_message(&a->progress, "coupler: warning: %s: work_tolerance has no "
                              "effect: %s", a->config_path, why_not);
+    const char *why_not_jacobian = why_not;
+    if (!why_not_jacobian && !s->interface_jacobian)
+        why_not_jacobian = "interface_jacobian is false";
+    if (!why_not_jacobian && !both_jacobian)
+        why_not_jacobian = "a participant lacks the capability 'jacobian'";
+    if (s->interface_compliance) {
+        const char *why = why_not_jacobian ? why_not_jacobian
+                          : !both_compliance ? "a participant lacks the capability 'compliance'"
+                                             : NULL;
+        if (why)
+            cpl_progress_message(&a->progress, "coupler: warning: %s: interface_compliance has "
+                                 "no effect: the structure's compliance comes with the interface "
+                                 "Jacobian's iteration, and %s", a->config_path, why);
+    }
     if (!(s->newton_estimate > 0.0)) return;
-    if (!why_not && !s->interface_jacobian) why_not = "interface_jacobian is false";
-    if (!why_not && !both_jacobian) why_not = "a participant lacks the capability 'jacobian'";
+    why_not = why_not_jacobian;
     if (why_not)
         cpl_progress_message(&a->progress, "coupler: warning: %s: newton_estimate has no "
                              "effect: it judges the structure's Newton step with the interface "
@@ -765,7 +783,7 @@ static int check_config(app *a)
     }
     cpl_progress_init(&a->progress, stdout, 0, 0, a->cfg.progress_interval_s,
                       a->cfg.loop.start_time_s, a->cfg.loop.end_time_s, a->cfg.loop.dt_s);
-    warn_idle_options(a, 1);
+    warn_idle_options(a, 1, 1);
     printf("coupler: %s: valid (checked only, nothing run)\n", a->config_path);
     return 0;
 }
@@ -908,7 +926,12 @@ int main(int argc, char **argv)
                                  ? "on: the FEM solves with the DEM's contact linearisation"
                                  : "not available (a participant lacks the capability "
                                    "'jacobian'): plain exchange");
-    warn_idle_options(&a, fem.can_jacobian && dem.can_jacobian);
+    if (!a.quiet && a.cfg.loop.interface_compliance && fem.can_jacobian && dem.can_jacobian &&
+        fem.can_compliance && dem.can_compliance && cpl_loop_settings_jacobian_applies(&a.cfg.loop))
+        cpl_progress_message(&a.progress, "coupler: interface compliance on: the DEM solves "
+                             "its steps with the structure's compliance at the contact nodes");
+    warn_idle_options(&a, fem.can_jacobian && dem.can_jacobian,
+                      fem.can_compliance && dem.can_compliance);
     cpl_observer obs = {&a, observe_iteration, observe_step, observe_reject, observe_checkpoint};
     if (cpl_loop_run(a.loop, &fem, &dem, &obs, a.stop_signal, &failure, &err)) {
         /* say which signal; one that interrupted a wait shows up as a transport error of

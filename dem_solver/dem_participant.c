@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "dem_checkpoint.h"
+#include "dem_compliance.h"
 #include "dem_energy.h"
 #include "dem_net_jacobian.h"
 #include "nc_file.h"
@@ -24,6 +25,9 @@ typedef struct participant {
     dem_net_jacobian jac;   /* the linearisation of the last solve, when asked for */
     char last_checkpoint[PROTO_TEXT_MAX]; /* the newest checkpoint saved or resumed from */
     int resume_failed;      /* a RESUME failed: the state may be neither the old nor the new */
+    double *wall_end;       /* [3n] where the wall ended in the last solve with the structure's
+                               compliance (the reply points to it) */
+    size_t wall_end_cap;
 } participant;
 
 /* The participant's own state in a checkpoint (dem_checkpoint.h): the nodal force of the last
@@ -110,9 +114,35 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
     /* the coupler asks for the force's linearisation with the value "jacobian" 1
      * (interface-Jacobian coupling, protocol/README.md §3.1) */
     int want_jacobian = proto_message_value(cmd, "jacobian", 0.0) != 0.0;
-    if (dem_sim_solve_coupled_jacobian(s, cmd->dt_s, disp, vel, c->force, &info,
-                                       want_jacobian ? &c->jac : NULL, err))
+    const proto_array *cn = proto_message_find(cmd, "compliance_nodes");
+    if (want_jacobian && cn && cn->count > 0) {
+        /* the structure's compliance at the contact nodes (capability "compliance",
+         * protocol/README.md §3.4; dem_compliance.h): the wall ends where the structure,
+         * linearised, puts it under the particles' force, and the reply says where */
+        const int32_t *nodes;
+        const double *S, *fref;
+        size_t k = 0;
+        if (proto_message_get_i32(cmd, "compliance_nodes", 0, 1, &nodes, &k, err) ||
+            proto_message_get_f64(cmd, "compliance", 3 * k, 3 * k, &S, NULL, err) ||
+            proto_message_get_f64(cmd, "compliance_force", n, 3, &fref, NULL, err))
+            return -1;
+        if (c->wall_end_cap < 3 * n) {
+            free(c->wall_end);
+            c->wall_end = malloc(3 * n * sizeof *c->wall_end);
+            c->wall_end_cap = c->wall_end ? 3 * n : 0;
+            if (!c->wall_end) return nc_error_set(err, 1, "dem: out of memory");
+        }
+        const dem_compliance cmp = {k, nodes, S, fref};
+        dem_compliance_stats st;
+        if (dem_sim_solve_with_compliance(s, cmd->dt_s, disp, vel, &cmp, c->force, c->wall_end,
+                                          &info, &c->jac, &st, err) ||
+            proto_message_add_f64(reply, "compliance_displacement", c->wall_end, n, 3, err) ||
+            proto_message_set_value(reply, "compliance_evaluations", st.evaluations, err))
+            return -1;
+    } else if (dem_sim_solve_coupled_jacobian(s, cmd->dt_s, disp, vel, c->force, &info,
+                                              want_jacobian ? &c->jac : NULL, err)) {
         return -1;
+    }
     /* C = -dF/du̇ is zero (dem_net_jacobian.h), so only the stiffness blocks are sent */
     if (want_jacobian &&
         (proto_message_add_i32(reply, "jacobian_nodes", c->jac.nodes, c->jac.n_blocks, 2, err) ||
@@ -267,7 +297,7 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     proto_options_default(&popt);
     popt.idle_timeout_ms = opt->idle_timeout_ms;
     proto_participant *p;
-    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore jacobian checkpoint", &popt, err))
+    if (proto_participant_open(&p, opt->endpoint, "dem", "netcouple dem_solver", "restore jacobian checkpoint compliance", &popt, err))
         return -1;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err)) {
         proto_participant_close(p);
@@ -313,5 +343,6 @@ int dem_participant_run(dem_sim *s, dem_output *out, const dem_participant_optio
     proto_participant_close(p);
     dem_net_jacobian_free(&c.jac);
     free(c.force);
+    free(c.wall_end);
     return rc;
 }

@@ -979,6 +979,12 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     const fem_model *m = s->m;
     const fem_settings *set = &m->settings;
     const step_weights sw = newton_weights(m, ns);
+    s->last_lw = sw.l_w;
+    s->last_lk = sw.l_k;
+    s->last_lc = sw.l_c;
+    s->last_cm = sw.c_m;
+    s->last_ck = sw.c_k;
+    s->last_velocity_per_m = ns->dynamic ? ns->gamma / (ns->beta * ns->dt) : 0.0;
     double tol, dunorm = 0;
     double rnorm = evaluate(s, ns, &sw, &tol);
     /* a factorisation of the same matrix form kept from an earlier step (modified Newton) */
@@ -1487,6 +1493,83 @@ void fem_analysis_clear_linearisation(fem_analysis *s)
 {
     if (s->lin.active) s->lin_serial++;
     fem_ijac_clear(&s->lin);
+}
+
+extern void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv,
+                   double *b, const int *ldb, int *info);
+
+int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, nc_error *err)
+{
+    const size_t nn = (size_t)n * (size_t)n;
+    double *SB = calloc(nn, sizeof *SB), *M = calloc(nn, sizeof *M), *rhs = calloc((size_t)s->neq, sizeof *rhs);
+    int *pos = malloc((size_t)s->ndof * sizeof *pos), *ipiv = malloc((size_t)n * sizeof *ipiv);
+    int rc = -1;
+    if (!SB || !M || !rhs || !pos || !ipiv) {
+        nc_error_set(err, 1, "out of memory for the interface compliance");
+        goto done;
+    }
+    /* GMRES only for what the factor leaves out (a skew part, rank-one terms) */
+    const int gmres = (s->lin.active && s->lin.has_skew) || s->lr_members > 0;
+    if (gmres && fem_gmres_reserve(&s->gmres, s->neq, FEM_GMRES_MAX_IT, err)) goto done;
+    for (int d = 0; d < s->ndof; d++) pos[d] = -1;
+    for (int a = 0; a < n; a++) pos[dofs[a]] = a;
+    s->skew_lk = s->last_lk;
+    s->skew_lc = s->last_lc;
+    /* the matrix holds the tangent at the solution (its last evaluation): a fresh factor
+     * leaves GMRES the skew part and the rank-one terms */
+    if (factorize(s, err)) goto done;
+    s->factor_cm = s->last_cm;
+    s->factor_ck = s->last_ck;
+    s->factor_lin = s->lin_serial;
+    /* S_B: columns of the solved step matrix's inverse (the linearisation in it) */
+    for (int b = 0; b < n; b++) {
+        const int qb = s->eq[dofs[b]];
+        if (qb < 0) continue;
+        memset(rhs, 0, (size_t)s->neq * sizeof *rhs);
+        rhs[qb] = 1.0;
+        int its = 0;
+        if (gmres ? fem_gmres_solve(&s->gmres, apply_tangent, apply_factor, s, rhs, s->du,
+                                    FEM_GMRES_TOL, FEM_GMRES_MAX_IT, &its, err) < 0
+                  : fem_sparse_solve(&s->K, rhs, s->du, err) != 0)
+            goto done;
+        for (int a = 0; a < n; a++) {
+            const int qa = s->eq[dofs[a]];
+            SB[(size_t)a * n + b] = qa < 0 ? 0.0 : s->du[qa];
+        }
+    }
+    /* Kd: the linearisation's tangent on the dofs; M = I - Kd S_B, S = S_B M^-1 */
+    double *Kd = S;
+    memset(Kd, 0, nn * sizeof *Kd);
+    if (s->lin.active)
+        for (int k = 0; k < s->lin.n_blocks; k++) {
+            const int ni = s->lin.nodes[2 * k], nj = s->lin.nodes[2 * k + 1];
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 3; c++) {
+                    const int a = pos[3 * ni + r], b = pos[3 * nj + c];
+                    if (a < 0 || b < 0 || s->eq[3 * ni + r] < 0 || s->eq[3 * nj + c] < 0) continue;
+                    Kd[(size_t)a * n + b] += s->last_lk * s->lin.K[9 * k + 3 * r + c] +
+                                             (s->lin.C ? s->last_lc * s->lin.C[9 * k + 3 * r + c] : 0.0);
+                }
+        }
+    for (int a = 0; a < n; a++)
+        for (int b = 0; b < n; b++) {
+            double sum = a == b ? 1.0 : 0.0;
+            for (int c = 0; c < n; c++) sum -= Kd[(size_t)a * n + c] * SB[(size_t)c * n + b];
+            M[(size_t)a * n + b] = sum;
+        }
+    /* row-major M read as column-major is M^T: M^T X = S_B^T gives X = S^T column-major,
+     * which is S row-major */
+    int info = 0;
+    dgesv_(&n, &n, M, &n, ipiv, SB, &n, &info);
+    if (info != 0) {
+        nc_error_set(err, 1, "interface compliance: singular system (LAPACK info %d)", info);
+        goto done;
+    }
+    for (size_t k = 0; k < nn; k++) S[k] = s->last_lw * SB[k];
+    rc = 0;
+done:
+    free(SB); free(M); free(rhs); free(pos); free(ipiv);
+    return rc;
 }
 
 int fem_analysis_save(fem_analysis *s, nc_error *err)

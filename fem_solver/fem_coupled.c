@@ -56,6 +56,9 @@ typedef struct coupled {
     double next_output_s;     /* time of the next full output */
     nc_ckpt_table run_entries; /* what of this driver a checkpoint holds */
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
+    int32_t *comp_nodes;      /* the compliance of the last reply (interface nodes, [3k x 3k]
+                                 m/N): the reply points to them */
+    double *comp_S;
 } coupled;
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -178,6 +181,47 @@ static int step_from_guess(coupled *c, double dt, nc_error *err)
     return fem_analysis_step(s, dt, err);
 }
 
+/* The structure's compliance at the interface nodes the linearisation of `cmd` touches
+ * (capability "compliance", protocol/README.md §3.4): "compliance_nodes" [k] interface
+ * indices, "compliance" [3k x 3k] m/N, "compliance_velocity_per_m" (dv/du at the step's end).
+ * Nothing when the linearisation has no block. */
+static int add_compliance(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
+{
+    const fem_model *m = c->m;
+    const int32_t *nodes;
+    size_t b = 0;
+    if (proto_message_get_i32(cmd, "jacobian_nodes", 0, 2, &nodes, &b, err)) return -1;
+    if (b == 0) return 0;
+    int32_t *list = malloc(2 * b * sizeof *list);
+    if (!list) return nc_error_set(err, 1, "out of memory for the compliance's nodes");
+    size_t k = 0;
+    for (size_t q = 0; q < 2 * b; q++) {
+        size_t t = 0;
+        while (t < k && list[t] != nodes[q]) t++;
+        if (t == k) list[k++] = nodes[q];
+    }
+    const int nd = (int)(3 * k);
+    int *dofs = malloc((size_t)nd * sizeof *dofs);
+    double *S = malloc((size_t)nd * (size_t)nd * sizeof *S);
+    if (!dofs || !S) {
+        free(list); free(dofs); free(S);
+        return nc_error_set(err, 1, "out of memory for the compliance of %zu nodes", k);
+    }
+    for (size_t q = 0; q < k; q++)
+        for (int d = 0; d < 3; d++) dofs[3 * q + d] = 3 * m->iface_nodes[list[q]] + d;
+    const int rc = fem_analysis_compliance(&c->s, nd, dofs, S, err);
+    free(dofs);
+    free(c->comp_nodes);
+    free(c->comp_S);
+    c->comp_nodes = list;
+    c->comp_S = S;
+    if (rc || proto_message_add_i32(reply, "compliance_nodes", c->comp_nodes, k, 1, err) ||
+        proto_message_add_f64(reply, "compliance", c->comp_S, (size_t)nd, (size_t)nd, err) ||
+        proto_message_set_value(reply, "compliance_velocity_per_m", c->s.last_velocity_per_m, err))
+        return -1;
+    return 0;
+}
+
 /* Solves the step with the interface force of `cmd`; fills the reply arrays. */
 static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
@@ -252,6 +296,10 @@ static int solve(coupled *c, const proto_message *cmd, proto_message *reply, nc_
         proto_message_set_value(reply, "numerical_dissipation_j", e.numerical_j, err) ||
         proto_message_set_value(reply, "newton_iterations", s->stats.iterations, err) ||
         proto_message_set_value(reply, "residual_norm", s->stats.residual_norm, err))
+        return -1;
+    /* the coupler asks for the structure's compliance with the value "compliance" 1 */
+    if (proto_message_value(cmd, "compliance", 0.0) != 0.0 && m->settings.type != FEM_STATIC &&
+        s->lin.active && add_compliance(c, cmd, reply, err))
         return -1;
     return 0;
 }
@@ -421,7 +469,7 @@ int fem_run_coupled(const fem_model *m, const char *output_dir, const fem_couple
     proto_options po;
     proto_options_default(&po);
     po.idle_timeout_ms = opt->idle_timeout_ms;
-    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore jacobian checkpoint", &po, err))
+    if (proto_participant_open(&p, opt->endpoint, "fem", "netcouple fem_solver", "restore jacobian checkpoint compliance", &po, err))
         goto done;
     if (opt->endpoint_file && nc_file_write_line(opt->endpoint_file, proto_participant_endpoint(p), err))
         goto done;
@@ -471,6 +519,7 @@ done:
     nc_ckpt_table_free(&c->run_entries);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v); free(c->iface_u0); free(c->ckpt_u0);
     free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->guess_u);
+    free(c->comp_nodes); free(c->comp_S);
     fem_psd_free(&c->psd);
     free(c);
     sum.wall_s = nc_clock_now_s() - t0;

@@ -1219,6 +1219,21 @@ def study_estimate(out, jobs, end_time):
     compare_variants(out, jobs, end_time, ESTIMATE_VARIANTS, "estimate_table.md")
 
 
+COMPLIANCE_VARIANTS = [("paper", "eq. (35)", ["coupler.work_tolerance=0", "coupler.newton_estimate=0"]),
+                       ("compliance", "interface_compliance",
+                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0",
+                         "coupler.interface_compliance=true"]),
+                       ("compliance_estimate", "interface_compliance and newton_estimate 0.1",
+                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1",
+                         "coupler.interface_compliance=true"])]
+
+
+def study_compliance(out, jobs, end_time):
+    """Jacobian + Aitken with eq. (35), with the structure's compliance in the DEM
+    (interface_compliance), and with it and the Newton error estimate; 8 cases x COR x dt."""
+    compare_variants(out, jobs, end_time, COMPLIANCE_VARIANTS, "compliance_table.md")
+
+
 NEWTON_VARIANTS = [("secant", "eq. (34) throughout", ["coupler.relaxation.newton_contraction=0"]),
                    ("theta0.2", "newton_contraction 0.2", ["coupler.relaxation.newton_contraction=0.2"]),
                    ("theta0.5", "newton_contraction 0.5", ["coupler.relaxation.newton_contraction=0.5"]),
@@ -1253,6 +1268,7 @@ STUDIES = {
     "speed": study_speed,
     "work": study_work,
     "estimate": study_estimate,
+    "compliance": study_compliance,
     "newton": study_newton,
     "tolerance": study_tolerance,
 }

@@ -226,7 +226,7 @@ cpl_participant tm_structure_participant(tm_structure *s)
 {
     cpl_participant p = {"fem", s, s_begin, s_solve, s_accept, 0,
                          s->checkpoint_dir ? s_checkpoint : NULL,
-                         s->checkpoint_dir ? s_resume : NULL, NULL, NULL};
+                         s->checkpoint_dir ? s_resume : NULL, NULL, NULL, 0};
     return p;
 }
 
@@ -308,7 +308,7 @@ cpl_participant tm_particles_participant(tm_particles *p)
 {
     cpl_participant q = {"dem", p, p_begin, p_solve, p_accept, 0,
                          p->checkpoint_dir ? p_checkpoint : NULL,
-                         p->checkpoint_dir ? p_resume : NULL, NULL, NULL};
+                         p->checkpoint_dir ? p_resume : NULL, NULL, NULL, 0};
     return q;
 }
 

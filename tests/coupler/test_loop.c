@@ -176,8 +176,8 @@ static void test_quadratic_predictor(void **state)
     const double a = -9.81, dt = 0.01;
     for (int quadratic = 0; quadratic <= 1; quadratic++) {
         guess_recorder g = {.accel = a};
-        cpl_participant fem = {"fem", &g, no_op, prescribed_solve, no_op, 0, NULL, NULL, NULL, NULL};
-        cpl_participant dem = {"dem", &g, no_op, recording_solve, no_op, 0, NULL, NULL, NULL, NULL};
+        cpl_participant fem = {"fem", &g, no_op, prescribed_solve, no_op, 0, NULL, NULL, NULL, NULL, 0};
+        cpl_participant dem = {"dem", &g, no_op, recording_solve, no_op, 0, NULL, NULL, NULL, NULL, 0};
         /* 20 steps of dt, then one of 0.4 dt to end on end_time: too short for the parabola
          * (less than half the last step), so the linear guess again */
         cpl_loop_settings s = tm_loop_settings(CPL_SCHEME_WEAK, dt, 0.204);
@@ -264,7 +264,7 @@ static cpl_participant posting_participant(posting *p)
 {
     cpl_participant q = {p->name, p, posting_begin, posting_solve, posting_accept, 0,
                          NULL, NULL, p->can_post ? posting_post : NULL,
-                         p->can_post ? posting_await : NULL};
+                         p->can_post ? posting_await : NULL, 0};
     return q;
 }
 

@@ -2,7 +2,8 @@
 # Checkpoint/resume end to end with the real solvers: the small net case
 # (tests/coupler/cases/small_net: 7 x 7 cable net, one rock, COR 0.5, strong coupling with
 # Aitken, 0.4 s) with a checkpoint every 0.05 s. A run stopped by SIGINT to
-# run_case.sh (exit 130) and one killed with its whole process group (SIGKILL) are continued
+# run_case.sh (exit 130) and one killed with its whole process group (SIGKILL), and one with
+# the structure's compliance in the DEM (interface_compliance) stopped by SIGINT, are continued
 # with `run_case.sh --resume DIR`; every dataset of fem.h5, dem.h5 and coupling.h5 (except
 # the wall-clock ones, tests/coupler/resume_lib.sh) must be identical to the uninterrupted
 # run's, with the same shapes; also for a net that starts at rest in its static equilibrium
@@ -27,6 +28,10 @@ fi
 
 resume_check net_int "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
 resume_check net_kill "$case_dir" kill "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet "${args[@]}"
+# with the structure's compliance in the DEM (coupler.json interface_compliance): a resumed
+# step starts from the compliance of the last FEM solve, which the checkpoint holds
+resume_check net_compliance "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet \
+  "${args[@]}" --set coupler.interface_compliance=true
 # a net that starts at rest in its static equilibrium under its own weight (fem.json
 # analysis.initial_state): the resumed FEM finds the same start and interface again
 resume_check net_settled "$case_dir" int "coupling.h5 fem.h5 dem.h5 iterations.log" --quiet \

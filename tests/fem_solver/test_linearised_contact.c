@@ -577,6 +577,17 @@ static void test_restore_bitwise(void **state)
  * needs clearly more iterations (measured: 2e4 costs one more, 1e5 three more) */
 #define SKEW_K 1e5
 
+/* The edge contact of edge_blocks (5e4 N/m, 50 N s/m) with a friction-like part
+ * k_t t n^T (tangential force from normal motion) on (a, b) only: an unsymmetric K. */
+static int skewed_edge_blocks(int *nodes, double *K, double *C)
+{
+    const int nb = edge_blocks(NET_CENTRE, NET_EDGE_B, 5e4, 50.0, nodes, K, C);
+    const double t[3] = {1, 0, 0}, n[3] = {0, 0, 1};
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) K[9 * 1 + 3 * r + c] += SKEW_K * t[r] * n[c];
+    return nb;
+}
+
 static void test_unsymmetric(void **state)
 {
     (void)state;
@@ -589,11 +600,7 @@ static void test_unsymmetric(void **state)
     size_t bytes = (size_t)s.ndof * sizeof(double);
     int nodes[8];
     double K[36], C[36];
-    const int nb = edge_blocks(NET_CENTRE, NET_EDGE_B, 5e4, 50.0, nodes, K, C);
-    /* a friction-like part k_t t n^T (tangential force from normal motion) on (a, b) only */
-    const double t[3] = {1, 0, 0}, n[3] = {0, 0, 1};
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) K[9 * 1 + 3 * r + c] += SKEW_K * t[r] * n[c];
+    const int nb = skewed_edge_blocks(nodes, K, C);
     double *uref = malloc(bytes), *vref = calloc(1, bytes);
     for (int i = 0; i < s.ndof; i++) uref[i] = -0.02 * (i % 3 == 2);
     edge_force(&s, 1500.0);
@@ -633,6 +640,70 @@ static void test_unsymmetric(void **state)
     free(uref); free(vref);
     fem_analysis_free(&s);
     fem_analysis_free(&p);
+    fem_model_free(&m);
+}
+
+/* The structure's interface compliance (fem_analysis_compliance) after a step solved with an
+ * unsymmetric linearisation: S = du/dF without the linearisation, against central
+ * differences of the plain step under F(u, v) of the linearised solution +- a force on each
+ * of the two edge nodes' dofs. */
+static void test_compliance(void **state)
+{
+    (void)state;
+    fem_model m;
+    net_model(&m, FEM_BOSSAK, 0, 0);
+    m.settings.displacement_tol_m = 1e-14;
+    m.settings.relative_tol = 1e-15;
+    m.settings.residual_tol_n = 1e-12;
+    fem_analysis s, p;
+    nc_error err;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    size_t bytes = (size_t)s.ndof * sizeof(double);
+    int nodes[8];
+    double K[36], C[36];
+    const int nb = skewed_edge_blocks(nodes, K, C);
+    double *uref = malloc(bytes), *vref = calloc(1, bytes), *up = malloc(bytes);
+    for (int i = 0; i < s.ndof; i++) uref[i] = -0.02 * (i % 3 == 2);
+    edge_force(&s, 1500.0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    assert_int_equal(fem_analysis_save(&s, &err), 0);
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, nb, nodes, K, C, &err), 0);
+    assert_int_equal(fem_analysis_step(&s, NET_DT, &err), 0);
+    const int dofs[6] = {3 * NET_CENTRE, 3 * NET_CENTRE + 1, 3 * NET_CENTRE + 2,
+                         3 * NET_EDGE_B, 3 * NET_EDGE_B + 1, 3 * NET_EDGE_B + 2};
+    double S[36];
+    assert_int_equal(fem_analysis_compliance(&s, 6, dofs, S, &err), 0);
+    const double delta = 1.0;   /* N, against 1500 N: central differences err by O(delta^2) */
+    double smax = 0.0, worst = 0.0;
+    for (int b = 0; b < 6; b++) {
+        double col[6];
+        for (int sign = -1; sign <= 1; sign += 2) {
+            assert_int_equal(fem_analysis_init(&p, &m, &err), 0);
+            memcpy(p.cur.u, s.saved.u, bytes);
+            memcpy(p.cur.v, s.saved.v, bytes);
+            memcpy(p.cur.a, s.saved.a, bytes);
+            memcpy(p.cur.fd, s.saved.fd, bytes);
+            memcpy(p.cur.fc, s.saved.fc, bytes);
+            memcpy(p.f_coupling, s.cur.fc, bytes);
+            p.f_coupling[dofs[b]] += sign * delta;
+            assert_int_equal(fem_analysis_step(&p, NET_DT, &err), 0);
+            if (sign < 0) memcpy(up, p.cur.u, bytes);
+            else
+                for (int a = 0; a < 6; a++) col[a] = (p.cur.u[dofs[a]] - up[dofs[a]]) / (2 * delta);
+            fem_analysis_free(&p);
+        }
+        for (int a = 0; a < 6; a++) {
+            smax = fmax(smax, fabs(S[6 * a + b]));
+            worst = fmax(worst, fabs(S[6 * a + b] - col[a]));
+        }
+    }
+    print_message("compliance: largest entry %.4g m/N, largest difference from central differences %.3g\n",
+                  smax, worst);
+    assert_below(worst, 1e-6 * smax);
+    /* a node's own direction moves with its force: the diagonal is positive */
+    for (int a = 0; a < 6; a++) assert_below(0.0, S[7 * a]);
+    free(uref); free(vref); free(up);
+    fem_analysis_free(&s);
     fem_model_free(&m);
 }
 
@@ -751,6 +822,7 @@ int main(void)
         cmocka_unit_test(test_edge_tangent),
         cmocka_unit_test(test_restore_bitwise),
         cmocka_unit_test(test_unsymmetric),
+        cmocka_unit_test(test_compliance),
         cmocka_unit_test(test_static),
         cmocka_unit_test(test_grows_pattern_for_unconnected_blocks),
     };

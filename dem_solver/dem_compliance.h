@@ -1,0 +1,54 @@
+/* dem_compliance — a coupled step solved with the structure's compliance at the nodes the
+ * rock touches (the structure's side of a two-sided interface Jacobian;
+ * docs/notes/interface_jacobian.md "The structure's compliance in the DEM").
+ *
+ * Contract: the coupler sends, with a SOLVE, the structure's compliance S = du/dF over some
+ * interface nodes N (3|N| x 3|N|, m/N, from the FEM's last solve of the same Δt) and the
+ * force F_ref the structure balanced at the received end-of-step displacement u_in. The
+ * step is then solved for the force F on N with
+ *     F = F_dem(u_e),   u_e = u_in + S (F - F_ref) on N (u_in elsewhere),
+ * F_dem the step-averaged force of dem_sim_solve_coupled_jacobian: the wall ends where the
+ * structure, linearised, would put it under the force the particles give it. Newton's method
+ * with the step's own K (J = I + K_NN S), each evaluation a full coupled step from the
+ * restored start-of-step state, a step that makes |F - F_dem| grow halved (up to four
+ * times), at most DEM_COMPLIANCE_MAX_EVALUATIONS evaluations (a search that stops short is
+ * still an exact evaluation of the step at the u_e it reports, which is all the coupler
+ * uses). The particles end as the last evaluation left them (the wall at u_e). Returned: force_out = F_dem(u_e), jac = K at u_e
+ * and wall_end_disp = u_e: the coupler takes u_e as the iteration's interface position (the
+ * DEM chose where its wall ends; the structure's answer is compared with that).
+ * Without compliance nodes it is dem_sim_solve_coupled_jacobian.
+ */
+#ifndef DEM_COMPLIANCE_H
+#define DEM_COMPLIANCE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dem_coupling.h"
+#include "dem_net_jacobian.h"
+#include "nc_error.h"
+
+#define DEM_COMPLIANCE_MAX_EVALUATIONS 12
+/* |F - F_dem| below this times the largest nodal force (or 1e-3 N): solved */
+#define DEM_COMPLIANCE_TOLERANCE 1e-9
+
+typedef struct dem_compliance {
+    size_t n_nodes;             /* |N| */
+    const int32_t *nodes;       /* [n_nodes] interface node indices */
+    const double *S;            /* [3 n_nodes x 3 n_nodes] row-major, m/N */
+    const double *force_ref;    /* [3 n] over all interface nodes, N */
+} dem_compliance;
+
+typedef struct dem_compliance_stats {
+    int evaluations;            /* coupled steps run */
+    double first_mismatch_n;    /* |F - F_dem| of the first one (N) */
+    double last_mismatch_n;     /* ... and of the last (above the tolerance: not solved) */
+} dem_compliance_stats;
+
+int dem_sim_solve_with_compliance(dem_sim *s, double dt_step, const double *disp_end,
+                                  const double *vel_end, const dem_compliance *cmp,
+                                  double *force_out, double *wall_end_disp,
+                                  dem_coupled_info *info, dem_net_jacobian *jac,
+                                  dem_compliance_stats *st, nc_error *err);
+
+#endif
