@@ -12,21 +12,20 @@ extern void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int
 
 /* Work space of one solve (m = 3 |N|). */
 typedef struct work {
-    double *ue, *F, *Fbase, *dF, *g, *J, *KN, *du;
+    double *ue, *F, *Fbase, *dF, *g, *J, *KN;
     int *pos, *ipiv;
 } work;
 
 static void work_free(work *w)
 {
     free(w->ue); free(w->F); free(w->Fbase); free(w->dF); free(w->g); free(w->J); free(w->KN);
-    free(w->du); free(w->pos); free(w->ipiv);
+    free(w->pos); free(w->ipiv);
 }
 
 static int work_alloc(work *w, size_t n, size_t m, nc_error *err)
 {
     memset(w, 0, sizeof *w);
     w->ue = malloc(3 * n * sizeof *w->ue);
-    w->du = calloc(3 * n, sizeof *w->du);
     w->F = malloc(m * sizeof *w->F);
     w->Fbase = malloc(m * sizeof *w->Fbase);
     w->dF = malloc(m * sizeof *w->dF);
@@ -35,7 +34,7 @@ static int work_alloc(work *w, size_t n, size_t m, nc_error *err)
     w->KN = malloc(m * m * sizeof *w->KN);
     w->pos = malloc(n * sizeof *w->pos);
     w->ipiv = malloc(m * sizeof *w->ipiv);
-    if (w->ue && w->du && w->F && w->Fbase && w->dF && w->g && w->J && w->KN && w->pos && w->ipiv)
+    if (w->ue && w->F && w->Fbase && w->dF && w->g && w->J && w->KN && w->pos && w->ipiv)
         return 0;
     work_free(w);
     return nc_error_set(err, 1, "dem: out of memory for the compliance of %zu nodes", m / 3);

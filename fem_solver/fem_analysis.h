@@ -121,8 +121,9 @@ typedef struct fem_analysis {
     fem_ijac lin;          /* interface linearisation of the coupling force (lin.active) */
     fem_gmres gmres;       /* work space of the Newton steps with lin's skew part */
     double skew_lk, skew_lc; /* the tangent weights of lin during such a step */
-    double last_lw, last_lk, last_lc, last_cm, last_ck;
-    double last_velocity_per_m; /* dv/du at the end of the last dynamic step: gamma/(beta dt) */ /* the linearisation's weights of the last Newton solve */
+    double last_lw, last_lk, last_lc, last_cm, last_ck; /* the step weights of the last
+                              Newton solve (fem_analysis_compliance works at its solution) */
+    double last_velocity_per_m; /* dv/du at the end of the last dynamic step: gamma/(beta dt) */
     long lin_serial;       /* counts set/clear calls: which linearisation a factor holds */
     int n_pairs, cap_pairs;/* node pairs in the pattern that share no element: added when a
                               linearisation couples them (a particle touching several
@@ -171,14 +172,15 @@ int fem_analysis_step_from(fem_analysis *s, double dt_s, const double *u_guess, 
 /* Load factor of the model loads at time t (load_ramp_s). */
 double fem_analysis_load_factor(const fem_analysis *s, double time_s);
 
-/* Save/restore the state and the factorisation kept by modified Newton (fem_sparse.h), so
- * a step solved again after a restore repeats the same operations bit for bit. */
 /* The structure's interface compliance at the last solved dynamic step: S = du/dF over the
  * n dofs `dofs` (full dof indices), the tangent of the step at its solution without the
  * interface linearisation (removed from the solved matrix by the Woodbury identity), times
  * the coupling force's weight in the step. S: [n x n] row-major; rows/columns of supported
- * dofs are zero. */
+ * dofs are zero. The matrix is factorised afresh (the kept factorisation is then that one). */
 int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, nc_error *err);
+
+/* Save/restore the state and the factorisation kept by modified Newton (fem_sparse.h), so
+ * a step solved again after a restore repeats the same operations bit for bit. */
 int fem_analysis_save(fem_analysis *s, nc_error *err);
 int fem_analysis_restore(fem_analysis *s, nc_error *err);
 
