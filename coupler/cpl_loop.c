@@ -926,6 +926,17 @@ static void compliance_reference(cpl_loop *L, int k)
     for (size_t i = 0; i < n3; i++) L->comp.force_ref[i] = L->comp_f_lin[i] + L->df[i];
 }
 
+/* 1 when every node of the linearisation's blocks has its compliance in c. */
+static int compliance_covers(const cpl_compliance *c, const cpl_jacobian *j)
+{
+    for (size_t b = 0; b < 2 * j->n_blocks; b++) {
+        size_t q = 0;
+        while (q < c->n_nodes && c->nodes[q] != j->nodes[b]) q++;
+        if (q == c->n_nodes) return 0;
+    }
+    return 1;
+}
+
 /* How one try of a step ended (the step is not accepted yet); TRY_SLOW: given up early by
  * reject_slow. */
 typedef enum { TRY_CONVERGED = 0, TRY_UNCONVERGED, TRY_SLOW, TRY_DIVERGED, TRY_FAILED } try_outcome;
@@ -1138,6 +1149,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                                                with it made the residual grow */
     L->timing.compliance_tries += compliance_on;
     double residual_before = INFINITY;
+    int compliance_asked = 0;               /* the FEM gave its compliance in this try */
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
     for (k = 1; k <= max_it; k++) {
@@ -1223,8 +1235,19 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 solved = 0;
                 L->timing.fem_repeats_skipped++;
             } else {
+                /* the structure's compliance: at the try's first FEM solve, and again when
+                 * the contact reaches a node it does not cover; the structure's tangent
+                 * changes little within a step, and each S costs the FEM a factorisation and
+                 * 3 solves per node (cases/steel_net: FEM 2.1 -> 1.5 s, the iterations the
+                 * same: 3.08 -> 3.06 per contact step) */
+                const int refresh = compliance_on &&
+                    (!compliance_asked || !L->comp.valid || L->comp.dt_s != call->dt_s ||
+                     !compliance_covers(&L->comp, &L->jac));
+                call->compliance_out = refresh ? &L->comp : NULL;
                 solved = fem_solve_or_skip(c, call, L->f_dem, t->fem_solved, &t->fem_info);
+                call->compliance_out = compliance_on ? &L->comp : NULL;
                 if (solved < 0) return try_failed(c, t);
+                if (solved && refresh) compliance_asked = 1;
                 if (solved && compliance_on) {
                     memcpy(L->comp_u_lin, L->u_in, n3 * sizeof(double));
                     memcpy(L->comp_f_lin, L->f_dem, n3 * sizeof(double));
