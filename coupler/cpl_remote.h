@@ -10,6 +10,11 @@
  * Interface-Jacobian coupling (version 2, capability "jacobian" on both sides): a DEM SOLVE
  * asks for the linearisation with the value "jacobian" 1, and the FEM's SOLVE carries it with
  * the point it was taken at (protocol/README.md §3.1).
+ * The structure's compliance (capability "compliance" on both sides, §3.4): a FEM SOLVE with
+ * call->compliance_out asks for it with the value "compliance" 1 and stores the reply's
+ * arrays there; a DEM SOLVE with call->compliance_in sends them (when of the same dt) with
+ * the force the structure balanced, and stores where the DEM's wall ended in
+ * call->compliance_out.
  * Replies may carry the value "solve_time_s" (the participant's own compute time for the
  * request); the coupler then splits waiting time into solver and exchange time.
  */

@@ -2,7 +2,9 @@
  * serve loop (protocol/proto_serve.h). INTERFACE builds the net wall, BEGIN_STEP saves the
  * complete state (dem_sim_begin_step), a repeated SOLVE restores it (dem_sim_restore; the
  * loop decides when), SOLVE sub-steps the coupling step and replies the time-averaged nodal
- * forces, ACCEPT_STEP writes output when due. The result files are created at the first
+ * forces (with the capability "jacobian" their linearisation, with "compliance" a step
+ * solved against the structure's compliance at the contact nodes: dem_compliance.h),
+ * ACCEPT_STEP writes output when due. The result files are created at the first
  * BEGIN_STEP (with output step 0), never before: CHECKPOINT saves the complete state to
  * checkpoint/dem_<name>.h5 in the output folder (dem_checkpoint.h) and RESUME, before the
  * first BEGIN_STEP, loads it and reopens the result files as they were then

@@ -9,6 +9,9 @@
  * carries the DEM's linearisation solves with F(u, v) = force - K (u - u^k) - C (v - v^k)
  * (fem_analysis_set_linearisation); one without it, with the constant force. A Newton failure
  * is answered as retryable: the coupler may try the step again with a smaller dt.
+ * The structure's compliance (capability "compliance", protocol/README.md §3.4): such a SOLVE
+ * with the value "compliance" 1 also replies S = du/dF at the nodes of the linearisation's
+ * blocks (fem_analysis_compliance), for the DEM's next solves.
  * Checkpoint and resume (capability "checkpoint", protocol/README.md §3.3): CHECKPOINT saves
  * the complete state (fem_checkpoint.h) as DIR/checkpoint/fem_<name>.h5; RESUME loads one
  * and reopens fem.h5 cut back to the rows written at that checkpoint. So that a resumed run
