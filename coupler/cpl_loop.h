@@ -329,7 +329,7 @@ typedef struct cpl_timing {
     long compliance_tries;          /* tries with the structure's compliance at the start
                                        (interface_compliance) ... */
     long compliance_dropped;        /* ... that went on without it after an iteration with it
-                                       made the residual grow */
+                                       made no progress */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;

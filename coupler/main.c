@@ -555,8 +555,8 @@ static void print_timing(app *a)
                 "iterate with contact\n", t->backtracks);
     if (cpl_loop_uses_compliance(a->loop))
         fprintf(o, "coupler: interface compliance: the DEM solved with the structure's "
-                "compliance; %ld of %ld tries went on without it after it made the residual "
-                "grow\n", t->compliance_dropped, t->compliance_tries);
+                "compliance; %ld of %ld tries went on without it after an iteration with it "
+                "made no progress\n", t->compliance_dropped, t->compliance_tries);
     if (t->jacobian_dropped_steps > 0)
         fprintf(o, "coupler: interface Jacobian incomplete in %ld steps: the DEM left particles "
                 "out of its linearisation\n", t->jacobian_dropped_steps);

@@ -10,12 +10,15 @@
  * F_dem the step-averaged force of dem_sim_solve_coupled_jacobian: the wall ends where the
  * structure, linearised, would put it under the force the particles give it. Newton's method
  * with the step's own K (J = I + K_NN S), each evaluation a full coupled step from the
- * restored start-of-step state, a step that makes |F - F_dem| grow halved (up to four
- * times), at most DEM_COMPLIANCE_MAX_EVALUATIONS evaluations (a search that stops short is
- * still an exact evaluation of the step at the u_e it reports, which is all the coupler
- * uses). The particles end as the last evaluation left them (the wall at u_e). Returned: force_out = F_dem(u_e), jac = K at u_e
- * and wall_end_disp = u_e: the coupler takes u_e as the iteration's interface position (the
- * DEM chose where its wall ends; the structure's answer is compared with that).
+ * restored start-of-step state; a step that goes past the root along its direction (a
+ * contact gained) brackets it and searches it, one that makes |F - F_dem| grow without that
+ * is halved (dem_compliance.c); at most DEM_COMPLIANCE_MAX_EVALUATIONS evaluations, the last
+ * of them back at the best one when the search ended elsewhere. A search that stops short
+ * returns its best evaluation, still an exact evaluation of the step at the u_e it reports,
+ * which is all the coupler uses. The particles end as that evaluation left them (the wall at
+ * u_e). Returned: force_out = F_dem(u_e), jac = K at u_e and wall_end_disp = u_e: the
+ * coupler takes u_e as the iteration's interface position (the DEM chose where its wall
+ * ends; the structure's answer is compared with that).
  * Without compliance nodes it is dem_sim_solve_coupled_jacobian.
  */
 #ifndef DEM_COMPLIANCE_H
@@ -29,6 +32,12 @@
 #include "nc_error.h"
 
 #define DEM_COMPLIANCE_MAX_EVALUATIONS 12
+/* a step halved below this share of Newton's without lowering the mismatch becomes the base
+ * all the same */
+#define DEM_COMPLIANCE_SMALLEST_STEP 0.1
+/* past the root along a Newton direction: a point of the bracket that leaves at most this
+ * share of the base's mismatch along it (and a smaller mismatch) is the next base */
+#define DEM_COMPLIANCE_SHARE_LEFT 0.25
 /* |F - F_dem| below this times the largest nodal force (or 1e-3 N): solved */
 #define DEM_COMPLIANCE_TOLERANCE 1e-9
 
@@ -42,7 +51,7 @@ typedef struct dem_compliance {
 typedef struct dem_compliance_stats {
     int evaluations;            /* coupled steps run */
     double first_mismatch_n;    /* |F - F_dem| of the first one (N) */
-    double last_mismatch_n;     /* ... and of the last (above the tolerance: not solved) */
+    double last_mismatch_n;     /* ... and of the one returned (above the tolerance: not solved) */
 } dem_compliance_stats;
 
 int dem_sim_solve_with_compliance(dem_sim *s, double dt_step, const double *disp_end,

@@ -818,11 +818,17 @@ def jacobian_metrics(run_dir, seconds, node, component):
         with h5py.File(os.path.join(run_dir, "coupling.h5"), "r") as f:
             st = f["/steps"]
             it = np.array(st["iterations"])
-            contact = np.array(st["in_contact"]) > 0
             # /steps/iterations counts the accepted try; /iterations has a row for every
             # iteration of every try, numbered by the step it tried
-            tries = np.bincount(np.array(f["/iterations/step"]).astype(int).ravel(),
-                                minlength=len(it))[:len(it)]
+            tried = np.array(f["/iterations/step"]).astype(int).ravel()
+            tries = np.bincount(tried, minlength=len(it))[:len(it)]
+            # a contact step: the accepted step ended in contact, or a try of it touched (a
+            # try rejected at a contact's onset is followed by a shorter step that may end
+            # before the rock arrives: its iterations belong to the contact all the same)
+            touched = np.any(np.array(f["/iterations/contact_force"]).reshape(len(tried), -1) != 0,
+                             axis=1)
+            contact = np.array(st["in_contact"]) > 0
+            contact[np.unique(tried[touched & (tried < len(it))])] = True
             r.update(steps=len(it), t_end=float(st["time"][-1]) if len(it) else 0.0,
                      unconverged=int((np.array(st["converged"]) == 0).sum()),
                      rejected=int(np.array(st["rejected"]).sum()),
