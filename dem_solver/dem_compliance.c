@@ -6,9 +6,7 @@
 #include <string.h>
 
 #include "dem_sim.h"
-
-extern void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv,
-                   double *b, const int *ldb, int *info);
+#include "nc_lapack.h"
 
 /* Work space of one solve (m = 3 |N|). */
 typedef struct work {

@@ -34,6 +34,7 @@
 #include "fem_element.h"
 #include "fem_element_cable.h"
 #include "nc_clock.h"
+#include "nc_lapack.h"
 
 #include <float.h>
 #include <math.h>
@@ -1494,9 +1495,6 @@ void fem_analysis_clear_linearisation(fem_analysis *s)
     if (s->lin.active) s->lin_serial++;
     fem_ijac_clear(&s->lin);
 }
-
-extern void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv,
-                   double *b, const int *ldb, int *info);
 
 int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, nc_error *err)
 {
