@@ -26,10 +26,13 @@
  * never above the nominal Δt. At dt_min a step that still does not converge is accepted or
  * stops the run (on_max_iterations); a failed solve there ends the run.
  * Contact backtracking (contact_backtracking > 0, strong, relaxed u, u̇): an iterate whose
- * DEM answer has no contact at all, after one with contact whose linearisation still
- * predicted a force of the same sense (or after the try's contact-free answer was seen to
- * collide), is moved halfway back towards that one, up to contact_backtracking times, and
- * only the DEM is solved again (docs/notes/contact_backtracking.md).
+ * DEM answer lost the contact of the last iterate with contact, whose linearisation still
+ * predicted force there (or after the try's contact-free answer was seen to collide), is
+ * moved back along the step towards that one to where the lost contact's force meets the
+ * prediction (cpl_contact_search.h), with at most contact_backtracking more DEM solves
+ * (docs/notes/contact_backtracking.md).
+ * Convergence with the interface Jacobian also needs the force the structure solved with at
+ * its answer within impulse_tolerance of the DEM's (force_mismatch in cpl_loop.c).
  * Jacobian check (jacobian_check > 0, strong, with the Jacobian): on every such step each
  * iteration's linearisation is compared with two more DEM solves of the step along the step
  * the iteration took (cpl_jacobian_check.h); the DEM's own solve of the next iteration comes
@@ -204,9 +207,9 @@ typedef struct cpl_loop_settings {
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */
-    int contact_backtracking;       /* strong: at most this many halvings back towards the
-                                       last iterate with contact when an iterate loses it
-                                       (0: off) */
+    int contact_backtracking;       /* strong: at most this many DEM solves back towards
+                                       the last iterate with contact when an iterate loses
+                                       it (0: off) */
     double checkpoint_interval_s;   /* simulated time between checkpoints (0: none); taken
                                        only when both participants can */
     int jacobian_check_interval;    /* strong, relaxed u, u̇, with the Jacobian: on every
@@ -329,7 +332,8 @@ typedef struct cpl_timing {
     long compliance_tries;          /* tries with the structure's compliance at the start
                                        (interface_compliance) ... */
     long compliance_dropped;        /* ... that went on without it after an iteration with it
-                                       made no progress */
+                                       made no progress or ended a contact the structure's
+                                       linearisation still carried */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */
 } cpl_timing;

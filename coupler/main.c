@@ -551,12 +551,13 @@ static void print_timing(app *a)
                 "had given), %ld DEM solves\n", t->fem_solves, t->fem_repeats_skipped,
                 t->dem_solves);
     if (t->backtracks > 0)
-        fprintf(o, "coupler: contact backtracking: %ld extra DEM solves halfway back to an "
-                "iterate with contact\n", t->backtracks);
+        fprintf(o, "coupler: contact backtracking: %ld extra DEM solves back along steps "
+                "that lost a contact\n", t->backtracks);
     if (cpl_loop_uses_compliance(a->loop))
         fprintf(o, "coupler: interface compliance: the DEM solved with the structure's "
                 "compliance; %ld of %ld tries went on without it after an iteration with it "
-                "made no progress\n", t->compliance_dropped, t->compliance_tries);
+                "made no progress or ended a contact the structure still carried\n",
+                t->compliance_dropped, t->compliance_tries);
     if (t->jacobian_dropped_steps > 0)
         fprintf(o, "coupler: interface Jacobian incomplete in %ld steps: the DEM left particles "
                 "out of its linearisation\n", t->jacobian_dropped_steps);
