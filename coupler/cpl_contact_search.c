@@ -32,23 +32,20 @@ static double power_law_target(double t1, double phi1, double slope1, double t2,
     return t0 - (t0 - t2) * pow(target / phi2, 1.0 / p);
 }
 
+/* Halfway without a target or a fit, or after two points past the end in a row; else the
+ * fit's point for φ_T, or, after one point past the end, for a force nearer the last one
+ * (the fit's end lies a little beyond the true one where the law steepens towards it). */
 double cpl_contact_search_next(const cpl_contact_search *s)
 {
-    /* without a fit, halfway; with one, a fit past the contact's end says the end is near
-     * that point: three quarters of the way */
     const double mid = 0.5 * (s->t_contact + s->t_past);
-    if (!(s->target > 0.0) || !s->have_before) return mid;
-    double t = power_law_target(s->t_before, s->phi_before, s->slope_before, s->t_contact,
-                                s->phi_contact, s->slope_contact, s->target);
+    if (!(s->target > 0.0) || !s->have_before || s->fit_missed > 1) return mid;
+    const double aim = s->fit_missed
+                           ? fmax(s->target, CPL_CONTACT_SEARCH_AFTER_MISS * s->phi_contact)
+                           : s->target;
+    const double t = power_law_target(s->t_before, s->phi_before, s->slope_before,
+                                      s->t_contact, s->phi_contact, s->slope_contact, aim);
     /* inside the bracket, and not so close to its ends that rounding makes it one of them */
     const double margin = 1e-12 * (1.0 + s->t_past);
-    if (s->fit_missed > 1) return mid;
-    if (s->fit_missed) {
-        /* the fit went past the contact's end: aim at a force nearer the last one's */
-        const double nearer = fmax(s->target, CPL_CONTACT_SEARCH_AFTER_MISS * s->phi_contact);
-        t = power_law_target(s->t_before, s->phi_before, s->slope_before, s->t_contact,
-                             s->phi_contact, s->slope_contact, nearer);
-    }
     return t > s->t_contact + margin && t < s->t_past - margin ? t : mid;
 }
 

@@ -17,8 +17,8 @@
  * iteration (13–17 iterations). The search instead brackets the contact's end [t_contact,
  * t_past] and fits φ = c (t₀ − t)^p through the last two points with contact, using the slope
  * dφ/dt the DEM's linearisation gives at each (for a power law φ/|φ'| = (t₀ − t)/p is linear in
- * t, which gives p and t₀), and solves the fit for φ_T; where the fit fails or leaves the
- * bracket it bisects. A point is accepted once its force is within [φ_T/4, 5/4 φ_T]; without
+ * t, which gives p and t₀), and solves the fit for φ_T; where the fit fails, leaves the
+ * bracket or has twice in a row landed past the end, it bisects. A point is accepted once its force is within [φ_T/4, 5/4 φ_T]; without
  * a target (φ_T ≤ 0: the linearisation predicted the contact's end, but the try has seen that
  * the contact-free answer collides) the first point with contact is, as by halving.
  *
@@ -30,7 +30,8 @@
 /* accepted band around the target φ_T */
 #define CPL_CONTACT_SEARCH_BELOW 0.25
 #define CPL_CONTACT_SEARCH_ABOVE 1.25
-/* where in the bracket the point after a fit that went past the contact's end goes */
+/* after a fitted point past the contact's end the next one aims at this share of the last
+ * force with contact (φ_T if that is larger) */
 #define CPL_CONTACT_SEARCH_AFTER_MISS 0.5
 
 typedef struct cpl_contact_search {
@@ -42,7 +43,8 @@ typedef struct cpl_contact_search {
     double t_past;                       /* the nearest point beyond the band: no contact,
                                             or φ below it (1 at first) */
     double t_best, phi_best;             /* the point to end at: contact, φ nearest φ_T */
-    int fit_missed;                      /* the last fitted point had no contact */
+    int fit_missed;                      /* points without contact since the last one above
+                                            the band, once a fit exists */
     int done;                            /* a point within the band was found */
 } cpl_contact_search;
 
