@@ -38,15 +38,34 @@ int cpl_impulse_fired(const cpl_impulse *m)
     return above(m);
 }
 
-void cpl_impulse_step(cpl_impulse *m, long step, double end_time_s, double dt_s,
-                      const double *force, const double *correction, size_t n_nodes)
+/* one step's resultants of force and correction (NULL: none) */
+static void step_sums(const double *force, const double *correction, size_t n_nodes,
+                      double given[3], double missed[3])
 {
-    double given[3] = {0.0, 0.0, 0.0}, missed[3] = {0.0, 0.0, 0.0};
+    for (int c = 0; c < 3; c++) given[c] = missed[c] = 0.0;
     for (size_t i = 0; i < n_nodes; i++)
         for (int c = 0; c < 3; c++) {
             given[c] += force[3 * i + c];
             if (correction) missed[c] += correction[3 * i + c];
         }
+}
+
+double cpl_impulse_share_after(const cpl_impulse *m, double dt_s, const double *force,
+                               const double *correction, size_t n_nodes)
+{
+    double given[3], missed[3];
+    step_sums(force, correction, n_nodes, given, missed);
+    const double scale = m->given_abs_ns + norm3(given) * dt_s;
+    if (!(scale > 0.0)) return 0.0;
+    for (int c = 0; c < 3; c++) missed[c] = m->missed_ns[c] + missed[c] * dt_s;
+    return norm3(missed) / scale;
+}
+
+void cpl_impulse_step(cpl_impulse *m, long step, double end_time_s, double dt_s,
+                      const double *force, const double *correction, size_t n_nodes)
+{
+    double given[3], missed[3];
+    step_sums(force, correction, n_nodes, given, missed);
     for (int c = 0; c < 3; c++) {
         m->given_ns[c] += given[c] * dt_s;
         m->missed_ns[c] += missed[c] * dt_s;

@@ -21,8 +21,8 @@
 # The structure's answer then stays within eq. (35)'s tolerance of its input whatever the
 # force, and that step was accepted with the particles' force at 439 N and the structure's at
 # about 46 N: over the whole run the impulse guard fired at 11 % (NOT reliable). Convergence
-# now also needs the structure's force within impulse_tolerance of the DEM's (force_mismatch in
-# coupler/cpl_loop.c). Checks (measured over 0.12 s: the structure missed 0.07 % of the
+# now also needs the guard's share, with the step accepted, within half of impulse_tolerance
+# (force_mismatch in coupler/cpl_loop.c). Checks (measured over 0.12 s: the structure missed 0.07 % of the
 # impulse; 31 % with the check off, impulse_tolerance 0):
 #  - reliable, exit 0, every step converged;
 #  - the structure missed at most 1 % of the particles' impulse (coupling.h5
