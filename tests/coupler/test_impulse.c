@@ -1,7 +1,7 @@
 /* The interface's momentum balance (cpl_impulse.h) against hand-computed sums: the impulse the
  * particles gave, what the structure's linearised force missed of it, the share and the
- * guard's verdict, its floor, and the scale summed step by step (impulses in opposite
- * directions do not cancel in it). */
+ * guard's verdict, its floor, the scale summed step by step (impulses in opposite
+ * directions do not cancel in it), and the share a step would bring before it is taken. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -82,6 +82,25 @@ static void test_floor(void **state)
     assert_false(cpl_impulse_fired(&m));
 }
 
+/* the share a step would bring (cpl_loop's convergence test) is the share after taking it:
+ * 100 N s given with 10 N s missed, then a step of 5 N along +z for 2 s missing 1 N along −z:
+ * |−10 − 2| / (100 + 10) by hand, and the same as cpl_impulse_step then gives; before any
+ * impulse, 0 */
+static void test_share_after_a_step(void **state)
+{
+    (void)state;
+    cpl_impulse m = fresh(0.05);
+    const double f[3] = {0, 0, 5}, c[3] = {0, 0, -1}, zero[3] = {0, 0, 0};
+    assert_near(cpl_impulse_share_after(&m, 1.0, zero, zero, 1), 0.0, 0.0);
+    const double down[3] = {0, 0, -100}, big[3] = {0, 0, -10};
+    cpl_impulse_step(&m, 0, 1.0, 1.0, down, big, 1);
+    const double after = cpl_impulse_share_after(&m, 2.0, f, c, 1);
+    assert_near(after, 12.0 / 110.0, 1e-15);
+    assert_near(cpl_impulse_missed_share(&m), 0.1, 1e-15);   /* unchanged by asking */
+    cpl_impulse_step(&m, 1, 3.0, 2.0, f, c, 1);
+    assert_near(cpl_impulse_missed_share(&m), after, 1e-15);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -89,6 +108,7 @@ int main(void)
         cmocka_unit_test(test_nothing_missed),
         cmocka_unit_test(test_scale_summed_step_by_step),
         cmocka_unit_test(test_floor),
+        cmocka_unit_test(test_share_after_a_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
