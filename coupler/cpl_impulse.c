@@ -51,10 +51,14 @@ static void step_sums(const double *force, const double *correction, size_t n_no
 }
 
 double cpl_impulse_share_after(const cpl_impulse *m, double dt_s, const double *force,
-                               const double *correction, size_t n_nodes)
+                               const double *correction, size_t n_nodes, double *own)
 {
     double given[3], missed[3];
     step_sums(force, correction, n_nodes, given, missed);
+    if (own) {
+        const double g = norm3(given), c = norm3(missed);
+        *own = c > 0.0 ? (g > 0.0 ? c / g : INFINITY) : 0.0;
+    }
     const double scale = m->given_abs_ns + norm3(given) * dt_s;
     if (!(scale > 0.0)) return 0.0;
     for (int c = 0; c < 3; c++) missed[c] = m->missed_ns[c] + missed[c] * dt_s;

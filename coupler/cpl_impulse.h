@@ -50,9 +50,10 @@ void cpl_impulse_step(cpl_impulse *m, long step, double end_time_s, double dt_s,
 /* |Σ missed| / Σ |given| (0 before any interface impulse). */
 double cpl_impulse_missed_share(const cpl_impulse *m);
 /* The share the run would have with one more step as cpl_impulse_step takes it (0 while the
- * sums stay without interface impulse). */
+ * sums stay without interface impulse); *own (may be NULL): that step's own share,
+ * |Σ_nodes correction| / |Σ_nodes force| (0 when both are zero, INFINITY with no force). */
 double cpl_impulse_share_after(const cpl_impulse *m, double dt_s, const double *force,
-                               const double *correction, size_t n_nodes);
+                               const double *correction, size_t n_nodes, double *own);
 /* 1 when the sums are above the limit now (the verdict at the end of a run). */
 int cpl_impulse_fired(const cpl_impulse *m);
 

@@ -32,7 +32,8 @@
  * prediction (cpl_contact_search.h), with at most contact_backtracking more DEM solves
  * (docs/notes/contact_backtracking.md).
  * Convergence with the interface Jacobian also needs the impulse guard's share, with the step
- * accepted, within half of impulse_tolerance (force_mismatch in cpl_loop.c).
+ * accepted, or the step's own share within half of impulse_tolerance (force_mismatch in
+ * cpl_loop.c).
  * Jacobian check (jacobian_check > 0, strong, with the Jacobian): on every such step each
  * iteration's linearisation is compared with two more DEM solves of the step along the step
  * the iteration took (cpl_jacobian_check.h); the DEM's own solve of the next iteration comes

@@ -84,18 +84,23 @@ static void test_floor(void **state)
 
 /* the share a step would bring (cpl_loop's convergence test) is the share after taking it:
  * 100 N s given with 10 N s missed, then a step of 5 N along +z for 2 s missing 1 N along −z:
- * |−10 − 2| / (100 + 10) by hand, and the same as cpl_impulse_step then gives; before any
- * impulse, 0 */
+ * |−10 − 2| / (100 + 10) by hand, and the same as cpl_impulse_step then gives, the step's
+ * own share 1/5; before any impulse, 0 */
 static void test_share_after_a_step(void **state)
 {
     (void)state;
     cpl_impulse m = fresh(0.05);
     const double f[3] = {0, 0, 5}, c[3] = {0, 0, -1}, zero[3] = {0, 0, 0};
-    assert_near(cpl_impulse_share_after(&m, 1.0, zero, zero, 1), 0.0, 0.0);
+    double own = -1.0;
+    assert_near(cpl_impulse_share_after(&m, 1.0, zero, zero, 1, &own), 0.0, 0.0);
+    assert_near(own, 0.0, 0.0);
+    cpl_impulse_share_after(&m, 1.0, zero, c, 1, &own);
+    assert_true(isinf(own));   /* a correction without force */
     const double down[3] = {0, 0, -100}, big[3] = {0, 0, -10};
     cpl_impulse_step(&m, 0, 1.0, 1.0, down, big, 1);
-    const double after = cpl_impulse_share_after(&m, 2.0, f, c, 1);
+    const double after = cpl_impulse_share_after(&m, 2.0, f, c, 1, &own);
     assert_near(after, 12.0 / 110.0, 1e-15);
+    assert_near(own, 1.0 / 5.0, 1e-15);   /* the step alone: 1 N of 5 N */
     assert_near(cpl_impulse_missed_share(&m), 0.1, 1e-15);   /* unchanged by asking */
     cpl_impulse_step(&m, 1, 3.0, 2.0, f, c, 1);
     assert_near(cpl_impulse_missed_share(&m), after, 1e-15);
