@@ -159,6 +159,7 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
         nc_h5_attr_double(&h->h5, "/", "work_tolerance", s->work_tol, err) ||
         nc_h5_attr_double(&h->h5, "/", "newton_estimate", s->newton_estimate, err) ||
         nc_h5_attr_double(&h->h5, "/", "interface_compliance", (double)s->interface_compliance, err) ||
+        nc_h5_attr_double(&h->h5, "/", "structure_predictor", (double)s->structure_predictor, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
         nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||
@@ -292,6 +293,8 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
                               (double)t->compliance_tries, NULL);
             nc_h5_attr_double(&h->h5, "/timing/total", "compliance_dropped",
                               (double)t->compliance_dropped, NULL);
+            nc_h5_attr_double(&h->h5, "/timing/total", "structure_predictions",
+                              (double)t->structure_predictions, NULL);
         }
         nc_h5_attr_double(&h->h5, "/", "unconverged_steps", (double)t->unconverged_steps, NULL);
         nc_h5_attr_double(&h->h5, "/", "rejected_attempts", (double)t->rejected_attempts, NULL);

@@ -1,6 +1,7 @@
 /* cpl_loop — weak and strong coupling loops (algorithms 1–3 and 5–7 of the paper) with step
  * rejection and Δt control (cpl_loop.h). */
 #include "cpl_loop.h"
+#include "cpl_compliance_line.h"
 #include "cpl_contact_search.h"
 
 #include <math.h>
@@ -13,9 +14,9 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
-#define CPL_FINGERPRINT_N 9   /* dt, scheme, relaxed quantity, tolerance, interface size,
+#define CPL_FINGERPRINT_N 10  /* dt, scheme, relaxed quantity, tolerance, interface size,
                                  work_tolerance, relaxation method, newton_estimate,
-                                 interface_compliance */
+                                 interface_compliance, structure_predictor */
 
 /* interface_compliance: a try goes on without the structure's compliance once an iteration
  * with it ends with a residual above this share of the last one. At a contact's onset the
@@ -58,6 +59,7 @@ struct cpl_loop {
                                    next iterate */
     double *u_end, *v_end;      /* ... and that next iterate, which lost the contact */
     unsigned char *lost;        /* per node: its contact ended between the two */
+    unsigned char *on_compliance; /* per node, scratch of move_free_nodes: 0 between calls */
     double *du, *dv, *df;       /* a change of the interface motion and the force change the
                                    linearisation predicts for it (predicted_force,
                                    backtrack, jacobian_check) */
@@ -70,9 +72,11 @@ struct cpl_loop {
     cpl_jacobian jac;       /* the DEM's linearisation of the current iteration */
     int use_compliance;     /* the structure's compliance in the DEM's solves in this run */
     cpl_compliance comp;    /* the FEM's last compliance, and where the DEM's wall ended */
-    double *comp_u_lin, *comp_f_lin; /* the linearisation point and force of the FEM's last
-                                        solve ... */
-    cpl_jacobian comp_jac;  /* ... and its K: the structure's force at the DEM's next input */
+    double *comp_u_lin, *comp_v_lin, *comp_f_lin; /* the linearisation point and force of
+                                                     the FEM's last solve ... */
+    cpl_jacobian comp_jac;  /* ... and its K, C: the structure's force at the DEM's next
+                               input */
+    cpl_jacobian predictor_jac; /* structure_predictor: zero blocks on the last one's nodes */
     double *v_answer;       /* the iteration's input velocity before the DEM moved its wall:
                                the last answer, when the input was that */
     cpl_timing timing;
@@ -115,6 +119,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     cpl_impulse_settings_default(&s->impulse);
     s->interface_jacobian = 1;
     s->interface_compliance = 0;
+    s->structure_predictor = 1;
     s->verify_restore = 1;
     s->contact_backtracking = 8;
     s->checkpoint_interval_s = 0.0;
@@ -125,15 +130,19 @@ int cpl_compliance_reserve(cpl_compliance *c, size_t n_nodes, nc_error *err)
     if (n_nodes > c->cap || !c->nodes) {
         int32_t *nodes = malloc((n_nodes + 1) * sizeof *nodes);
         double *S = malloc((9 * n_nodes * n_nodes + 1) * sizeof *S);
-        if (!nodes || !S) {
+        double *rows = malloc((3 * n_nodes * c->n3 + 1) * sizeof *rows);
+        if (!nodes || !S || !rows) {
             free(nodes);
             free(S);
+            free(rows);
             return nc_error_set(err, 1, "out of memory for the compliance of %zu nodes", n_nodes);
         }
         free(c->nodes);
         free(c->S);
+        free(c->S_interface);
         c->nodes = nodes;
         c->S = S;
+        c->S_interface = rows;
         c->cap = n_nodes;
     }
     c->n_nodes = n_nodes;
@@ -273,15 +282,18 @@ int cpl_loop_create(cpl_loop **out, const cpl_loop_settings *s, size_t n_nodes,
                           &L->u_before, &L->lin_u, &L->lin_v,
                           &L->du, &L->dv, &L->df, &L->probe_u, &L->probe_v, &L->probe_plus,
                           &L->probe_minus, &L->correction, &L->comp.force_ref,
-                          &L->comp_u_lin, &L->comp_f_lin, &L->comp.u_wall, &L->v_answer};
+                          &L->comp_u_lin, &L->comp_v_lin, &L->comp_f_lin, &L->comp.u_wall,
+                          &L->v_answer};
     for (size_t i = 0; i < sizeof vectors / sizeof *vectors; i++) {
         *vectors[i] = calloc(L->n3, sizeof(double));
         if (!*vectors[i]) goto oom;
     }
+    L->comp.n3 = L->n3;
     L->x_in = calloc(L->nx, sizeof(double));
     L->x_out = calloc(L->nx, sizeof(double));
     L->lost = calloc(n_nodes ? n_nodes : 1, 1);
-    if (!L->x_in || !L->x_out || !L->lost) goto oom;
+    L->on_compliance = calloc(n_nodes ? n_nodes : 1, 1);
+    if (!L->x_in || !L->x_out || !L->lost || !L->on_compliance) goto oom;
     if (u0) memcpy(L->u, u0, L->n3 * sizeof(double));
     if (v0) memcpy(L->v, v0, L->n3 * sizeof(double));
     if (s->scheme == CPL_SCHEME_STRONG &&
@@ -328,6 +340,7 @@ void cpl_loop_free(cpl_loop *L)
     free(L->u_end);
     free(L->v_end);
     free(L->lost);
+    free(L->on_compliance);
     free(L->u_before);
     double *check_vectors[] = {L->du, L->dv, L->df, L->lin_u, L->lin_v, L->probe_u,
                                L->probe_v, L->probe_plus, L->probe_minus, L->correction};
@@ -335,8 +348,10 @@ void cpl_loop_free(cpl_loop *L)
         free(check_vectors[i]);
     cpl_jacobian_free(&L->jac);
     cpl_jacobian_free(&L->comp_jac);
-    free(L->comp.force_ref); free(L->comp.nodes); free(L->comp.S);
-    free(L->comp_u_lin); free(L->comp_f_lin); free(L->comp.u_wall); free(L->v_answer);
+    cpl_jacobian_free(&L->predictor_jac);
+    free(L->comp.force_ref); free(L->comp.nodes); free(L->comp.S); free(L->comp.S_interface);
+    free(L->comp_u_lin); free(L->comp_v_lin); free(L->comp_f_lin); free(L->comp.u_wall);
+    free(L->v_answer);
     free(L);
 }
 
@@ -387,6 +402,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
                                     ? cpl_relax_settings_method(&s->relax) : "none");
     fp[7] = s->newton_estimate;
     fp[8] = (double)s->interface_compliance;
+    fp[9] = (double)s->structure_predictor;
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
@@ -397,7 +413,7 @@ static int check_fingerprint(const cpl_loop *L, const char *path, nc_error *err)
     const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
                                            "interface dofs", "work_tolerance",
                                            "relaxation.method", "newton_estimate",
-                                           "interface_compliance"};
+                                           "interface_compliance", "structure_predictor"};
     for (int i = 0; i < CPL_FINGERPRINT_N; i++) {
         if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) == 0) continue;
         if (i == 6) {
@@ -463,6 +479,8 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_size(t, p, "compliance_nodes", &L->comp.n_nodes);
     cpl_ckpt_add(t, p, "compliance_node_list", CPL_CKPT_INT, L->comp.nodes, L->comp.n_nodes);
     cpl_ckpt_f64(t, p, "compliance", L->comp.S, 9 * L->comp.n_nodes * L->comp.n_nodes);
+    cpl_ckpt_int(t, p, "compliance_has_interface", &L->comp.has_interface);
+    cpl_ckpt_f64(t, p, "compliance_interface", L->comp.S_interface, 3 * L->comp.n_nodes * L->n3);
     cpl_ckpt_f64(t, p, "compliance_dt", &L->comp.dt_s, 1);
     cpl_ckpt_f64(t, p, "compliance_velocity_per_m", &L->comp.velocity_per_m, 1);
     cpl_ckpt_int(t, p, "compliance_valid", &L->comp.valid);
@@ -485,6 +503,7 @@ void cpl_loop_checkpoint_entries(cpl_loop *L, cpl_ckpt_table *t)
     cpl_ckpt_long(t, q, "fem_repeats_skipped", &tm->fem_repeats_skipped);
     cpl_ckpt_long(t, q, "compliance_tries", &tm->compliance_tries);
     cpl_ckpt_long(t, q, "compliance_dropped", &tm->compliance_dropped);
+    cpl_ckpt_long(t, q, "structure_predictions", &tm->structure_predictions);
     cpl_ckpt_long(t, q, "work_test_steps", &tm->work_test_steps);
     cpl_ckpt_long(t, q, "estimate_steps", &tm->estimate_steps);
     cpl_ckpt_long(t, q, "jacobian_dropped_steps", &tm->jacobian_dropped_steps);
@@ -967,20 +986,42 @@ static double residual_uv(cpl_loop *L, double dt_s, double rv_prev, const double
     return fmax(ru, rv);
 }
 
-/* The force the structure balanced at the DEM's input u_in (interface_compliance): at
- * iteration 1 the last step's, else the FEM's last solve's linearised force there,
- * F^k - K (u_in - u^k). */
-static void compliance_reference(cpl_loop *L, int k)
+/* The force the structure balanced at the DEM's input u_in (interface_compliance): before
+ * the try's first FEM solve the last step's, else the FEM's last solve's linearised force
+ * there, F^k - K (u_in - u^k). */
+static void compliance_reference(cpl_loop *L, int fem_solved)
 {
     const size_t n3 = L->n3;
-    if (k == 1) {
+    if (!fem_solved) {
         memcpy(L->comp.force_ref, L->f, n3 * sizeof(double));
         return;
     }
-    for (size_t i = 0; i < n3; i++) L->du[i] = L->u_in[i] - L->comp_u_lin[i];
-    memset(L->dv, 0, n3 * sizeof(double));
+    for (size_t i = 0; i < n3; i++) {
+        L->du[i] = L->u_in[i] - L->comp_u_lin[i];
+        L->dv[i] = L->v_in[i] - L->comp_v_lin[i];
+    }
     cpl_jacobian_apply(&L->comp_jac, L->du, L->dv, n3, L->df);
     for (size_t i = 0; i < n3; i++) L->comp.force_ref[i] = L->comp_f_lin[i] + L->df[i];
+}
+
+/* The DEM moved its wall on the compliance nodes only, u_in + S (F − F_ref) there: the rest
+ * of the interface, which no particle touches, goes where the same compliance puts it under
+ * the DEM's answer, u_in + S_interface (F − F_ref) (when the structure sent those rows), so
+ * that the iteration's residual measures what the DEM's model of the structure missed and
+ * not the net's response to a force change that model already holds. */
+static void move_free_nodes(cpl_loop *L)
+{
+    cpl_compliance *c = &L->comp;
+    if (!c->has_interface) return;
+    for (size_t q = 0; q < 3 * c->n_nodes; q++) {
+        const size_t dof = 3 * (size_t)c->nodes[q / 3] + q % 3;
+        L->df[q] = L->f_dem[dof] - c->force_ref[dof];
+    }
+    cpl_compliance_answer(c, L->df, L->du);
+    for (size_t q = 0; q < c->n_nodes; q++) L->on_compliance[c->nodes[q]] = 1;
+    for (size_t i = 0; i < L->n3; i++)
+        if (!L->on_compliance[i / 3]) c->u_wall[i] = L->u_in[i] + L->du[i];
+    for (size_t q = 0; q < c->n_nodes; q++) L->on_compliance[c->nodes[q]] = 0;
 }
 
 /* 1 when every node of the linearisation's blocks has its compliance in c. */
@@ -1090,7 +1131,7 @@ static int solve_along(run_ctx *c, cpl_call *call, try_result *t, double s)
         L->v_in[i] = L->v_prev[i] + s * (L->v_end[i] - L->v_prev[i]);
     }
     L->timing.backtracks++;
-    if (call->compliance_in) compliance_reference(L, call->iteration);
+    if (call->compliance_in) compliance_reference(L, t->fem_solved);
     return do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info);
 }
 
@@ -1276,6 +1317,71 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
     return 0;
 }
 
+/* structure_predictor: a try after a step with contact begins with the structure's own
+ * motion. The FEM solves the step under the last step's force held (L->f), with a
+ * linearisation of zero blocks on the last one's nodes (L->jac) so that it returns its
+ * compliance there (protocol/README.md §3.4) without the solve changing. The DEM's model of
+ * the structure, u_in + S (F − F_ref), then holds the structure's motion over the step
+ * instead of the kinematic guess of it, which on terrain_net at 5× Δt missed it by 5e-5 m at
+ * the contact nodes (docs/notes/interface_jacobian.md, "The structure's compliance in the
+ * DEM", item 8). The DEM's search starts on that answer where S puts the contact nodes at
+ * the guess. Returns 1 when the FEM solved, 0 when it was skipped, -1 on failure. */
+static int predict_structure(run_ctx *c, cpl_call *call, try_result *t)
+{
+    cpl_loop *L = c->L;
+    const size_t n3 = L->n3;
+    const size_t nb = L->jac.n_blocks;
+    if (cpl_jacobian_set(&L->predictor_jac, nb, L->jac.nodes, L->jac.stiffness, NULL, c->err))
+        return -1;
+    memset(L->predictor_jac.stiffness, 0, 9 * nb * sizeof(double));
+    call->iteration = 1;
+    call->jacobian_out = NULL;
+    call->jacobian_in = &L->predictor_jac;
+    call->jacobian_u = L->u;
+    call->jacobian_v = L->v;
+    call->compliance_in = NULL;
+    call->compliance_out = &L->comp;
+    const int solved = fem_solve_or_skip(c, call, L->f, t->fem_solved, &t->fem_info);
+    call->compliance_out = NULL;
+    call->jacobian_in = NULL;
+    if (solved <= 0) return solved;
+    t->fem_solved = 1;
+    L->timing.structure_predictions++;
+    /* the point of the structure's linear answer with the compliance nodes at the kinematic
+     * guess (u_in, predict()): under L->f + dF with S dF = guess − answer there. Begun at
+     * the answer itself (L->f), the DEM's search failed from 4 kN off on terrain_net's rock
+     * resting in the net (restitution 0.1, its Δt), where from the guess it starts within
+     * 0.2 kN; a singular S leaves it at the answer. */
+    const cpl_compliance *cp = &L->comp;
+    const size_t k3 = 3 * cp->n_nodes;
+    int on_line = cp->valid && cp->has_interface && k3 > 0;
+    if (on_line) {
+        for (size_t q = 0; q < k3; q++) {
+            const size_t dof = 3 * (size_t)cp->nodes[q / 3] + q % 3;
+            L->dv[q] = L->u_in[dof] - L->u_out[dof];
+        }
+        nc_error singular;   /* a singular S: the answer itself, nothing to report */
+        on_line = cpl_compliance_force_for(cp, L->dv, L->df, &singular) == 0;
+    }
+    memcpy(L->comp_f_lin, L->f, n3 * sizeof(double));
+    if (on_line) {
+        cpl_compliance_answer(cp, L->df, L->du);
+        for (size_t q = 0; q < k3; q++)
+            L->comp_f_lin[3 * (size_t)cp->nodes[q / 3] + q % 3] += L->df[q];
+    } else {
+        memset(L->du, 0, n3 * sizeof(double));
+    }
+    for (size_t i = 0; i < n3; i++) {
+        L->u_in[i] = L->u_out[i] + L->du[i];
+        L->v_in[i] = L->v_out[i] + cp->velocity_per_m * L->du[i];
+    }
+    /* the force the structure balances there, whatever the position: comp_f_lin */
+    memcpy(L->comp_u_lin, L->u_in, n3 * sizeof(double));
+    memcpy(L->comp_v_lin, L->v_in, n3 * sizeof(double));
+    if (cpl_jacobian_set(&L->comp_jac, 0, NULL, NULL, NULL, c->err)) return -1;
+    return 1;
+}
+
 /* One try of the step of `call`: BEGIN_STEP, the iterations, no ACCEPT_STEP. Returns -1 on a
  * failure that ends the run, else 0 with the outcome in t. */
 static int run_step(run_ctx *c, cpl_call *call, try_result *t)
@@ -1319,6 +1425,12 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     int compliance_asked = 0;               /* the FEM gave its compliance in this try */
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
+    if (strong && !force_mode && compliance_on && L->s.structure_predictor &&
+        L->jac.n_blocks > 0 && !all_zero(L->f, n3)) {
+        const int solved = predict_structure(c, call, t);
+        if (solved < 0) return try_failed(c, t);
+        compliance_asked = solved;
+    }
     for (k = 1; k <= max_it; k++) {
         call->iteration = k;
         t->iterations = k;
@@ -1330,7 +1442,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
         if (compliance_on) {
             call->compliance_in = &L->comp;
             call->compliance_out = &L->comp;
-            compliance_reference(L, k);
+            compliance_reference(L, t->fem_solved);
         } else {
             call->compliance_in = NULL;
             call->compliance_out = NULL;
@@ -1362,6 +1474,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
          * structure's answers from the last answer, where the input came from */
         const int wall_moved = compliance_on && L->comp.wall_valid;
         if (wall_moved) {
+            move_free_nodes(L);
             memcpy(L->v_answer, L->v_in, n3 * sizeof(double));
             for (size_t i = 0; i < n3; i++) {
                 L->v_in[i] += L->comp.velocity_per_m * (L->comp.u_wall[i] - L->u_in[i]);
@@ -1424,9 +1537,11 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 if (solved && refresh) compliance_asked = 1;
                 if (solved && compliance_on) {
                     memcpy(L->comp_u_lin, L->u_in, n3 * sizeof(double));
+                    memcpy(L->comp_v_lin, L->v_in, n3 * sizeof(double));
                     memcpy(L->comp_f_lin, L->f_dem, n3 * sizeof(double));
                     if (cpl_jacobian_set(&L->comp_jac, L->jac.n_blocks, L->jac.nodes,
-                                         L->jac.stiffness, NULL, c->err))
+                                         L->jac.stiffness,
+                                         L->jac.has_damping ? L->jac.damping : NULL, c->err))
                         return try_failed(c, t);
                 }
                 if (solved) fem_answer_plain = plain_input;

@@ -85,6 +85,10 @@ typedef struct cpl_compliance {
     size_t n_nodes, cap;
     int32_t *nodes;         /* [n_nodes] interface indices */
     double *S;              /* [3 n_nodes x 3 n_nodes] m/N */
+    size_t n3;              /* interface dofs (set with force_ref) */
+    double *S_interface;    /* [n3 x 3 n_nodes] m/N: how every interface dof answers forces
+                               on the nodes, when has_interface */
+    int has_interface;
     double dt_s;            /* the step it belongs to */
     double velocity_per_m;  /* the structure's dv/du at the step's end (gamma / (beta dt)) */
     int valid;
@@ -93,7 +97,8 @@ typedef struct cpl_compliance {
     int wall_valid;
 } cpl_compliance;
 
-/* Room for n_nodes nodes (kept when there is), n_nodes set; 0 or -1 (out of memory). */
+/* Room for n_nodes nodes (kept when there is; S_interface for c->n3 dofs), n_nodes set; 0 or
+ * -1 (out of memory). */
 int cpl_compliance_reserve(cpl_compliance *c, size_t n_nodes, nc_error *err);
 
 /* What a participant is asked to do: step, iteration (1-based; 0 outside solve), the
@@ -205,6 +210,9 @@ typedef struct cpl_loop_settings {
     int interface_compliance;       /* with the interface Jacobian, also the structure's
                                        compliance in the DEM's solves when both can
                                        (default 0; docs/notes/interface_jacobian.md) */
+    int structure_predictor;        /* with the compliance, a try after a step with
+                                       contact begins with the structure's answer under the
+                                       last step's force (default 1) */
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */
@@ -322,6 +330,7 @@ typedef struct cpl_timing {
     long slow_rejections;           /* ... of them early, as converging too slowly */
     long reduced_steps;             /* accepted steps that needed at least one rejection */
     long backtracks;                /* DEM solves repeated by contact backtracking */
+    long structure_predictions;     /* FEM solves of structure_predictor */
     long fem_repeats_skipped;       /* FEM solves not sent: the input was the one the FEM had
                                        just solved with in the same try (same force, no
                                        linearisation), so its answer is the one it gave */

@@ -236,6 +236,15 @@ static int read_compliance(cpl_remote *r, cpl_compliance *cp, double dt_s, nc_er
     if (cpl_compliance_reserve(cp, k, err)) return -1;
     memcpy(cp->nodes, nodes, k * sizeof *nodes);
     memcpy(cp->S, S, 9 * k * k * sizeof *S);
+    cp->has_interface = 0;
+    if (proto_message_find(&r->reply, "compliance_interface")) {
+        const double *rows;
+        if (proto_message_get_f64(&r->reply, "compliance_interface", 3 * r->n_nodes, 3 * k,
+                                  &rows, NULL, err))
+            return -1;
+        memcpy(cp->S_interface, rows, 9 * k * r->n_nodes * sizeof *rows);
+        cp->has_interface = 1;
+    }
     cp->dt_s = dt_s;
     cp->velocity_per_m = proto_message_value(&r->reply, "compliance_velocity_per_m", 0.0);
     cp->valid = 1;

@@ -558,6 +558,10 @@ static void print_timing(app *a)
                 "compliance; %ld of %ld tries went on without it after an iteration with it "
                 "made no progress or ended a contact the structure still carried\n",
                 t->compliance_dropped, t->compliance_tries);
+    if (t->structure_predictions > 0)
+        fprintf(o, "coupler: structure predictor: %ld of the %ld FEM solves were the structure's "
+                "motion under the last step's force, which began a try\n",
+                t->structure_predictions, t->fem_solves);
     if (t->jacobian_dropped_steps > 0)
         fprintf(o, "coupler: interface Jacobian incomplete in %ld steps: the DEM left particles "
                 "out of its linearisation\n", t->jacobian_dropped_steps);

@@ -1496,10 +1496,13 @@ void fem_analysis_clear_linearisation(fem_analysis *s)
     fem_ijac_clear(&s->lin);
 }
 
-int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, nc_error *err)
+int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, int n_rows,
+                            const int *row_dofs, double *S_rows, nc_error *err)
 {
     const size_t nn = (size_t)n * (size_t)n;
-    double *SB = calloc(nn, sizeof *SB), *M = calloc(nn, sizeof *M), *rhs = calloc((size_t)s->neq, sizeof *rhs);
+    if (!S_rows) n_rows = 0;
+    /* SB: n rows of the compliance dofs, then n_rows of row_dofs (row-major) */
+    double *SB = calloc(nn + (size_t)n_rows * (size_t)n, sizeof *SB), *M = calloc(nn, sizeof *M), *rhs = calloc((size_t)s->neq, sizeof *rhs);
     int *pos = malloc((size_t)s->ndof * sizeof *pos), *ipiv = malloc((size_t)n * sizeof *ipiv);
     int rc = -1;
     if (!SB || !M || !rhs || !pos || !ipiv) {
@@ -1534,6 +1537,10 @@ int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, 
             const int qa = s->eq[dofs[a]];
             SB[(size_t)a * n + b] = qa < 0 ? 0.0 : s->du[qa];
         }
+        for (int a = 0; a < n_rows; a++) {
+            const int qa = s->eq[row_dofs[a]];
+            SB[(size_t)(n + a) * n + b] = qa < 0 ? 0.0 : s->du[qa];
+        }
     }
     /* Kd: the linearisation's tangent on the dofs; M = I - Kd S_B, S = S_B M^-1 */
     double *Kd = S;
@@ -1556,14 +1563,16 @@ int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, 
             M[(size_t)a * n + b] = sum;
         }
     /* row-major M read as column-major is M^T: M^T X = S_B^T gives X = S^T column-major,
-     * which is S row-major */
-    int info = 0;
-    dgesv_(&n, &n, M, &n, ipiv, SB, &n, &info);
+     * which is S row-major; the rows of row_dofs take the same M^-1 (Woodbury: the
+     * structure alone answers a force on the compliance dofs with A^-1 P M^-1 everywhere) */
+    int info = 0, n_rhs = n + n_rows;
+    dgesv_(&n, &n_rhs, M, &n, ipiv, SB, &n, &info);
     if (info != 0) {
         nc_error_set(err, 1, "interface compliance: singular system (LAPACK info %d)", info);
         goto done;
     }
     for (size_t k = 0; k < nn; k++) S[k] = s->last_lw * SB[k];
+    for (size_t k = 0; k < (size_t)n_rows * (size_t)n; k++) S_rows[k] = s->last_lw * SB[nn + k];
     rc = 0;
 done:
     free(SB); free(M); free(rhs); free(pos); free(ipiv);

@@ -176,8 +176,11 @@ double fem_analysis_load_factor(const fem_analysis *s, double time_s);
  * n dofs `dofs` (full dof indices), the tangent of the step at its solution without the
  * interface linearisation (removed from the solved matrix by the Woodbury identity), times
  * the coupling force's weight in the step. S: [n x n] row-major; rows/columns of supported
- * dofs are zero. The matrix is factorised afresh (the kept factorisation is then that one). */
-int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, nc_error *err);
+ * dofs are zero. With S_rows (else NULL), also how the n_rows dofs row_dofs answer a force on
+ * `dofs`: [n_rows x n] row-major, from the same solves. The matrix is factorised afresh (the
+ * kept factorisation is then that one). */
+int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, int n_rows,
+                            const int *row_dofs, double *S_rows, nc_error *err);
 
 /* Save/restore the state and the factorisation kept by modified Newton (fem_sparse.h), so
  * a step solved again after a restore repeats the same operations bit for bit. */

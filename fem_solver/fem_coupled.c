@@ -60,8 +60,9 @@ typedef struct coupled {
     nc_ckpt_table run_entries; /* what of this driver a checkpoint holds */
     char first_failure[PROTO_TEXT_MAX];   /* the first error reply, for the final message */
     int32_t *comp_nodes;      /* the compliance of the last reply (interface nodes, [3k x 3k]
-                                 m/N): the reply points to them */
-    double *comp_S;
+                                 m/N, and every interface dof's row [3n x 3k]): the reply
+                                 points to them */
+    double *comp_S, *comp_rows;
 } coupled;
 
 static int on_interface(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
@@ -186,8 +187,9 @@ static int step_from_guess(coupled *c, double dt, nc_error *err)
 
 /* The structure's compliance at the interface nodes the linearisation of `cmd` touches
  * (capability "compliance", protocol/README.md §3.4): "compliance_nodes" [k] interface
- * indices, "compliance" [3k x 3k] m/N, "compliance_velocity_per_m" (dv/du at the step's end).
- * Nothing when the linearisation has no block. */
+ * indices, "compliance" [3k x 3k] m/N, "compliance_interface" [3n x 3k] m/N (how every
+ * interface node answers the same forces), "compliance_velocity_per_m" (dv/du at the step's
+ * end). Nothing when the linearisation has no block. */
 static int add_compliance(coupled *c, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
     const fem_model *m = c->m;
@@ -203,23 +205,30 @@ static int add_compliance(coupled *c, const proto_message *cmd, proto_message *r
         while (t < k && list[t] != nodes[q]) t++;
         if (t == k) list[k++] = nodes[q];
     }
-    const int nd = (int)(3 * k);
-    int *dofs = malloc((size_t)nd * sizeof *dofs);
+    const int nd = (int)(3 * k), nr = 3 * m->n_iface_nodes;
+    int *dofs = malloc((size_t)(nd + nr) * sizeof *dofs);
     double *S = malloc((size_t)nd * (size_t)nd * sizeof *S);
-    if (!dofs || !S) {
-        free(list); free(dofs); free(S);
+    double *rows = malloc((size_t)nr * (size_t)nd * sizeof *rows + 1);
+    if (!dofs || !S || !rows) {
+        free(list); free(dofs); free(S); free(rows);
         return nc_error_set(err, 1, "out of memory for the compliance of %zu nodes", k);
     }
     for (size_t q = 0; q < k; q++)
         for (int d = 0; d < 3; d++) dofs[3 * q + d] = 3 * m->iface_nodes[list[q]] + d;
-    const int rc = fem_analysis_compliance(&c->s, nd, dofs, S, err);
+    for (int i = 0; i < m->n_iface_nodes; i++)
+        for (int d = 0; d < 3; d++) dofs[nd + 3 * i + d] = 3 * m->iface_nodes[i] + d;
+    const int rc = fem_analysis_compliance(&c->s, nd, dofs, S, nr, dofs + nd, rows, err);
     free(dofs);
     free(c->comp_nodes);
     free(c->comp_S);
+    free(c->comp_rows);
     c->comp_nodes = list;
     c->comp_S = S;
+    c->comp_rows = rows;
     if (rc || proto_message_add_i32(reply, "compliance_nodes", c->comp_nodes, k, 1, err) ||
         proto_message_add_f64(reply, "compliance", c->comp_S, (size_t)nd, (size_t)nd, err) ||
+        proto_message_add_f64(reply, "compliance_interface", c->comp_rows, (size_t)nr,
+                              (size_t)nd, err) ||
         proto_message_set_value(reply, "compliance_velocity_per_m", c->s.last_velocity_per_m, err))
         return -1;
     return 0;
@@ -522,7 +531,7 @@ done:
     nc_ckpt_table_free(&c->run_entries);
     free(c->node_ids); free(c->iface_X); free(c->iface_u); free(c->iface_v); free(c->iface_u0); free(c->ckpt_u0);
     free(c->lin_u); free(c->lin_v); free(c->lin_nodes); free(c->guess_u);
-    free(c->comp_nodes); free(c->comp_S);
+    free(c->comp_nodes); free(c->comp_S); free(c->comp_rows);
     fem_psd_free(&c->psd);
     free(c);
     sum.wall_s = nc_clock_now_s() - t0;

@@ -1228,15 +1228,23 @@ def study_estimate(out, jobs, end_time):
 COMPLIANCE_VARIANTS = [("paper", "eq. (35)", ["coupler.work_tolerance=0", "coupler.newton_estimate=0"]),
                        ("compliance", "interface_compliance",
                         ["coupler.work_tolerance=0", "coupler.newton_estimate=0",
-                         "coupler.interface_compliance=true"]),
+                         "coupler.interface_compliance=true", "coupler.structure_predictor=false"]),
                        ("compliance_estimate", "interface_compliance and newton_estimate 0.1",
                         ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1",
-                         "coupler.interface_compliance=true"])]
+                         "coupler.interface_compliance=true", "coupler.structure_predictor=false"]),
+                       ("compliance_predictor", "interface_compliance and structure_predictor",
+                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0",
+                         "coupler.interface_compliance=true", "coupler.structure_predictor=true"]),
+                       ("compliance_predictor_estimate",
+                        "interface_compliance, structure_predictor and newton_estimate 0.1",
+                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1",
+                         "coupler.interface_compliance=true", "coupler.structure_predictor=true"])]
 
 
 def study_compliance(out, jobs, end_time):
     """Jacobian + Aitken with eq. (35), with the structure's compliance in the DEM
-    (interface_compliance), and with it and the Newton error estimate; 8 cases x COR x dt."""
+    (interface_compliance), each with and without the structure predictor, with and without
+    the Newton error estimate; 8 cases x COR x dt."""
     compare_variants(out, jobs, end_time, COMPLIANCE_VARIANTS, "compliance_table.md")
 
 

@@ -19,3 +19,12 @@ run_case() {
   scripts/run_case.sh "$case_dir" --out "$NC_TMP/$name" --quiet "$@" > "$NC_TMP/$name.out" 2>&1 \
     || { tail -n 20 "$NC_TMP/$name.out" "$NC_TMP/$name"/*.log; fail "$name: run_case.sh failed"; }
 }
+
+# expect_reliable NAME ...: each run's summary ends with "results are reliable".
+expect_reliable() {
+  local name
+  for name in "$@"; do
+    grep -v '^$' "$NC_TMP/$name/coupler.log" | tail -n 1 | grep -q "^coupler: results are reliable" \
+      || fail "$name: not reliable: $(tail -n 1 "$NC_TMP/$name/coupler.log")"
+  done
+}

@@ -646,7 +646,8 @@ static void test_unsymmetric(void **state)
 /* The structure's interface compliance (fem_analysis_compliance) after a step solved with an
  * unsymmetric linearisation: S = du/dF without the linearisation, against central
  * differences of the plain step under F(u, v) of the linearised solution +- a force on each
- * of the two edge nodes' dofs. */
+ * of the two edge nodes' dofs; and the rows of every dof of the model (S_rows), against the
+ * same differences at each dof. */
 static void test_compliance(void **state)
 {
     (void)state;
@@ -672,9 +673,12 @@ static void test_compliance(void **state)
     const int dofs[6] = {3 * NET_CENTRE, 3 * NET_CENTRE + 1, 3 * NET_CENTRE + 2,
                          3 * NET_EDGE_B, 3 * NET_EDGE_B + 1, 3 * NET_EDGE_B + 2};
     double S[36];
-    assert_int_equal(fem_analysis_compliance(&s, 6, dofs, S, &err), 0);
+    int *all = malloc((size_t)s.ndof * sizeof *all);
+    double *S_all = malloc(6 * bytes), *col_all = malloc(bytes);
+    for (int i = 0; i < s.ndof; i++) all[i] = i;
+    assert_int_equal(fem_analysis_compliance(&s, 6, dofs, S, s.ndof, all, S_all, &err), 0);
     const double delta = 1.0;   /* N, against 1500 N: central differences err by O(delta^2) */
-    double smax = 0.0, worst = 0.0;
+    double smax = 0.0, worst = 0.0, worst_rows = 0.0, same_rows = 0.0;
     for (int b = 0; b < 6; b++) {
         double col[6];
         for (int sign = -1; sign <= 1; sign += 2) {
@@ -688,18 +692,26 @@ static void test_compliance(void **state)
             p.f_coupling[dofs[b]] += sign * delta;
             assert_int_equal(fem_analysis_step(&p, NET_DT, &err), 0);
             if (sign < 0) memcpy(up, p.cur.u, bytes);
-            else
+            else {
                 for (int a = 0; a < 6; a++) col[a] = (p.cur.u[dofs[a]] - up[dofs[a]]) / (2 * delta);
+                for (int i = 0; i < s.ndof; i++) col_all[i] = (p.cur.u[i] - up[i]) / (2 * delta);
+            }
             fem_analysis_free(&p);
         }
         for (int a = 0; a < 6; a++) {
             smax = fmax(smax, fabs(S[6 * a + b]));
             worst = fmax(worst, fabs(S[6 * a + b] - col[a]));
+            same_rows = fmax(same_rows, fabs(S_all[6 * dofs[a] + b] - S[6 * a + b]));
         }
+        for (int i = 0; i < s.ndof; i++)
+            worst_rows = fmax(worst_rows, fabs(S_all[6 * i + b] - col_all[i]));
     }
-    print_message("compliance: largest entry %.4g m/N, largest difference from central differences %.3g\n",
-                  smax, worst);
+    print_message("compliance: largest entry %.4g m/N, largest difference from central differences %.3g "
+                  "(%.3g over the rows of every dof)\n", smax, worst, worst_rows);
     assert_below(worst, 1e-6 * smax);
+    assert_below(worst_rows, 1e-6 * smax);
+    assert_below(same_rows, 1e-12 * smax);
+    free(all); free(S_all); free(col_all);
     /* a node's own direction moves with its force: the diagonal is positive */
     for (int a = 0; a < 6; a++) assert_below(0.0, S[7 * a]);
     free(uref); free(vref); free(up);
