@@ -402,7 +402,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
                                     ? cpl_relax_settings_method(&s->relax) : "none");
     fp[7] = s->newton_estimate;
     fp[8] = (double)s->interface_compliance;
-    fp[9] = (double)s->structure_predictor;
+    fp[9] = s->interface_compliance ? (double)s->structure_predictor : 0.0;   /* acts only then */
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
@@ -570,6 +570,20 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
         return nc_error_set(err, 1, "%s: /loop/compliance_nodes = %zu is not a node count", path,
                             n);
     return cpl_compliance_reserve(&L->comp, n, err);
+}
+
+int cpl_loop_checkpoint_loaded(const cpl_loop *L, const char *path, nc_error *err)
+{
+    const size_t n_nodes = L->n3 / 3;
+    if (cpl_compliance_check_nodes(L->comp.nodes, L->comp.n_nodes, n_nodes,
+                                   "/loop/compliance_node_list", err))
+        return nc_error_prefix(err, "%s", path);
+    for (size_t q = 0; q < 2 * L->jac.n_blocks; q++)
+        if (L->jac.nodes[q] < 0 || (size_t)L->jac.nodes[q] >= n_nodes)
+            return nc_error_set(err, 1, "%s: /loop/jacobian_nodes row %zu: node %d is not an "
+                                "interface node (0..%zu)", path, q / 2, (int)L->jac.nodes[q],
+                                n_nodes ? n_nodes - 1 : 0);
+    return 0;
 }
 
 void cpl_loop_resumed(cpl_loop *L, const char *name)
@@ -988,7 +1002,8 @@ static double residual_uv(cpl_loop *L, double dt_s, double rv_prev, const double
 
 /* The force the structure balanced at the DEM's input u_in (interface_compliance): before
  * the try's first FEM solve the last step's, else the FEM's last solve's linearised force
- * there, F^k - K (u_in - u^k). */
+ * there, F^k - K (u_in - u^k) - C (u̇_in - u̇^k) (after structure_predictor's solve, its force
+ * at the input it chose). */
 static void compliance_reference(cpl_loop *L, int fem_solved)
 {
     const size_t n3 = L->n3;
@@ -1008,7 +1023,9 @@ static void compliance_reference(cpl_loop *L, int fem_solved)
  * of the interface, which no particle touches, goes where the same compliance puts it under
  * the DEM's answer, u_in + S_interface (F − F_ref) (when the structure sent those rows), so
  * that the iteration's residual measures what the DEM's model of the structure missed and
- * not the net's response to a force change that model already holds. */
+ * not the net's response to a force change that model already holds. A node the DEM touched
+ * outside the compliance (a force or a block of its linearisation there) stays where the
+ * DEM computed its force. */
 static void move_free_nodes(cpl_loop *L)
 {
     cpl_compliance *c = &L->comp;
@@ -1018,10 +1035,16 @@ static void move_free_nodes(cpl_loop *L)
         L->df[q] = L->f_dem[dof] - c->force_ref[dof];
     }
     cpl_compliance_answer(c, L->df, L->du);
+    const size_t n_nodes = L->n3 / 3;
     for (size_t q = 0; q < c->n_nodes; q++) L->on_compliance[c->nodes[q]] = 1;
+    for (size_t b = 0; b < 2 * L->jac.n_blocks; b++)
+        if (L->jac.nodes[b] >= 0 && (size_t)L->jac.nodes[b] < n_nodes)
+            L->on_compliance[L->jac.nodes[b]] = 1;
+    for (size_t i = 0; i < L->n3; i++)
+        if (L->f_dem[i] != 0.0) L->on_compliance[i / 3] = 1;
     for (size_t i = 0; i < L->n3; i++)
         if (!L->on_compliance[i / 3]) c->u_wall[i] = L->u_in[i] + L->du[i];
-    for (size_t q = 0; q < c->n_nodes; q++) L->on_compliance[c->nodes[q]] = 0;
+    memset(L->on_compliance, 0, n_nodes);
 }
 
 /* 1 when every node of the linearisation's blocks has its compliance in c. */
@@ -1319,8 +1342,9 @@ static int check_linearisation(run_ctx *c, cpl_call *call, double *miss)
 
 /* structure_predictor: a try after a step with contact begins with the structure's own
  * motion. The FEM solves the step under the last step's force held (L->f), with a
- * linearisation of zero blocks on the last one's nodes (L->jac) so that it returns its
- * compliance there (protocol/README.md §3.4) without the solve changing. The DEM's model of
+ * linearisation of zero blocks on the last one's nodes (L->jac: the accepted step's, or on a
+ * retry the rejected try's last) so that it returns its compliance there
+ * (protocol/README.md §3.4) without the answer changing. The DEM's model of
  * the structure, u_in + S (F − F_ref), then holds the structure's motion over the step
  * instead of the kinematic guess of it, which on terrain_net at 5× Δt missed it by 5e-5 m at
  * the contact nodes (docs/notes/interface_jacobian.md, "The structure's compliance in the
@@ -1368,14 +1392,14 @@ static int predict_structure(run_ctx *c, cpl_call *call, try_result *t)
         cpl_compliance_answer(cp, L->df, L->du);
         for (size_t q = 0; q < k3; q++)
             L->comp_f_lin[3 * (size_t)cp->nodes[q / 3] + q % 3] += L->df[q];
-    } else {
-        memset(L->du, 0, n3 * sizeof(double));
+        for (size_t i = 0; i < n3; i++) {
+            L->u_in[i] = L->u_out[i] + L->du[i];
+            L->v_in[i] = L->v_out[i] + cp->velocity_per_m * L->du[i];
+        }
     }
-    for (size_t i = 0; i < n3; i++) {
-        L->u_in[i] = L->u_out[i] + L->du[i];
-        L->v_in[i] = L->v_out[i] + cp->velocity_per_m * L->du[i];
-    }
-    /* the force the structure balances there, whatever the position: comp_f_lin */
+    /* else (no rows in this reply, or S singular) the kinematic guess stays the DEM's input
+     * under the last force, as without the predictor, but with S fresh */
+    /* the force the structure balances at the input, whatever the position: comp_f_lin */
     memcpy(L->comp_u_lin, L->u_in, n3 * sizeof(double));
     memcpy(L->comp_v_lin, L->v_in, n3 * sizeof(double));
     if (cpl_jacobian_set(&L->comp_jac, 0, NULL, NULL, NULL, c->err)) return -1;
@@ -1426,7 +1450,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
     if (strong && !force_mode && compliance_on && L->s.structure_predictor &&
-        L->jac.n_blocks > 0 && !all_zero(L->f, n3)) {
+        L->comp.has_interface && L->jac.n_blocks > 0 && !all_zero(L->f, n3)) {
         const int solved = predict_structure(c, call, t);
         if (solved < 0) return try_failed(c, t);
         compliance_asked = solved;

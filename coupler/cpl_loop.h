@@ -400,6 +400,9 @@ int cpl_loop_checkpoints_on(const cpl_loop *loop, const cpl_participant *fem,
  * written with against the run's and reads the sizes that vary (the Jacobian's blocks). */
 void cpl_loop_checkpoint_entries(cpl_loop *loop, cpl_ckpt_table *t);
 int cpl_loop_checkpoint_prepare(cpl_loop *loop, const char *path, nc_error *err);
+/* After the load: the node lists it held (the linearisation's, the compliance's) name
+ * interface nodes, each once; 0, or -1 with err naming `path` and the list. */
+int cpl_loop_checkpoint_loaded(const cpl_loop *loop, const char *path, nc_error *err);
 /* The state was loaded from the checkpoint `name` (after cpl_loop_checkpoint_prepare, which
  * checked that the run has the settings the checkpoint was written with: dt, scheme,
  * relaxed quantity, tolerance, interface size, work_tolerance, relaxation method):

@@ -1,5 +1,6 @@
 /* cpl_remote — FEM and DEM participants over the netcouple protocol. */
 #include "cpl_remote.h"
+#include "cpl_compliance_line.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -231,8 +232,12 @@ static int read_compliance(cpl_remote *r, cpl_compliance *cp, double dt_s, nc_er
     const double *S;
     size_t k = 0;
     if (proto_message_get_i32(&r->reply, "compliance_nodes", 0, 1, &nodes, &k, err) ||
+        cpl_compliance_check_nodes(nodes, k, r->n_nodes, "compliance_nodes", err) ||
         proto_message_get_f64(&r->reply, "compliance", 3 * k, 3 * k, &S, NULL, err))
-        return -1;
+        return nc_error_prefix(err, "asked for the structure's compliance");
+    if (cp->n3 != 3 * r->n_nodes)
+        return nc_error_set(err, 1, "compliance: room for %zu interface dofs, the interface "
+                            "has %zu", cp->n3, 3 * r->n_nodes);
     if (cpl_compliance_reserve(cp, k, err)) return -1;
     memcpy(cp->nodes, nodes, k * sizeof *nodes);
     memcpy(cp->S, S, 9 * k * k * sizeof *S);
@@ -241,9 +246,12 @@ static int read_compliance(cpl_remote *r, cpl_compliance *cp, double dt_s, nc_er
         const double *rows;
         if (proto_message_get_f64(&r->reply, "compliance_interface", 3 * r->n_nodes, 3 * k,
                                   &rows, NULL, err))
-            return -1;
+            return nc_error_prefix(err, "asked for the structure's compliance");
         memcpy(cp->S_interface, rows, 9 * k * r->n_nodes * sizeof *rows);
         cp->has_interface = 1;
+    } else {
+        /* defined contents for the checkpoint, which holds the array either way */
+        memset(cp->S_interface, 0, 9 * k * r->n_nodes * sizeof *cp->S_interface);
     }
     cp->dt_s = dt_s;
     cp->velocity_per_m = proto_message_value(&r->reply, "compliance_velocity_per_m", 0.0);

@@ -360,7 +360,7 @@ static int load_checkpoint(app *a, nc_error *err)
     app_checkpoint_entries(a, &t);
     int rc = cpl_ckpt_load(&t, path, err);
     cpl_ckpt_table_free(&t);
-    if (rc) return -1;
+    if (rc || cpl_loop_checkpoint_loaded(a->loop, path, err)) return -1;
     cpl_loop_resumed(a->loop, a->ckpt_name);
     if (cpl_loop_step(a->loop) != a->ckpt_step)
         return nc_error_set(err, 1, "%s: holds step %ld, checkpoint/latest.json says %ld", path,

@@ -9,10 +9,10 @@
 #  - the compliance without the structure predictor: the coupler moves the interface nodes
 #    the DEM does not touch by the structure's compliance rows (compliance_interface), so that
 #    a contact step's first residual measures the DEM's model of the structure rather than
-#    the net's answer to a force change that model held. Measured 2.80 iterations per contact
+#    the net's answer to a force change that model held. Measured 2.82 iterations per contact
 #    step, every try counted; 3.16 when the coupler moved only the nodes the DEM moved;
 #  - with the structure predictor (the default): each try after a step with contact begins
-#    with the structure's motion under the last step's force. Measured 2.26 per contact step,
+#    with the structure's motion under the last step's force. Measured 2.28 per contact step,
 #    at most 5 (eq. (35) without the compliance: 6.38, at most 18).
 # Checks:
 #  - all three reliable, exit 0; the summary counts the structure predictor's FEM solves in
