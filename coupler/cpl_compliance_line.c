@@ -5,22 +5,6 @@
 
 #include "nc_lapack.h"
 
-int cpl_compliance_check_nodes(const int32_t *nodes, size_t k, size_t n_nodes, const char *what,
-                               nc_error *err)
-{
-    for (size_t q = 0; q < k; q++) {
-        if (nodes[q] < 0 || (size_t)nodes[q] >= n_nodes)
-            return nc_error_set(err, CPL_ERR_PARTICIPANT, "%s row %zu: node %d is not an "
-                                "interface node (0..%zu)", what, q, (int)nodes[q],
-                                n_nodes ? n_nodes - 1 : 0);
-        for (size_t p = 0; p < q; p++)
-            if (nodes[p] == nodes[q])
-                return nc_error_set(err, CPL_ERR_PARTICIPANT, "%s row %zu: node %d is listed "
-                                    "twice", what, q, (int)nodes[q]);
-    }
-    return 0;
-}
-
 void cpl_compliance_answer(const cpl_compliance *c, const double *dF, double *du)
 {
     const size_t k3 = 3 * c->n_nodes;

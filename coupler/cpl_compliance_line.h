@@ -20,12 +20,6 @@
 #include "cpl_loop.h"
 #include "nc_error.h"
 
-/* 0 when the k nodes are interface nodes (0..n_nodes − 1), each once; else -1 with err
- * naming `what` (the array), the row and the node. The coupler checks a FEM's
- * compliance_nodes, and a checkpoint's, before indexing by them. */
-int cpl_compliance_check_nodes(const int32_t *nodes, size_t k, size_t n_nodes, const char *what,
-                               nc_error *err);
-
 /* du [n3] = S_interface dF, dF [3|N|] in the order of c->nodes (N, direction). Needs
  * c->has_interface. */
 void cpl_compliance_answer(const cpl_compliance *c, const double *dF, double *du);

@@ -92,3 +92,18 @@ double cpl_max_abs(const double *x, size_t n)
     }
     return m;
 }
+
+int cpl_node_list_check(const int32_t *nodes, size_t count, size_t per_row, size_t n_nodes,
+                        int once, const char *what, nc_error *err)
+{
+    for (size_t q = 0; q < count; q++) {
+        if (nodes[q] < 0 || (size_t)nodes[q] >= n_nodes)
+            return nc_error_set(err, 1, "%s row %zu: node %d is not an interface node (0..%zu)",
+                                what, q / per_row, (int)nodes[q], n_nodes ? n_nodes - 1 : 0);
+        for (size_t p = 0; once && p < q; p++)
+            if (nodes[p] == nodes[q])
+                return nc_error_set(err, 1, "%s row %zu: node %d is listed twice", what,
+                                    q / per_row, (int)nodes[q]);
+    }
+    return 0;
+}

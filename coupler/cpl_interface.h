@@ -27,6 +27,14 @@ int cpl_mesh_init(cpl_mesh *mesh, size_t n_nodes, const int32_t *node_ids,
                   const char *source, nc_error *err);
 void cpl_mesh_free(cpl_mesh *mesh);
 
+/* 0 when every entry of the node list (count entries, per_row to a row) indexes one of the
+ * interface's n_nodes nodes and, with `once`, none is listed twice; else -1 with err naming
+ * `what` (the array), the row and the node. A participant's reply (jacobian_nodes,
+ * compliance_nodes) or a checkpoint's lists are checked so before anything is indexed by
+ * them. */
+int cpl_node_list_check(const int32_t *nodes, size_t count, size_t per_row, size_t n_nodes,
+                        int once, const char *what, nc_error *err);
+
 /* Interface state at one instant: displacement (m), velocity (m/s) of the nodes and the
  * contact force on them (N). */
 typedef struct cpl_state {

@@ -575,14 +575,11 @@ int cpl_loop_checkpoint_prepare(cpl_loop *L, const char *path, nc_error *err)
 int cpl_loop_checkpoint_loaded(const cpl_loop *L, const char *path, nc_error *err)
 {
     const size_t n_nodes = L->n3 / 3;
-    if (cpl_compliance_check_nodes(L->comp.nodes, L->comp.n_nodes, n_nodes,
-                                   "/loop/compliance_node_list", err))
+    if (cpl_node_list_check(L->comp.nodes, L->comp.n_nodes, 1, n_nodes, 1,
+                            "/loop/compliance_node_list", err) ||
+        cpl_node_list_check(L->jac.nodes, 2 * L->jac.n_blocks, 2, n_nodes, 0,
+                            "/loop/jacobian_nodes", err))
         return nc_error_prefix(err, "%s", path);
-    for (size_t q = 0; q < 2 * L->jac.n_blocks; q++)
-        if (L->jac.nodes[q] < 0 || (size_t)L->jac.nodes[q] >= n_nodes)
-            return nc_error_set(err, 1, "%s: /loop/jacobian_nodes row %zu: node %d is not an "
-                                "interface node (0..%zu)", path, q / 2, (int)L->jac.nodes[q],
-                                n_nodes ? n_nodes - 1 : 0);
     return 0;
 }
 

@@ -1,6 +1,5 @@
 /* cpl_remote — FEM and DEM participants over the netcouple protocol. */
 #include "cpl_remote.h"
-#include "cpl_compliance_line.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -210,17 +209,13 @@ static int read_jacobian(cpl_remote *r, cpl_jacobian *j, nc_error *err)
     size_t b = 0;
     r->alive = 1;   /* whatever is wrong below, it answered */
     if (proto_message_get_i32(&r->reply, "jacobian_nodes", 0, 2, &nodes, &b, err) ||
-        proto_message_get_f64(&r->reply, "jacobian_stiffness", b, 9, &K, NULL, err))
+        proto_message_get_f64(&r->reply, "jacobian_stiffness", b, 9, &K, NULL, err) ||
+        cpl_node_list_check(nodes, 2 * b, 2, r->n_nodes, 0, "jacobian_nodes", err))
         return nc_error_prefix(err, "asked for the interface Jacobian");
     for (size_t i = 0; i < r->reply.n_arrays; i++)
         if (strcmp(r->reply.arrays[i].name, "jacobian_damping") == 0 &&
             proto_message_get_f64(&r->reply, "jacobian_damping", b, 9, &C, NULL, err))
             return -1;
-    for (size_t k = 0; k < 2 * b; k++)
-        if (nodes[k] < 0 || (size_t)nodes[k] >= r->n_nodes)
-            return nc_error_set(err, CPL_ERR_PARTICIPANT, "jacobian_nodes row %zu: node %d is "
-                                "not an interface node (0..%zu)", k / 2, (int)nodes[k],
-                                r->n_nodes - 1);
     return cpl_jacobian_set(j, b, nodes, K, C, err);
 }
 
@@ -232,7 +227,7 @@ static int read_compliance(cpl_remote *r, cpl_compliance *cp, double dt_s, nc_er
     const double *S;
     size_t k = 0;
     if (proto_message_get_i32(&r->reply, "compliance_nodes", 0, 1, &nodes, &k, err) ||
-        cpl_compliance_check_nodes(nodes, k, r->n_nodes, "compliance_nodes", err) ||
+        cpl_node_list_check(nodes, k, 1, r->n_nodes, 1, "compliance_nodes", err) ||
         proto_message_get_f64(&r->reply, "compliance", 3 * k, 3 * k, &S, NULL, err))
         return nc_error_prefix(err, "asked for the structure's compliance");
     if (cp->n3 != 3 * r->n_nodes)

@@ -1502,7 +1502,8 @@ int fem_analysis_compliance(fem_analysis *s, int n, const int *dofs, double *S, 
     const size_t nn = (size_t)n * (size_t)n;
     if (!S_rows) n_rows = 0;
     /* SB: n rows of the compliance dofs, then n_rows of row_dofs (row-major) */
-    double *SB = calloc(nn + (size_t)n_rows * (size_t)n, sizeof *SB), *M = calloc(nn, sizeof *M), *rhs = calloc((size_t)s->neq, sizeof *rhs);
+    double *SB = calloc(nn + (size_t)n_rows * (size_t)n, sizeof *SB);
+    double *M = calloc(nn, sizeof *M), *rhs = calloc((size_t)s->neq, sizeof *rhs);
     int *pos = malloc((size_t)s->ndof * sizeof *pos), *ipiv = malloc((size_t)n * sizeof *ipiv);
     int rc = -1;
     if (!SB || !M || !rhs || !pos || !ipiv) {

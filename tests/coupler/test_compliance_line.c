@@ -10,8 +10,7 @@
  *  - cpl_compliance_answer: S_interface dF is u(F₀ + dF) − u(F₀) at every dof, N's and the
  *    free node's;
  *  - a supported dof (its row and column of S zero, as the FEM sends them) gets no force
- *    and the others still land on the target;
- *  - node lists out of range or with a node twice are refused with the row named. */
+ *    and the others still land on the target. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -157,30 +156,12 @@ static void test_singular(void **state)
     assert_non_null(strstr(err.message, "singular"));
 }
 
-/* A FEM's compliance_nodes (or a checkpoint's) index the coupler's arrays: out of range or
- * twice is an error naming the array, the row and the node. */
-static void test_check_nodes(void **state)
-{
-    (void)state;
-    nc_error err;
-    const int32_t good[3] = {4, 0, 2}, negative[2] = {1, -1}, beyond[2] = {0, 5},
-                  twice[3] = {3, 1, 3};
-    assert_int_equal(cpl_compliance_check_nodes(good, 3, 5, "compliance_nodes", &err), 0);
-    assert_int_equal(cpl_compliance_check_nodes(negative, 2, 5, "compliance_nodes", &err), -1);
-    assert_string_equal(err.message, "compliance_nodes row 1: node -1 is not an interface node (0..4)");
-    assert_int_equal(cpl_compliance_check_nodes(beyond, 2, 5, "compliance_nodes", &err), -1);
-    assert_string_equal(err.message, "compliance_nodes row 1: node 5 is not an interface node (0..4)");
-    assert_int_equal(cpl_compliance_check_nodes(twice, 3, 5, "compliance_nodes", &err), -1);
-    assert_string_equal(err.message, "compliance_nodes row 2: node 3 is listed twice");
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lands_on_target),
         cmocka_unit_test(test_supported_dof),
         cmocka_unit_test(test_singular),
-        cmocka_unit_test(test_check_nodes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -68,6 +68,27 @@ static void test_total_force_and_mesh_checks(void **state)
     assert_non_null(strstr(err.message, "elements[0][1] = 2"));
 }
 
+/* Node lists from a participant or a checkpoint index the coupler's arrays: out of range, or
+ * twice where each node is listed once (compliance_nodes), is an error naming the array, the
+ * row and the node; a linearisation's pairs (two to a row) may repeat a node. */
+static void test_node_list_check(void **state)
+{
+    (void)state;
+    nc_error err;
+    const int32_t good[3] = {4, 0, 2}, negative[2] = {1, -1}, beyond[2] = {0, 5},
+                  twice[3] = {3, 1, 3}, pairs[4] = {2, 2, 2, 6};
+    assert_int_equal(cpl_node_list_check(good, 3, 1, 5, 1, "compliance_nodes", &err), 0);
+    assert_int_equal(cpl_node_list_check(negative, 2, 1, 5, 1, "compliance_nodes", &err), -1);
+    assert_string_equal(err.message, "compliance_nodes row 1: node -1 is not an interface node (0..4)");
+    assert_int_equal(cpl_node_list_check(beyond, 2, 1, 5, 1, "compliance_nodes", &err), -1);
+    assert_string_equal(err.message, "compliance_nodes row 1: node 5 is not an interface node (0..4)");
+    assert_int_equal(cpl_node_list_check(twice, 3, 1, 5, 1, "compliance_nodes", &err), -1);
+    assert_string_equal(err.message, "compliance_nodes row 2: node 3 is listed twice");
+    assert_int_equal(cpl_node_list_check(pairs, 2, 2, 5, 0, "jacobian_nodes", &err), 0);
+    assert_int_equal(cpl_node_list_check(pairs, 4, 2, 5, 0, "jacobian_nodes", &err), -1);
+    assert_string_equal(err.message, "jacobian_nodes row 1: node 6 is not an interface node (0..4)");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -75,6 +96,7 @@ int main(void)
         cmocka_unit_test(test_residual_is_produced_minus_used),
         cmocka_unit_test(test_convergence_absolute_and_relative),
         cmocka_unit_test(test_total_force_and_mesh_checks),
+        cmocka_unit_test(test_node_list_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
