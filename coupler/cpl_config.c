@@ -165,7 +165,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
         "energy_tolerance", "energy_tolerance_abs", "accept_energy_growth",
         "stop_on_energy_growth", "impulse_tolerance",
         "accept_impulse_loss", "interface_jacobian", "interface_compliance",
-        "structure_predictor", "verify_restore", "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
+        "structure_predictor", "compliance_proximity", "verify_restore",
+        "contact_backtracking", "jacobian_check", "timeouts", "output", "checkpoint",
         "comment", NULL};
     static const char *const schemes[] = {"weak", "strong", NULL};
     static const char *const policies[] = {"accept", "stop", NULL};
@@ -222,6 +223,8 @@ int cpl_config_parse(cpl_config *c, const cJSON *root, const char *where, const 
                          &s->interface_compliance, err) ||
         nc_json_bool_opt(root, where, "structure_predictor", s->structure_predictor,
                          &s->structure_predictor, err) ||
+        nc_json_bool_opt(root, where, "compliance_proximity", s->compliance_proximity,
+                         &s->compliance_proximity, err) ||
         nc_json_bool_opt(root, where, "verify_restore", s->verify_restore, &s->verify_restore,
                          err) ||
         nc_json_int_opt(root, where, "contact_backtracking", backtracking, 0, 30, &backtracking,

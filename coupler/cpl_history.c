@@ -160,6 +160,7 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
         nc_h5_attr_double(&h->h5, "/", "newton_estimate", s->newton_estimate, err) ||
         nc_h5_attr_double(&h->h5, "/", "interface_compliance", (double)s->interface_compliance, err) ||
         nc_h5_attr_double(&h->h5, "/", "structure_predictor", (double)s->structure_predictor, err) ||
+        nc_h5_attr_double(&h->h5, "/", "compliance_proximity", (double)s->compliance_proximity, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt", s->dt_s, err) ||
         nc_h5_attr_double(&h->h5, "/", "dt_min", cpl_loop_settings_dt_min(s), err) ||
         nc_h5_attr_double(&h->h5, "/", "grow_after", (double)s->grow_after, err) ||

@@ -14,9 +14,10 @@
 #include "nc_clock.h"
 #include "nc_json.h"
 
-#define CPL_FINGERPRINT_N 10  /* dt, scheme, relaxed quantity, tolerance, interface size,
+#define CPL_FINGERPRINT_N 11  /* dt, scheme, relaxed quantity, tolerance, interface size,
                                  work_tolerance, relaxation method, newton_estimate,
-                                 interface_compliance, structure_predictor */
+                                 interface_compliance, structure_predictor,
+                                 compliance_proximity */
 
 /* interface_compliance: a try goes on without the structure's compliance once an iteration
  * with it ends with a residual above this share of the last one. At a contact's onset the
@@ -120,6 +121,7 @@ void cpl_loop_settings_default(cpl_loop_settings *s)
     s->interface_jacobian = 1;
     s->interface_compliance = 0;
     s->structure_predictor = 1;
+    s->compliance_proximity = 1;
     s->verify_restore = 1;
     s->contact_backtracking = 8;
     s->checkpoint_interval_s = 0.0;
@@ -403,6 +405,7 @@ static void fill_fingerprint(const cpl_loop_settings *s, size_t n3, double *fp)
     fp[7] = s->newton_estimate;
     fp[8] = (double)s->interface_compliance;
     fp[9] = s->interface_compliance ? (double)s->structure_predictor : 0.0;   /* acts only then */
+    fp[10] = s->interface_compliance ? (double)s->compliance_proximity : 0.0;
 }
 
 /* The settings the checkpoint `path` was written with (L->fingerprint) against this run's. */
@@ -413,7 +416,8 @@ static int check_fingerprint(const cpl_loop *L, const char *path, nc_error *err)
     const char *what[CPL_FINGERPRINT_N] = {"dt (s)", "scheme", "relaxed_quantity", "tolerance",
                                            "interface dofs", "work_tolerance",
                                            "relaxation.method", "newton_estimate",
-                                           "interface_compliance", "structure_predictor"};
+                                           "interface_compliance", "structure_predictor",
+                                           "compliance_proximity"};
     for (int i = 0; i < CPL_FINGERPRINT_N; i++) {
         if (memcmp(&now[i], &L->fingerprint[i], sizeof now[i]) == 0) continue;
         if (i == 6) {
@@ -1698,7 +1702,8 @@ static int advance_step(run_ctx *c)
     cpl_call call;
     try_result t;
     for (c->attempt = 0;; c->attempt++) {
-        call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt};
+        call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt,
+                          .proximity = L->use_compliance && L->s.compliance_proximity};
         if (run_step(c, &call, &t)) return -1;
         if (t.outcome == TRY_CONVERGED || (!strong && t.outcome == TRY_UNCONVERGED)) break;
         int level = L->level;

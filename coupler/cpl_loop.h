@@ -117,6 +117,9 @@ typedef struct cpl_call {
                                                 solve: with where its wall ended (NULL: not
                                                 used) */
     const cpl_compliance *compliance_in;     /* DEM solve: solve with it (NULL: not used) */
+    int proximity;                           /* DEM solve with jacobian_out: name also the
+                                                nodes a particle in contact may reach in the
+                                                next step (zero blocks; compliance_proximity) */
 } cpl_call;
 
 /* Extra information a participant returns with a solve. */
@@ -213,6 +216,8 @@ typedef struct cpl_loop_settings {
     int structure_predictor;        /* with the compliance, a try after a step with
                                        contact begins with the structure's answer under the
                                        last step's force (default 1) */
+    int compliance_proximity;       /* with the compliance, also at the nodes a particle in
+                                       contact may reach within the next step (default 1) */
     int verify_restore;             /* strong: send each participant's first solve with a
                                        non-zero answer twice with the same input and require
                                        identical results (default 1) */

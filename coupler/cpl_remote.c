@@ -282,6 +282,8 @@ static int remote_solve(void *ctx, const cpl_call *call, const double *in0, cons
         if (proto_message_add_f64(&r->request, "displacement", in0, n, 3, err) ||
             proto_message_add_f64(&r->request, "velocity", in1, n, 3, err) ||
             (call->jacobian_out && proto_message_set_value(&r->request, "jacobian", 1.0, err)) ||
+            (call->jacobian_out && call->proximity &&
+             proto_message_set_value(&r->request, "proximity", 1.0, err)) ||
             (call->jacobian_out && add_compliance(r, call, err)) ||
             request(r, err) || copy_array(r, "force", out0, err) ||
             (call->jacobian_out && read_jacobian(r, call->jacobian_out, err)))

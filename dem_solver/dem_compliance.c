@@ -12,12 +12,13 @@
 typedef struct work {
     double *ue, *F, *Fbase, *Fbest, *dF, *g, *gbase, *J, *KN;
     int *pos, *ipiv;
+    size_t *cols;   /* a row of K_NN's non-zero columns */
 } work;
 
 static void work_free(work *w)
 {
     free(w->ue); free(w->F); free(w->Fbase); free(w->Fbest); free(w->dF); free(w->g);
-    free(w->gbase); free(w->J); free(w->KN); free(w->pos); free(w->ipiv);
+    free(w->gbase); free(w->J); free(w->KN); free(w->pos); free(w->ipiv); free(w->cols);
 }
 
 static int work_alloc(work *w, size_t n, size_t m, nc_error *err)
@@ -34,8 +35,9 @@ static int work_alloc(work *w, size_t n, size_t m, nc_error *err)
     w->KN = malloc(m * m * sizeof *w->KN);
     w->pos = malloc(n * sizeof *w->pos);
     w->ipiv = malloc(m * sizeof *w->ipiv);
+    w->cols = malloc(m * sizeof *w->cols);
     if (w->ue && w->F && w->Fbase && w->Fbest && w->dF && w->g && w->gbase && w->J && w->KN &&
-        w->pos && w->ipiv)
+        w->pos && w->ipiv && w->cols)
         return 0;
     work_free(w);
     return nc_error_set(err, 1, "dem: out of memory for the compliance of %zu nodes", m / 3);
@@ -53,7 +55,10 @@ static void wall_end(const dem_compliance *c, const double *disp, const double *
     }
 }
 
-/* J = I + K_NN S of the last evaluation's K, column-major for LAPACK. */
+/* J = I + K_NN S of the last evaluation's K, column-major for LAPACK. K_NN has a few blocks
+ * per row (the contact nodes'; with compliance_proximity most of N is out of contact): the
+ * product runs over each row's non-zero columns only, in the order of the dense product,
+ * which it matches bit for bit (m = 102: 1e6 multiplications an evaluation before). */
 static void build_jacobian(const dem_compliance *c, const dem_net_jacobian *jac, work *w,
                            size_t m)
 {
@@ -65,12 +70,17 @@ static void build_jacobian(const dem_compliance *c, const dem_net_jacobian *jac,
             for (int t = 0; t < 3; t++)
                 w->KN[(3 * (size_t)a + r) * m + 3 * (size_t)q + t] += jac->K[9 * b + 3 * r + t];
     }
-    for (size_t r = 0; r < m; r++)
+    for (size_t r = 0; r < m; r++) {
+        size_t n_cols = 0;
+        for (size_t t = 0; t < m; t++)
+            if (w->KN[r * m + t] != 0.0) w->cols[n_cols++] = t;
         for (size_t q = 0; q < m; q++) {
             double sum = r == q ? 1.0 : 0.0;
-            for (size_t t = 0; t < m; t++) sum += w->KN[r * m + t] * c->S[t * m + q];
+            for (size_t k = 0; k < n_cols; k++)
+                sum += w->KN[r * m + w->cols[k]] * c->S[w->cols[k] * m + q];
             w->J[q * m + r] = sum;
         }
+    }
 }
 
 /* The Newton direction dF = -J^-1 g (J is overwritten); 0, or 1 when J is singular. */
@@ -173,14 +183,17 @@ int dem_sim_solve_with_compliance(dem_sim *s, double dt_step, const double *disp
      * lands millimetres deep), the root is bracketed and found by Newton on the step length
      * with each evaluation's own J, bisecting where that leaves the bracket, stalls or does
      * not halve sigma; a point leaving at most DEM_COMPLIANCE_SHARE_LEFT of the base's
-     * mismatch along d, and less mismatch, is the next base. Where the mismatch grew without
+     * mismatch along d, and less mismatch, is the next base (or more mismatch, at most
+     * DEM_COMPLIANCE_UPHILL_BASES times: the line from a base whose K lacked a contact the
+     * search then met, a node coming into touch, has no root; the point where its mismatch
+     * along d is gone has that contact and its K). Where the mismatch grew without
      * passing the root, the step is halved. Halving alone, without the bracket, went back to
      * contact-free points whose K is zero again, whose Newton step returned to the deep one:
      * a cycle until the last evaluation (docs/notes/interface_jacobian.md "The structure's
      * compliance in the DEM", item 6). The best evaluation is the one returned. */
     double g_base = INFINITY, g_best = INFINITY, g = INFINITY;
     double lambda = 0.0, lambda_lo = 0.0, lambda_hi = NAN, step_before = NAN, sigma_before = NAN;
-    int solved = 0;
+    int solved = 0, uphill = 0;
     for (int e = 0;; e++) {
         g = evaluate(s, dt_step, disp_end, vel_end, cmp, &w, m, e > 0, force_out, info, jac,
                      &solved, err);
@@ -206,7 +219,12 @@ int dem_sim_solve_with_compliance(dem_sim *s, double dt_step, const double *disp
             } else {
                 if (sigma <= 0.0) lambda_hi = lambda;
                 else lambda_lo = lambda;
-                new_base = fabs(sigma) <= DEM_COMPLIANCE_SHARE_LEFT && g < g_base;
+                /* a larger mismatch than the base's is taken too, a few times: there d has
+                 * crossed its root, and what is left lies across d (a contact the base's K
+                 * did not have), which that point's own K knows */
+                new_base = fabs(sigma) <= DEM_COMPLIANCE_SHARE_LEFT &&
+                           (g < g_base || uphill < DEM_COMPLIANCE_UPHILL_BASES);
+                if (new_base && !(g < g_base)) uphill++;
                 if (!new_base) {
                     /* a bracket narrower than rounding: the mismatch jumps across the root
                      * along d, nothing left to find on it */

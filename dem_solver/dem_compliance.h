@@ -11,9 +11,11 @@
  * structure, linearised, would put it under the force the particles give it. Newton's method
  * with the step's own K (J = I + K_NN S), each evaluation a full coupled step from the
  * restored start-of-step state; a step that goes past the root along its direction (a
- * contact gained) brackets it and searches it, one that makes |F - F_dem| grow without that
- * is halved (dem_compliance.c); at most DEM_COMPLIANCE_MAX_EVALUATIONS evaluations, the last
- * of them back at the best one when the search ended elsewhere. A search that stops short
+ * contact gained) brackets it and searches it, the bracket's point with the mismatch along
+ * the direction gone the next base (twice at most even when |F - F_dem| is larger there),
+ * one that makes |F - F_dem| grow without that is halved (dem_compliance.c); at most
+ * DEM_COMPLIANCE_MAX_EVALUATIONS evaluations, the last of them back at the best one when the
+ * search ended elsewhere. A search that stops short
  * returns its best evaluation, still an exact evaluation of the step at the u_e it reports,
  * which is all the coupler uses. The particles end as that evaluation left them (the wall at
  * u_e). Returned: force_out = F_dem(u_e), jac = K at u_e and wall_end_disp = u_e: the
@@ -38,6 +40,9 @@
 /* past the root along a Newton direction: a point of the bracket that leaves at most this
  * share of the base's mismatch along it (and a smaller mismatch) is the next base */
 #define DEM_COMPLIANCE_SHARE_LEFT 0.25
+/* ... and with a larger mismatch, at most this many times in one solve (a contact the
+ * base's K did not have; docs/notes/interface_jacobian.md item 9) */
+#define DEM_COMPLIANCE_UPHILL_BASES 2
 /* |F - F_dem| below this times the largest nodal force (or 1e-3 N): solved */
 #define DEM_COMPLIANCE_TOLERANCE 1e-9
 

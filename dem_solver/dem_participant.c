@@ -11,6 +11,7 @@
 #include "dem_compliance.h"
 #include "dem_energy.h"
 #include "dem_net_jacobian.h"
+#include "dem_net_proximity.h"
 #include "nc_file.h"
 #include "proto_serve.h"
 
@@ -143,6 +144,13 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
                                               want_jacobian ? &c->jac : NULL, err)) {
         return -1;
     }
+    /* with "proximity" 1, zero blocks also name the nodes a particle in contact may reach
+     * in the next step, so that the structure's compliance covers them (protocol/README.md
+     * §3.4, dem_net_proximity.h) */
+    if (want_jacobian && proto_message_value(cmd, "proximity", 0.0) != 0.0 &&
+        dem_net_jacobian_add_proximity(s, &c->jac, cmd->dt_s, DEM_PROXIMITY_MAX_NODES, NULL,
+                                       err))
+        return -1;
     /* C = -dF/du̇ is zero (dem_net_jacobian.h), so only the stiffness blocks are sent */
     if (want_jacobian &&
         (proto_message_add_i32(reply, "jacobian_nodes", c->jac.nodes, c->jac.n_blocks, 2, err) ||

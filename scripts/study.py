@@ -1225,26 +1225,34 @@ def study_estimate(out, jobs, end_time):
     compare_variants(out, jobs, end_time, ESTIMATE_VARIANTS, "estimate_table.md")
 
 
-COMPLIANCE_VARIANTS = [("paper", "eq. (35)", ["coupler.work_tolerance=0", "coupler.newton_estimate=0"]),
+_NO_WORK = ["coupler.work_tolerance=0"]
+_COMPLIANCE = _NO_WORK + ["coupler.interface_compliance=true"]
+COMPLIANCE_VARIANTS = [("paper", "eq. (35)", _NO_WORK + ["coupler.newton_estimate=0"]),
                        ("compliance", "interface_compliance",
-                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0",
-                         "coupler.interface_compliance=true", "coupler.structure_predictor=false"]),
+                        _COMPLIANCE + ["coupler.newton_estimate=0", "coupler.structure_predictor=false",
+                                       "coupler.compliance_proximity=false"]),
                        ("compliance_estimate", "interface_compliance and newton_estimate 0.1",
-                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1",
-                         "coupler.interface_compliance=true", "coupler.structure_predictor=false"]),
-                       ("compliance_predictor", "interface_compliance and structure_predictor",
-                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0",
-                         "coupler.interface_compliance=true", "coupler.structure_predictor=true"]),
+                        _COMPLIANCE + ["coupler.newton_estimate=0.1", "coupler.structure_predictor=false",
+                                       "coupler.compliance_proximity=false"]),
                        ("compliance_predictor_estimate",
                         "interface_compliance, structure_predictor and newton_estimate 0.1",
-                        ["coupler.work_tolerance=0", "coupler.newton_estimate=0.1",
-                         "coupler.interface_compliance=true", "coupler.structure_predictor=true"])]
+                        _COMPLIANCE + ["coupler.newton_estimate=0.1", "coupler.structure_predictor=true",
+                                       "coupler.compliance_proximity=false"]),
+                       ("compliance_proximity",
+                        "interface_compliance, structure_predictor and compliance_proximity",
+                        _COMPLIANCE + ["coupler.newton_estimate=0", "coupler.structure_predictor=true",
+                                       "coupler.compliance_proximity=true"]),
+                       ("compliance_proximity_estimate",
+                        "interface_compliance, structure_predictor, compliance_proximity and newton_estimate 0.1",
+                        _COMPLIANCE + ["coupler.newton_estimate=0.1", "coupler.structure_predictor=true",
+                                       "coupler.compliance_proximity=true"])]
 
 
 def study_compliance(out, jobs, end_time):
     """Jacobian + Aitken with eq. (35), with the structure's compliance in the DEM
-    (interface_compliance), each with and without the structure predictor, with and without
-    the Newton error estimate; 8 cases x COR x dt."""
+    (interface_compliance), with and without the Newton error estimate, the structure
+    predictor and the compliance at the nodes a rock in contact may reach
+    (compliance_proximity); 8 cases x COR x dt."""
     compare_variants(out, jobs, end_time, COMPLIANCE_VARIANTS, "compliance_table.md")
 
 

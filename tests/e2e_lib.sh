@@ -28,3 +28,13 @@ expect_reliable() {
       || fail "$name: not reliable: $(tail -n 1 "$NC_TMP/$name/coupler.log")"
   done
 }
+
+# The terrain cases (terrain_net, terrain_curtain) as scripts/study.py compliance runs them at
+# rock–net restitution 0.3 and 5× their Δt (0.005 s) over 2.15 s, with the interface Jacobian
+# and Aitken from the full step: --set options for run_case.
+TERRAIN_5X=(--set coupler.interface_jacobian=true --set coupler.relaxation.method=aitken
+            --set coupler.relaxation.alpha=1.0 --set coupler.relaxation.first_iteration_cap=1.0
+            --set coupler.efficiency.far_step=true --set coupler.efficiency.far_step_factor=10
+            --set coupler.dt=0.005 --set fem.analysis.dt_s=0.005
+            --set coupler.end_time=2.15 --set fem.analysis.end_time_s=2.15
+            --set dem.materials.0.restitution=0.3 --set dem.net_wall.restitution=0.3)

@@ -44,6 +44,7 @@ static void test_minimal_and_defaults(void **state)
     assert_near(c.loop.newton_estimate, 0.0, 0.0);
     assert_int_equal(c.loop.interface_compliance, 0);
     assert_int_equal(c.loop.structure_predictor, 1);   /* acts with interface_compliance */
+    assert_int_equal(c.loop.compliance_proximity, 1);  /* likewise */
     assert_int_equal(c.loop.max_iterations, 50);
     /* Aitken with its Newton rule, the first iteration's cap left to the regime (0) */
     assert_string_equal(cpl_relax_settings_method(&c.loop.relax), "aitken");
@@ -87,6 +88,7 @@ static void test_full_file(void **state)
         " \"scheme\": \"strong\", \"dt\": 2e-3, \"end_time\": 1, \"start_time\": 0.5,"
         " \"tolerance\": 1e-8, \"relative_tolerance\": 1e-4, \"work_tolerance\": 1e-6,"
         " \"newton_estimate\": 0.1, \"structure_predictor\": false,"
+        " \"compliance_proximity\": false,"
         " \"max_iterations\": 12,"
         " \"on_max_iterations\": \"stop\", \"relaxed_quantity\": \"force\","
         " \"predictor\": \"linear\", \"max_steps\": 7,"
@@ -110,6 +112,7 @@ static void test_full_file(void **state)
     assert_near(c.loop.work_tol, 1e-6, 0.0);
     assert_near(c.loop.newton_estimate, 0.1, 0.0);
     assert_int_equal(c.loop.structure_predictor, 0);
+    assert_int_equal(c.loop.compliance_proximity, 0);
     assert_int_equal(c.loop.on_max_iterations, CPL_MAXIT_STOP);
     assert_int_equal(c.loop.relaxed, CPL_RELAXED_FORCE);
     assert_int_equal(c.loop.predictor, CPL_PREDICT_LINEAR);
