@@ -31,23 +31,23 @@
 #define DT 1e-3
 #define SINK 4e-3   /* every node's end-of-step displacement, down (m) */
 
-/* The rope along x at z = 0; the striking sphere at x = 0.3 (over edge 1-2) and z_strike,
+/* The rope along x at z = 0; the striking sphere at x_strike (over edge 1-2) and z_strike,
  * the idle one over node 9, 16 mm above its reach (6 mm after the step); the coupled step
  * solved with every node sinking by SINK, its Jacobian in jac. */
-static void rope_step(dem_sim *s, double z_strike, dem_net_jacobian *jac)
+static void rope_step(dem_sim *s, double x_strike, double z_strike, dem_net_jacobian *jac)
 {
     char json[2048];
     snprintf(json, sizeof json,
              "{\"contact_law\": \"hertz_mindlin\","
              " \"materials\": [{\"name\": \"m\", \"youngs_modulus_pa\": 3e10, \"poisson_ratio\": 0.25,"
              " \"density_kg_m3\": 2650, \"restitution\": 0.2, \"friction\": 0.5}],"
-             " \"particles\": [{\"position\": [0.3, 0.0, %.17g], \"radius\": 0.4,"
+             " \"particles\": [{\"position\": [%.17g, 0.0, %.17g], \"radius\": 0.4,"
              " \"velocity\": [0, 0, -10]},"
              " {\"position\": [1.8, 0.0, 0.42], \"radius\": 0.4, \"velocity\": [0, 0, -10]}],"
              " \"net_wall\": {\"youngs_modulus_pa\": 1e11, \"poisson_ratio\": 0.3, \"friction\": 0.5,"
              " \"cable_radius_m\": 0.004},"
              " \"gravity\": [0, 0, -9.81], \"dt_s\": \"auto\"}",
-             z_strike);
+             x_strike, z_strike);
     dem_test_build(s, json);
     double xyz[3 * N_NODES], disp[3 * N_NODES];
     int32_t edges[2 * (N_NODES - 1)];
@@ -90,7 +90,7 @@ static void test_names_reachable_nodes(void **state)
     (void)state;
     dem_sim s;
     dem_net_jacobian jac;
-    rope_step(&s, 0.3998, &jac);
+    rope_step(&s, 0.3, 0.3998, &jac);
     nc_error err;
     const size_t n_step = jac.n_blocks;
     assert_true(n_step > 0);
@@ -147,21 +147,23 @@ static void test_names_reachable_nodes(void **state)
     dem_sim_free(&s);
 }
 
-/* At most max_nodes, the nearest to the sphere's surface first: with 1, one node of the full
- * set at the least distance from the striking sphere (here nodes 0 and 3, 0.3 m to either
- * side of it, are equally near). */
+/* At most max_nodes, the nearest to the sphere's surface first: the sphere 3 mm off the edge's
+ * middle towards node 3 names nodes 0 and 3, node 0 first (edge 0-1 comes first); with a cap
+ * of one node it is node 3, the nearer (0.4984 against 0.5020 m). */
 static void test_nearest_first(void **state)
 {
     (void)state;
     dem_sim s;
     dem_net_jacobian jac;
-    rope_step(&s, 0.3998, &jac);
+    rope_step(&s, 0.303, 0.3998, &jac);
     nc_error err;
     const size_t n_step = jac.n_blocks;
     size_t added = 0;
     assert_int_equal(dem_net_jacobian_add_proximity(&s, &jac, DT, DEM_PROXIMITY_MAX_NODES, &added,
                                                     &err), 0);
-    assert_true(added >= 2);
+    assert_int_equal(added, 2);
+    assert_int_equal(jac.nodes[2 * n_step], 0);   /* found first */
+    assert_int_equal(jac.nodes[2 * n_step + 2], 3);
     /* the nearest of the nodes the full call named */
     const double *p = s.model.sph.pos;
     double best_d = INFINITY;
@@ -175,6 +177,7 @@ static void test_nearest_first(void **state)
     const int32_t i = jac.nodes[2 * n_step];
     assert_int_equal(jac.nodes[2 * n_step + 1], i);
     assert_near(node_distance(p, i), best_d, 1e-9);
+    assert_int_equal(i, 3);
     dem_net_jacobian_free(&jac);
     dem_sim_free(&s);
 }
@@ -184,7 +187,7 @@ static void test_nothing_without_contact(void **state)
     (void)state;
     dem_sim s;
     dem_net_jacobian jac;
-    rope_step(&s, 0.45, &jac);   /* 5 cm above reach: 1 cm of travel does not close it */
+    rope_step(&s, 0.3, 0.45, &jac);   /* 5 cm above reach: 1 cm of travel does not close it */
     nc_error err;
     assert_int_equal(jac.n_blocks, 0);
     size_t added = 1;
