@@ -56,14 +56,16 @@ int dem_net_jacobian_add_proximity(const dem_sim *s, dem_net_jacobian *jac, doub
     unsigned char *named = calloc(n_nodes, 1), *touching = calloc(n_bodies ? n_bodies : 1, 1);
     candidate *cand = malloc(n_nodes * sizeof *cand);
     int32_t *slot = malloc(n_nodes * sizeof *slot);
+    double *node_speed = malloc(n_nodes * sizeof *node_speed);
     int rc = -1;
-    if (!named || !touching || !cand || !slot) {
+    if (!named || !touching || !cand || !slot || !node_speed) {
         nc_error_set(err, 1, "dem: out of memory for the nodes near the particles");
         goto done;
     }
     for (size_t b = 0; b < jac->n_blocks; b++)
         named[jac->nodes[2 * b]] = named[jac->nodes[2 * b + 1]] = 1;
     for (size_t r = 0; r < jac->n_rec; r++) touching[jac->rec[r].body] = 1;
+    for (size_t k = 0; k < n_nodes; k++) node_speed[k] = speed(net->vel + 3 * k);
     size_t count = 0;
     for (size_t i = 0; i < s->model.sph.n; i++) {
         if (!touching[s->model.sph.body[i]]) continue;
@@ -73,8 +75,7 @@ int dem_net_jacobian_add_proximity(const dem_sim *s, dem_net_jacobian *jac, doub
         for (size_t e = 0; e < net->n_edges; e++) {
             const int32_t a = net->edges[2 * e], b = net->edges[2 * e + 1];
             if (named[a] == 1 && named[b] == 1) continue;
-            const double v_node = fmax(speed(net->vel + 3 * (size_t)a),
-                                       speed(net->vel + 3 * (size_t)b));
+            const double v_node = fmax(node_speed[a], node_speed[b]);
             const double gap = reach + DEM_PROXIMITY_STEPS * (v_sphere + v_node) * dt_s;
             double q[3], t;
             if (dem_closest_on_segment(p, net->cur + 3 * (size_t)a, net->cur + 3 * (size_t)b, q,
@@ -111,5 +112,6 @@ done:
     free(touching);
     free(cand);
     free(slot);
+    free(node_speed);
     return rc;
 }

@@ -8,6 +8,8 @@
  *  - the blocks the step computed come first, unchanged bit for bit, and the new ones are
  *    zero diagonal blocks of nodes no block had;
  *  - the sphere without a net contact names nothing (its nodes 8-10 stay out);
+ *  - the margin pinned: with the next step's dt_s putting the limit 1 % short of an edge and
+ *    1 % beyond it, its far node is named only in the second case;
  *  - with a cap of one node, the one named is the nearest of the full set;
  *  - without any net contact nothing is added. */
 #include <stdarg.h>
@@ -147,6 +149,38 @@ static void test_names_reachable_nodes(void **state)
     dem_sim_free(&s);
 }
 
+/* The margin itself: the next step's dt_s chosen so that the limit reach + 2 (|v_sphere| +
+ * |v_node|) dt_s falls 1 % of its distance short of edge 3-4 (0.500 m), then 1 % beyond it;
+ * node 4 is named in the second call only. A margin 5 % off its formula fails one of them
+ * (the test above has no edge within 86 mm outside its limit). */
+static void test_margin(void **state)
+{
+    (void)state;
+    dem_sim s;
+    dem_net_jacobian jac;
+    rope_step(&s, 0.3, 0.3998, &jac);
+    nc_error err;
+    const size_t n_step = jac.n_blocks;
+    const double *p = s.model.sph.pos, *v = s.model.sph.vel;
+    const double speeds = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + SINK / DT;
+    const double d34 = edge_distance(p, 3);
+    const double shares[2] = {0.99, 1.01};
+    for (int k = 0; k < 2; k++) {
+        const double dt_next = (shares[k] * d34 - (0.4 + 0.004)) / (2.0 * speeds);
+        jac.n_blocks = n_step;
+        size_t added = 0;
+        assert_int_equal(dem_net_jacobian_add_proximity(&s, &jac, dt_next,
+                                                        DEM_PROXIMITY_MAX_NODES, &added, &err), 0);
+        int node4 = 0;
+        for (size_t b = n_step; b < jac.n_blocks; b++) node4 |= jac.nodes[2 * b] == 4;
+        print_message("limit %.4f m (edge 3-4 at %.4f m): %zu named, node 4 %s\n", shares[k] * d34,
+                      d34, added, node4 ? "among them" : "not");
+        assert_int_equal(node4, k == 1);
+    }
+    dem_net_jacobian_free(&jac);
+    dem_sim_free(&s);
+}
+
 /* At most max_nodes, the nearest to the sphere's surface first: the sphere 3 mm off the edge's
  * middle towards node 3 names nodes 0 and 3, node 0 first (edge 0-1 comes first); with a cap
  * of one node it is node 3, the nearer (0.4984 against 0.5020 m). */
@@ -203,6 +237,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_names_reachable_nodes),
+        cmocka_unit_test(test_margin),
         cmocka_unit_test(test_nearest_first),
         cmocka_unit_test(test_nothing_without_contact),
     };
