@@ -1464,6 +1464,8 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
          * linearisation, which the FEM then solves with: interface-Jacobian coupling) */
         call->jacobian_out = L->use_jacobian ? &L->jac : NULL;
         call->jacobian_in = NULL;
+        /* the nodes a contact may reach matter only to the structure's compliance */
+        call->proximity = compliance_on && L->s.compliance_proximity;
         if (compliance_on) {
             call->compliance_in = &L->comp;
             call->compliance_out = &L->comp;
@@ -1488,6 +1490,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                 L->timing.compliance_dropped++;
                 call->compliance_in = NULL;
                 call->compliance_out = NULL;
+                call->proximity = 0;
                 L->comp.wall_valid = 0;
                 if (do_solve(c, c->dem, call, L->u_in, L->v_in, L->f_dem, NULL, &t->dem_info))
                     return try_failed(c, t);
@@ -1702,8 +1705,7 @@ static int advance_step(run_ctx *c)
     cpl_call call;
     try_result t;
     for (c->attempt = 0;; c->attempt++) {
-        call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt,
-                          .proximity = L->use_compliance && L->s.compliance_proximity};
+        call = (cpl_call){.step = L->step, .iteration = 0, .time_s = L->time_s, .dt_s = dt};
         if (run_step(c, &call, &t)) return -1;
         if (t.outcome == TRY_CONVERGED || (!strong && t.outcome == TRY_UNCONVERGED)) break;
         int level = L->level;

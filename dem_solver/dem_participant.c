@@ -29,6 +29,7 @@ typedef struct participant {
     double *wall_end;       /* [3n] where the wall ended in the last solve with the structure's
                                compliance (the reply points to it) */
     size_t wall_end_cap;
+    int dashpot_noted;      /* the note on a Hertz dashpot at the first touch was printed */
 } participant;
 
 /* The participant's own state in a checkpoint (dem_checkpoint.h): the nodal force of the last
@@ -101,6 +102,37 @@ static double max_body_speed(const dem_sim *s)
     return sqrt(v2);
 }
 
+/* The Hertz law's dashpot of eq. (A.5), 2 ζ sqrt(m* kn') δ̇ ("fit" or "a7"), grows like
+ * δ^(1/4) from the first touch: its dF/dδ, and with it the Jacobian the coupler asks for, is
+ * unbounded there (1e16 N/m measured on cases/cable_impact at restitution 0.1 and 5x its dt,
+ * where the structure's Newton then stalled at its rounding floor). Said once, in the log,
+ * with the restitution of the net contacts (-1: none damped). */
+static double net_dashpot_restitution(const dem_sim *s)
+{
+    const dem_model *m = &s->model;
+    if (m->prm.law != DEM_LAW_HERTZ_MINDLIN || m->prm.damping == DEM_DAMPING_HUNT_CROSSLEY) return -1.0;
+    if (m->net.restitution >= 0.0) return m->net.zeta > 0.0 ? m->net.restitution : -1.0;
+    double lowest = -1.0;   /* the net takes each particle's own damping */
+    for (size_t k = 0; k < m->n_materials; k++)
+        if (m->materials[k].zeta > 0.0 && (lowest < 0.0 || m->materials[k].restitution < lowest))
+            lowest = m->materials[k].restitution;
+    return lowest;
+}
+
+static void note_dashpot(participant *c)
+{
+    c->dashpot_noted = 1;
+    const double e = net_dashpot_restitution(c->s);
+    if (e < 0.0 || !c->opt->progress) return;
+    fprintf(c->opt->progress,
+            "dem_solver: note: %s: damping \"%s\" with net contacts of restitution %g: its dashpot "
+            "grows like overlap^(1/4) from the first touch, so the Jacobian the coupler asks for is "
+            "unbounded where a contact begins or ends, and the interface iteration needs more "
+            "iterations and rejected tries there; \"damping\": \"hunt_crossley\" is continuous "
+            "there (dem_solver/README.md, Contact model)\n",
+            c->s->model.source, c->s->model.prm.damping == DEM_DAMPING_A7 ? "a7" : "fit", e);
+}
+
 static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)
 {
     participant *c = ctx;
@@ -115,6 +147,7 @@ static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, n
     /* the coupler asks for the force's linearisation with the value "jacobian" 1
      * (interface-Jacobian coupling, protocol/README.md §3.1) */
     int want_jacobian = proto_message_value(cmd, "jacobian", 0.0) != 0.0;
+    if (want_jacobian && !c->dashpot_noted) note_dashpot(c);
     const proto_array *cn = proto_message_find(cmd, "compliance_nodes");
     if (want_jacobian && cn && cn->count > 0) {
         /* the structure's compliance at the contact nodes (capability "compliance",

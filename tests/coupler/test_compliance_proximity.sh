@@ -17,7 +17,9 @@
 #    run only;
 #  - with it at most 3 iterations per contact step on average and 10 at most, every try
 #    counted, and at least 10 % fewer per contact step than without it;
-#  - the peak deflection of node 52 (along the slope) of both within 0.5 % of eq. (35)'s.
+#  - the peak deflection of node 52 (along the slope) of both within 0.5 % of eq. (35)'s;
+#  - no note on the dashpot in the DEM's log (the case's Hunt–Crossley dashpot is continuous
+#    at the first touch; test_contact_ends.sh has eq. (A.5)'s).
 . tests/e2e_lib.sh
 [ -d cases/terrain_curtain ] || { echo "SKIP: cases/terrain_curtain missing"; exit 77; }
 common=("${TERRAIN_5X[@]}")
@@ -27,6 +29,8 @@ run_case held cases/terrain_curtain "${common[@]}" "${compliance[@]}" \
   --set coupler.compliance_proximity=false
 run_case proximity cases/terrain_curtain "${common[@]}" "${compliance[@]}"
 expect_reliable paper held proximity
+! grep -q "^dem_solver: note: .*dashpot" "$NC_TMP/proximity/dem.log" \
+  || fail "proximity: the DEM noted a dashpot the case does not have"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys
