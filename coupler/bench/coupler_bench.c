@@ -172,6 +172,7 @@ int main(int argc, char **argv)
     const char *bin = argc > 1 ? argv[1] : "bin";
     long steps = argc > 2 ? atol(argv[2]) : 200;
     setenv("OMP_WAIT_POLICY", "PASSIVE", 0);   /* see scripts/run_case.sh */
+    setenv("OPENBLAS_THREAD_TIMEOUT", "4", 0);  /* likewise */
     signal(SIGPIPE, SIG_IGN);
 
     double rtt = round_trip_s(1), rtt0 = round_trip_s(0);
