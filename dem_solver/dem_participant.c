@@ -104,33 +104,46 @@ static double max_body_speed(const dem_sim *s)
 
 /* The Hertz law's dashpot of eq. (A.5), 2 ζ sqrt(m* kn') δ̇ ("fit" or "a7"), grows like
  * δ^(1/4) from the first touch: its dF/dδ, and with it the Jacobian the coupler asks for, is
- * unbounded there (1e16 N/m measured on cases/cable_impact at restitution 0.1 and 5x its dt,
- * where the structure's Newton then stalled at its rounding floor). Said once, in the log,
- * with the restitution of the net contacts (-1: none damped). */
-static double net_dashpot_restitution(const dem_sim *s)
+ * unbounded there (1.2e16 N/m measured on cases/cable_impact at restitution 0.1 and 5x its
+ * dt, where the structure's Newton then stalled at its rounding floor). Said once, in the
+ * log. Returns the material of the particles whose net contacts have the largest damping
+ * ratio (the pair's, as dem_net_wall_pair takes it), or -1 when none is damped. */
+static int damped_net_material(const dem_sim *s)
 {
     const dem_model *m = &s->model;
-    if (m->prm.law != DEM_LAW_HERTZ_MINDLIN || m->prm.damping == DEM_DAMPING_HUNT_CROSSLEY) return -1.0;
-    if (m->net.restitution >= 0.0) return m->net.zeta > 0.0 ? m->net.restitution : -1.0;
-    double lowest = -1.0;   /* the net takes each particle's own damping */
-    for (size_t k = 0; k < m->n_materials; k++)
-        if (m->materials[k].zeta > 0.0 && (lowest < 0.0 || m->materials[k].restitution < lowest))
-            lowest = m->materials[k].restitution;
-    return lowest;
+    if (m->prm.law != DEM_LAW_HERTZ_MINDLIN || m->prm.damping == DEM_DAMPING_HUNT_CROSSLEY) return -1;
+    int worst = -1;
+    double worst_zeta = 0.0;
+    for (size_t i = 0; i < m->sph.n; i++) {
+        const int k = m->sph.material[i];
+        const double zi = m->materials[k].zeta;
+        const double pair = 0.5 * (zi + (m->net.zeta >= 0.0 ? m->net.zeta : zi));
+        if (pair > worst_zeta) {
+            worst_zeta = pair;
+            worst = k;
+        }
+    }
+    return worst;
 }
 
 static void note_dashpot(participant *c)
 {
     c->dashpot_noted = 1;
-    const double e = net_dashpot_restitution(c->s);
-    if (e < 0.0 || !c->opt->progress) return;
+    const dem_model *m = &c->s->model;
+    const int k = damped_net_material(c->s);
+    if (k < 0 || !c->opt->progress) return;
+    char wall[64] = "";
+    if (m->net.restitution >= 0.0)
+        snprintf(wall, sizeof wall, " and net_wall restitution %g", m->net.restitution);
     fprintf(c->opt->progress,
-            "dem_solver: note: %s: damping \"%s\" with net contacts of restitution %g: its dashpot "
-            "grows like overlap^(1/4) from the first touch, so the Jacobian the coupler asks for is "
-            "unbounded where a contact begins or ends, and the interface iteration needs more "
-            "iterations and rejected tries there; \"damping\": \"hunt_crossley\" is continuous "
-            "there (dem_solver/README.md, Contact model)\n",
-            c->s->model.source, c->s->model.prm.damping == DEM_DAMPING_A7 ? "a7" : "fit", e);
+            "dem_solver: note: %s: damping \"%s\" on net contacts (material \"%s\", restitution "
+            "%g%s): its dashpot grows like overlap^(1/4) from the first touch, so the Jacobian the "
+            "coupler asks for is unbounded where a contact begins or ends, and the interface "
+            "iteration needs more iterations and rejected tries there; \"damping\": "
+            "\"hunt_crossley\" is continuous there (dem_solver/README.md, Contact model)\n",
+            m->source, m->prm.damping == DEM_DAMPING_A7 ? "a7" : "fit", m->materials[k].name,
+            m->materials[k].restitution, wall);
+    fflush(c->opt->progress);
 }
 
 static int on_solve(void *ctx, const proto_message *cmd, proto_message *reply, nc_error *err)

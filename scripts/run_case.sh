@@ -30,7 +30,7 @@ python=/usr/bin/python3
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-PASSIVE}
 # OpenBLAS's worker threads (the dense kernels of CHOLMOD and LAPACK, in each of the three
 # processes) otherwise spin on sched_yield for about 2^28 cycles after every call: a short
-# wait before they sleep (the MEL test with the compliance over 0.1 s: 28-32 -> 22 s, two
+# wait before they sleep (the MEL test with the compliance over 0.1 s: 28-32 -> 22-23 s, two
 # such runs at once 36 -> 24 s; as committed over 0.3 s the same 59-62 s).
 export OPENBLAS_THREAD_TIMEOUT=${OPENBLAS_THREAD_TIMEOUT:-4}
 

@@ -58,12 +58,13 @@ run_case angled cases/angled_net "${options[@]}" --set coupler.dt=0.001 --set fe
 run_case capped cases/angled_net "${options[@]}" --set coupler.dt=0.001 --set fem.analysis.dt_s=0.001 \
   --set coupler.end_time=0.2 --set fem.analysis.end_time_s=0.2 \
   --set dem.materials.0.restitution=0.1 --set dem.net_wall.restitution=0.1 \
-  --set dem.net_wall.coupling_force=end_of_step --set coupler.max_iterations=4 --set coupler.step_control.dt_min=0.001 \
+  --set dem.net_wall.coupling_force=end_of_step --set coupler.max_iterations=4 \
+  --set coupler.step_control.dt_min=0.001 \
   --set coupler.accept_unconverged=true --set coupler.accept_impulse_loss=true
 expect_reliable leaves angled
 grep -q "^coupler: results are NOT reliable: [0-9]* of [0-9]* steps were accepted without converging.*accepted because coupler.json sets accept_unconverged" \
   "$NC_TMP/capped/coupler.log" || fail "capped: the verdict does not say the steps were accepted unconverged"
-[ "$(grep -c '^dem_solver: note: dem.json: damping "fit" with net contacts of restitution 0.3: ' \
+[ "$(grep -c '^dem_solver: note: dem.json: damping "fit" on net contacts (material "rock", restitution 0.3): ' \
      "$NC_TMP/leaves/dem.log")" = 1 ] || fail "leaves: the DEM did not note its dashpot once"
 grep -Eq "^coupler: contact backtracking: [1-9][0-9]* extra DEM solves" "$NC_TMP/leaves/coupler.log" \
   || fail "leaves: no contact backtracking"
