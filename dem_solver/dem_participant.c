@@ -139,7 +139,7 @@ static void note_dashpot(participant *c)
             "dem_solver: note: %s: damping \"%s\" on net contacts (material \"%s\", restitution "
             "%g%s): its dashpot grows like overlap^(1/4) from the first touch, so the Jacobian the "
             "coupler asks for is unbounded where a contact begins or ends, and the interface "
-            "iteration needs more iterations and rejected tries there; \"damping\": "
+            "iteration may need more iterations and rejected tries there; \"damping\": "
             "\"hunt_crossley\" is continuous there (dem_solver/README.md, Contact model)\n",
             m->source, m->prm.damping == DEM_DAMPING_A7 ? "a7" : "fit", m->materials[k].name,
             m->materials[k].restitution, wall);
