@@ -119,7 +119,9 @@ typedef struct cpl_call {
     const cpl_compliance *compliance_in;     /* DEM solve: solve with it (NULL: not used) */
     int proximity;                           /* DEM solve with jacobian_out: name also the
                                                 nodes a particle in contact may reach in the
-                                                next step (zero blocks; compliance_proximity) */
+                                                next step (zero blocks; compliance_proximity,
+                                                set per iteration while the try solves with
+                                                the compliance) */
 } cpl_call;
 
 /* Extra information a participant returns with a solve. */

@@ -4,7 +4,9 @@
  * loop decides when), SOLVE sub-steps the coupling step and replies the time-averaged nodal
  * forces (with the capability "jacobian" their linearisation, with "compliance" a step
  * solved against the structure's compliance at the contact nodes: dem_compliance.h),
- * ACCEPT_STEP writes output when due. The result files are created at the first
+ * ACCEPT_STEP writes output when due. The first SOLVE that asks for the Jacobian notes in
+ * the progress log when net contacts have the Hertz dashpot of eq. (A.5), whose dF/dδ is
+ * unbounded where a contact begins or ends (dem_solver/README.md "Contact model"). The result files are created at the first
  * BEGIN_STEP (with output step 0), never before: CHECKPOINT saves the complete state to
  * checkpoint/dem_<name>.h5 in the output folder (dem_checkpoint.h) and RESUME, before the
  * first BEGIN_STEP, loads it and reopens the result files as they were then

@@ -22,7 +22,9 @@
 #  - no step needs more than 10 interface iterations, its rejected tries counted too;
 #  - the DEM's log notes, once, that its dashpot of eq. (A.5) makes the Jacobian unbounded
 #    where a contact begins or ends (dem_solver/README.md "Contact model"), naming the
-#    restitution.
+#    restitution. Two short runs more (0.03 s, before the contact): with the rock at 0.3 and
+#    net_wall.restitution 1 the pair's damping is half the rock's, and the note names both;
+#    with both at 1 there is no dashpot and no note.
 #
 # cases/angled_net at restitution 0.1 and 5× its Δt (1e-3 s), 0.12 s: in step 96 the search
 # leaves the iterate just inside a contact's end, where the dashpot's K grows like δ^(−3/4).
@@ -61,7 +63,16 @@ run_case capped cases/angled_net "${options[@]}" --set coupler.dt=0.001 --set fe
   --set dem.net_wall.coupling_force=end_of_step --set coupler.max_iterations=4 \
   --set coupler.step_control.dt_min=0.001 \
   --set coupler.accept_unconverged=true --set coupler.accept_impulse_loss=true
+short=(--set coupler.end_time=0.03 --set fem.analysis.end_time_s=0.03 --set dem.damping=fit)
+run_case half cases/cable_impact "${options[@]}" "${short[@]}" \
+  --set dem.materials.0.restitution=0.3 --set dem.net_wall.restitution=1.0
+run_case undamped cases/cable_impact "${options[@]}" "${short[@]}" \
+  --set dem.net_wall.restitution=1.0
 expect_reliable leaves angled
+grep -q '^dem_solver: note: dem.json: damping "fit" on net contacts (material "rock", restitution 0.3 and net_wall restitution 1): ' \
+  "$NC_TMP/half/dem.log" || fail "half: the DEM did not note the dashpot of a pair damped by one side"
+[ -f "$NC_TMP/undamped/dem.log" ] && ! grep -q "^dem_solver: note: .*dashpot" "$NC_TMP/undamped/dem.log" \
+  || fail "undamped: the DEM noted a dashpot its contacts do not have"
 grep -q "^coupler: results are NOT reliable: [0-9]* of [0-9]* steps were accepted without converging.*accepted because coupler.json sets accept_unconverged" \
   "$NC_TMP/capped/coupler.log" || fail "capped: the verdict does not say the steps were accepted unconverged"
 [ "$(grep -c '^dem_solver: note: dem.json: damping "fit" on net contacts (material "rock", restitution 0.3): ' \

@@ -32,6 +32,15 @@
 #define SPACING 0.2
 #define DT 1e-3
 #define SINK 4e-3   /* every node's end-of-step displacement, down (m) */
+#define REACH_M (0.4 + 0.004)   /* the spheres' radius plus the cable's */
+
+/* A coupled step on the rope (rope_begin) and what each test needs of it. */
+typedef struct rope {
+    dem_sim s;
+    dem_net_jacobian jac;
+    nc_error err;
+    size_t n_step;   /* the blocks the step computed */
+} rope;
 
 /* The rope along x at z = 0; the striking sphere at x_strike (over edge 1-2) and z_strike,
  * the idle one over node 9, 16 mm above its reach (6 mm after the step); the coupled step
@@ -72,6 +81,25 @@ static void rope_step(dem_sim *s, double x_strike, double z_strike, dem_net_jaco
     assert_int_equal(dem_sim_solve_coupled_jacobian(s, DT, disp, NULL, F, &info, jac, &err), 0);
 }
 
+static void rope_begin(rope *r, double x_strike, double z_strike)
+{
+    rope_step(&r->s, x_strike, z_strike, &r->jac);
+    r->n_step = r->jac.n_blocks;
+}
+
+static void rope_end(rope *r)
+{
+    dem_net_jacobian_free(&r->jac);
+    dem_sim_free(&r->s);
+}
+
+/* The striking sphere's speed plus the wall's over the step: the margin's relative travel. */
+static double relative_speed(const dem_sim *s)
+{
+    const double *v = s->model.sph.vel;
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + SINK / DT;
+}
+
 /* Distance from p to the rope's edge e at the step's end (the rope is straight and every node
  * sank by SINK: the edge is x in [0.2 e, 0.2 (e + 1)] at z = -SINK). */
 static double edge_distance(const double *p, int e)
@@ -90,28 +118,25 @@ static double node_distance(const double *p, int32_t i)
 static void test_names_reachable_nodes(void **state)
 {
     (void)state;
-    dem_sim s;
-    dem_net_jacobian jac;
-    rope_step(&s, 0.3, 0.3998, &jac);
-    nc_error err;
-    const size_t n_step = jac.n_blocks;
+    rope r;
+    rope_begin(&r, 0.3, 0.3998);
+    dem_net_jacobian *jac = &r.jac;
+    const size_t n_step = r.n_step;
     assert_true(n_step > 0);
     int32_t *nodes_step = malloc(2 * n_step * sizeof *nodes_step);
     double *K_step = malloc(9 * n_step * sizeof *K_step);
-    memcpy(nodes_step, jac.nodes, 2 * n_step * sizeof *nodes_step);
-    memcpy(K_step, jac.K, 9 * n_step * sizeof *K_step);
+    memcpy(nodes_step, jac->nodes, 2 * n_step * sizeof *nodes_step);
+    memcpy(K_step, jac->K, 9 * n_step * sizeof *K_step);
     int in_step[N_NODES] = {0};
     for (size_t b = 0; b < 2 * n_step; b++) in_step[nodes_step[b]] = 1;
 
     size_t added = 0;
     assert_int_equal(
-        dem_net_jacobian_add_proximity(&s, &jac, DT, DEM_PROXIMITY_MAX_NODES, &added, &err), 0);
+        dem_net_jacobian_add_proximity(&r.s, jac, DT, DEM_PROXIMITY_MAX_NODES, &added, &r.err), 0);
 
     /* independently: the striking sphere's reach over the next step */
-    const double *p = s.model.sph.pos, *v = s.model.sph.vel;
-    const double v_node = SINK / DT;   /* the wall's speed over the step */
-    const double v_sphere = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    const double gap = 0.4 + 0.004 + 2.0 * (v_sphere + v_node) * DT;
+    const double *p = r.s.model.sph.pos;
+    const double gap = REACH_M + 2.0 * relative_speed(&r.s) * DT;
     int expect[N_NODES] = {0}, inside = 0, outside = 0;
     for (int e = 0; e < N_NODES - 1; e++) {
         const double d = edge_distance(p, e);
@@ -128,25 +153,24 @@ static void test_names_reachable_nodes(void **state)
     size_t want = 0;
     for (int n = 0; n < N_NODES; n++) want += expect[n] && !in_step[n];
     assert_int_equal(added, want);
-    assert_int_equal(jac.n_blocks, n_step + want);
+    assert_int_equal(jac->n_blocks, n_step + want);
     /* the step's blocks first and unchanged, then zero (i, i) blocks of new nodes */
-    assert_memory_equal(jac.nodes, nodes_step, 2 * n_step * sizeof *nodes_step);
-    assert_memory_equal(jac.K, K_step, 9 * n_step * sizeof *K_step);
+    assert_memory_equal(jac->nodes, nodes_step, 2 * n_step * sizeof *nodes_step);
+    assert_memory_equal(jac->K, K_step, 9 * n_step * sizeof *K_step);
     int named[N_NODES] = {0};
-    for (size_t b = n_step; b < jac.n_blocks; b++) {
-        const int32_t i = jac.nodes[2 * b];
-        assert_int_equal(jac.nodes[2 * b + 1], i);
+    for (size_t b = n_step; b < jac->n_blocks; b++) {
+        const int32_t i = jac->nodes[2 * b];
+        assert_int_equal(jac->nodes[2 * b + 1], i);
         assert_true(i >= 0 && i < N_NODES);
         assert_true(expect[i] && !in_step[i] && !named[i]);
         named[i] = 1;
-        for (int k = 0; k < 9; k++) assert_true(jac.K[9 * b + k] == 0.0);
+        for (int k = 0; k < 9; k++) assert_true(jac->K[9 * b + k] == 0.0);
     }
     /* the idle sphere over node 9 (within its own reach-plus-travel) names nothing */
     for (int n = 8; n < N_NODES; n++) assert_false(named[n] || in_step[n]);
     free(nodes_step);
     free(K_step);
-    dem_net_jacobian_free(&jac);
-    dem_sim_free(&s);
+    rope_end(&r);
 }
 
 /* The margin itself: the next step's dt_s chosen so that the limit reach + 2 (|v_sphere| +
@@ -156,29 +180,23 @@ static void test_names_reachable_nodes(void **state)
 static void test_margin(void **state)
 {
     (void)state;
-    dem_sim s;
-    dem_net_jacobian jac;
-    rope_step(&s, 0.3, 0.3998, &jac);
-    nc_error err;
-    const size_t n_step = jac.n_blocks;
-    const double *p = s.model.sph.pos, *v = s.model.sph.vel;
-    const double speeds = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + SINK / DT;
-    const double d34 = edge_distance(p, 3);
+    rope r;
+    rope_begin(&r, 0.3, 0.3998);
+    const double d34 = edge_distance(r.s.model.sph.pos, 3);
     const double shares[2] = {0.99, 1.01};
     for (int k = 0; k < 2; k++) {
-        const double dt_next = (shares[k] * d34 - (0.4 + 0.004)) / (2.0 * speeds);
-        jac.n_blocks = n_step;
+        const double dt_next = (shares[k] * d34 - REACH_M) / (2.0 * relative_speed(&r.s));
+        r.jac.n_blocks = r.n_step;
         size_t added = 0;
-        assert_int_equal(dem_net_jacobian_add_proximity(&s, &jac, dt_next,
-                                                        DEM_PROXIMITY_MAX_NODES, &added, &err), 0);
+        assert_int_equal(dem_net_jacobian_add_proximity(&r.s, &r.jac, dt_next,
+                                                        DEM_PROXIMITY_MAX_NODES, &added, &r.err), 0);
         int node4 = 0;
-        for (size_t b = n_step; b < jac.n_blocks; b++) node4 |= jac.nodes[2 * b] == 4;
+        for (size_t b = r.n_step; b < r.jac.n_blocks; b++) node4 |= r.jac.nodes[2 * b] == 4;
         print_message("limit %.4f m (edge 3-4 at %.4f m): %zu named, node 4 %s\n", shares[k] * d34,
                       d34, added, node4 ? "among them" : "not");
         assert_int_equal(node4, k == 1);
     }
-    dem_net_jacobian_free(&jac);
-    dem_sim_free(&s);
+    rope_end(&r);
 }
 
 /* At most max_nodes, the nearest to the sphere's surface first: the sphere 3 mm off the edge's
@@ -187,50 +205,45 @@ static void test_margin(void **state)
 static void test_nearest_first(void **state)
 {
     (void)state;
-    dem_sim s;
-    dem_net_jacobian jac;
-    rope_step(&s, 0.303, 0.3998, &jac);
-    nc_error err;
-    const size_t n_step = jac.n_blocks;
+    rope r;
+    rope_begin(&r, 0.303, 0.3998);
+    dem_net_jacobian *jac = &r.jac;
+    const size_t n_step = r.n_step;
     size_t added = 0;
-    assert_int_equal(dem_net_jacobian_add_proximity(&s, &jac, DT, DEM_PROXIMITY_MAX_NODES, &added,
-                                                    &err), 0);
+    assert_int_equal(dem_net_jacobian_add_proximity(&r.s, jac, DT, DEM_PROXIMITY_MAX_NODES, &added,
+                                                    &r.err), 0);
     assert_int_equal(added, 2);
-    assert_int_equal(jac.nodes[2 * n_step], 0);   /* found first */
-    assert_int_equal(jac.nodes[2 * n_step + 2], 3);
+    assert_int_equal(jac->nodes[2 * n_step], 0);   /* found first */
+    assert_int_equal(jac->nodes[2 * n_step + 2], 3);
     /* the nearest of the nodes the full call named */
-    const double *p = s.model.sph.pos;
+    const double *p = r.s.model.sph.pos;
     double best_d = INFINITY;
-    for (size_t b = n_step; b < jac.n_blocks; b++) {
-        best_d = fmin(best_d, node_distance(p, jac.nodes[2 * b]));
+    for (size_t b = n_step; b < jac->n_blocks; b++) {
+        best_d = fmin(best_d, node_distance(p, jac->nodes[2 * b]));
     }
-    jac.n_blocks = n_step;   /* the step's own blocks again */
-    assert_int_equal(dem_net_jacobian_add_proximity(&s, &jac, DT, 1, &added, &err), 0);
+    jac->n_blocks = n_step;   /* the step's own blocks again */
+    assert_int_equal(dem_net_jacobian_add_proximity(&r.s, jac, DT, 1, &added, &r.err), 0);
     assert_int_equal(added, 1);
-    assert_int_equal(jac.n_blocks, n_step + 1);
-    const int32_t i = jac.nodes[2 * n_step];
-    assert_int_equal(jac.nodes[2 * n_step + 1], i);
+    assert_int_equal(jac->n_blocks, n_step + 1);
+    const int32_t i = jac->nodes[2 * n_step];
+    assert_int_equal(jac->nodes[2 * n_step + 1], i);
     assert_near(node_distance(p, i), best_d, 1e-9);
     assert_int_equal(i, 3);
-    dem_net_jacobian_free(&jac);
-    dem_sim_free(&s);
+    rope_end(&r);
 }
 
 static void test_nothing_without_contact(void **state)
 {
     (void)state;
-    dem_sim s;
-    dem_net_jacobian jac;
-    rope_step(&s, 0.3, 0.45, &jac);   /* 5 cm above reach: 1 cm of travel does not close it */
-    nc_error err;
-    assert_int_equal(jac.n_blocks, 0);
+    rope r;
+    rope_begin(&r, 0.3, 0.45);   /* 5 cm above reach: 1 cm of travel does not close it */
+    assert_int_equal(r.n_step, 0);
     size_t added = 1;
-    assert_int_equal(
-        dem_net_jacobian_add_proximity(&s, &jac, DT, DEM_PROXIMITY_MAX_NODES, &added, &err), 0);
+    assert_int_equal(dem_net_jacobian_add_proximity(&r.s, &r.jac, DT, DEM_PROXIMITY_MAX_NODES,
+                                                    &added, &r.err), 0);
     assert_int_equal(added, 0);
-    assert_int_equal(jac.n_blocks, 0);
-    dem_net_jacobian_free(&jac);
-    dem_sim_free(&s);
+    assert_int_equal(r.jac.n_blocks, 0);
+    rope_end(&r);
 }
 
 int main(void)
