@@ -146,7 +146,8 @@ static int open_files(cpl_history *h, const char *dir, const cpl_loop_settings *
          series(h, &h->i_fem_solved, "/iterations/fem_solved", NC_H5_I32, 1, "1", err) ||
          series(h, &h->i_attempt, "/iterations/attempt", NC_H5_I32, 1, "1", err) ||
          series(h, &h->i_dt, "/iterations/dt", NC_H5_F64, 1, "s", err) ||
-         series(h, &h->i_jacobian_miss, "/iterations/jacobian_miss", NC_H5_F64, 1, "1", err)))
+         series(h, &h->i_jacobian_miss, "/iterations/jacobian_miss", NC_H5_F64, 1, "1", err) ||
+         series(h, &h->i_compliance, "/iterations/compliance", NC_H5_I32, 1, "1", err)))
         goto fail;
     if (nc_h5_attr_string(&h->h5, "/", "scheme", s->scheme == CPL_SCHEME_STRONG ? "strong" : "weak", err) ||
         /* a weak step is not iterated: nothing is relaxed whatever the settings say */
@@ -199,7 +200,7 @@ int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_er
 {
     if (!h->open || !h->write_iterations) return 0;
     int32_t step = (int32_t)rec->step, it = rec->iteration, solved = rec->fem_solved,
-            attempt = rec->attempt;
+            attempt = rec->attempt, compliance = rec->compliance;
     return nc_h5_series_append(&h->i_step, &step, err) ||
            nc_h5_series_append(&h->i_iteration, &it, err) ||
            nc_h5_series_append(&h->i_residual, &rec->residual, err) ||
@@ -209,6 +210,7 @@ int cpl_history_iteration(cpl_history *h, const cpl_iteration_record *rec, nc_er
            nc_h5_series_append(&h->i_attempt, &attempt, err) ||
            nc_h5_series_append(&h->i_dt, &rec->dt_s, err) ||
            nc_h5_series_append(&h->i_jacobian_miss, &rec->jacobian_miss, err) ||
+           nc_h5_series_append(&h->i_compliance, &compliance, err) ||
            flush_due(h, err)
                ? -1 : 0;
 }
@@ -331,7 +333,7 @@ void cpl_history_close(cpl_history *h, const cpl_timing *t, const cpl_energy *en
                            &h->s_converged, &h->s_force, &h->s_contact, &h->s_near, &h->s_gap,
                            &h->s_rejected, &h->i_step, &h->i_iteration, &h->i_residual,
                            &h->i_alpha, &h->i_force, &h->i_fem_solved, &h->i_attempt, &h->i_dt,
-                           &h->i_jacobian_miss, &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
+                           &h->i_jacobian_miss, &h->i_compliance, &h->r_step, &h->r_attempt, &h->r_time, &h->r_dt, &h->r_next_dt,
                            &h->r_iterations, &h->r_residual, &h->r_reason, &h->e_above};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++) nc_h5_series_close(all[i]);
     for (int k = 0; k < CPL_HISTORY_ENERGY_SERIES; k++) nc_h5_series_close(&h->e_series[k]);

@@ -36,7 +36,7 @@ typedef struct cpl_history {
     nc_h5_series s_time, s_dt, s_iterations, s_residual, s_converged, s_force, s_contact,
         s_near, s_gap, s_rejected;
     nc_h5_series i_step, i_iteration, i_residual, i_alpha, i_force, i_fem_solved, i_attempt,
-        i_dt, i_jacobian_miss;
+        i_dt, i_jacobian_miss, i_compliance;
     nc_h5_series e_series[CPL_HISTORY_ENERGY_SERIES], e_above;
     nc_h5_series r_step, r_attempt, r_time, r_dt, r_next_dt, r_iterations, r_residual,
         r_reason;

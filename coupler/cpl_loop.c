@@ -876,7 +876,8 @@ static int report_iteration(run_ctx *c, const cpl_call *call, double residual, d
     cpl_iteration_record rec = {.step = call->step, .iteration = call->iteration,
                                 .time_s = call->time_s, .dt_s = call->dt_s,
                                 .residual = residual, .alpha = alpha, .fem_solved = fem_solved,
-                                .attempt = c->attempt, .jacobian_miss = jacobian_miss};
+                                .attempt = c->attempt, .jacobian_miss = jacobian_miss,
+                                .compliance = call->compliance_in != NULL};
     cpl_total_force(c->L->f_dem, c->L->n3 / 3, rec.contact_force);
     if (c->obs->on_iteration(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
     return 0;
@@ -1488,6 +1489,7 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (lost_contact(L, 0, e, &target)) {
                 compliance_on = 0;
                 L->timing.compliance_dropped++;
+                cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);   /* the map changes */
                 call->compliance_in = NULL;
                 call->compliance_out = NULL;
                 call->proximity = 0;
@@ -1586,9 +1588,12 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (wall_moved && k > 1 && !converged &&
                 t->residual >= CPL_COMPLIANCE_STALL * residual_before) {
                 /* no progress with the structure's linearisation: the rest of this try
-                 * without it, the plain interface-Jacobian iteration */
+                 * without it, the plain interface-Jacobian iteration. The map changes with
+                 * it, so the relaxation forgets its pair: eq. (34)'s secant across the
+                 * change gave α at alpha_min, and the next iterate repeated its input */
                 compliance_on = 0;
                 L->timing.compliance_dropped++;
+                cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
             }
             residual_before = t->residual;
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);

@@ -268,6 +268,8 @@ typedef struct cpl_iteration_record {
     double jacobian_miss;           /* jacobian_check: the relative miss of the DEM's
                                        linearisation of this iteration along the step to the
                                        next input (NAN: not checked) */
+    int compliance;                 /* 1: the DEM's solve that the iteration kept was against
+                                       the structure's compliance (interface_compliance) */
 } cpl_iteration_record;
 
 typedef enum {

@@ -85,4 +85,40 @@ grep -Eq "^coupler: interface compliance: .*; [1-9][0-9]* of [0-9]+ tries went o
   || fail "onset: no try went on without the compliance: $(grep "interface compliance:" "$NC_TMP/onset/coupler.log")"
 grep -q "^coupler: step control: no step rejected" "$NC_TMP/onset/coupler.log" \
   || fail "onset: tries rejected: $(grep "step control:" "$NC_TMP/onset/coupler.log")"
+
+# The relaxation after the stall rule: cases/angled_net (a 97 kg rock sliding through a net of
+# 0.03 kg nodes) at restitution 0.1 and 5× its Δt with the compliance, its predictor, the
+# proximity and newton_estimate, 0.2 s. Its tries drop the compliance by the stall rule
+# several times. Aitken's secant across the drop compared two different maps: α came out at
+# alpha_min (1e-6) and the next iterate repeated its input. The relaxation now forgets its
+# pair there. Checked: /iterations/compliance marks the iterations with it (none in the run
+# without it); at least one stall drop (an iteration with the compliance, its residual at
+# least 0.9 of the last, followed in the same try by one without); at each, the α applied
+# is a step (above 1e-3), not alpha_min.
+[ -d cases/angled_net ] || { echo "SKIP: cases/angled_net missing"; exit 77; }
+run_case stall cases/angled_net --set coupler.interface_compliance=true \
+  --set coupler.newton_estimate=0.1 --set coupler.work_tolerance=0 \
+  --set coupler.dt=1e-3 --set fem.analysis.dt_s=1e-3 --set coupler.end_time=0.2 \
+  --set fem.analysis.end_time_s=0.2 --set dem.materials.0.restitution=0.1 \
+  --set dem.net_wall.restitution=0.1
+expect_reliable stall
+"$PY" - "$NC_TMP" <<'PY' || exit 1
+import sys, h5py, numpy as np
+tmp = sys.argv[1]
+with h5py.File(tmp + "/plain/coupling.h5", "r") as f:
+    assert not np.array(f["/iterations/compliance"]).any(), "plain: an iteration marked with the compliance"
+with h5py.File(tmp + "/stall/coupling.h5", "r") as f:
+    it = f["/iterations"]
+    step, attempt, res, alpha, comp = (np.array(it[k]).ravel() for k in
+                                       ("step", "attempt", "residual", "alpha", "compliance"))
+assert comp.any(), "stall: no iteration marked with the compliance"
+drops = [i for i in range(1, len(step) - 1)
+         if step[i - 1] == step[i] == step[i + 1] and attempt[i - 1] == attempt[i] == attempt[i + 1]
+         and comp[i] == 1 and comp[i + 1] == 0 and res[i] >= 0.9 * res[i - 1]]
+print("stall: %d iterations, %d with the compliance, %d stall drops, alpha there %s"
+      % (len(step), comp.sum(), len(drops), [float("%.3g" % alpha[i]) for i in drops]))
+assert drops, "stall: no try dropped the compliance by the stall rule (the check needs one)"
+bad = [(int(step[i]), float(alpha[i])) for i in drops if not alpha[i] > 1e-3]
+assert not bad, "stall: the iterate after a stall drop repeats its input (step, alpha): %s" % bad
+PY
 echo "PASS: test_interface_compliance"
