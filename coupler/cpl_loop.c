@@ -877,7 +877,7 @@ static int report_iteration(run_ctx *c, const cpl_call *call, double residual, d
                                 .time_s = call->time_s, .dt_s = call->dt_s,
                                 .residual = residual, .alpha = alpha, .fem_solved = fem_solved,
                                 .attempt = c->attempt, .jacobian_miss = jacobian_miss,
-                                .compliance = call->compliance_in != NULL};
+                                .compliance = call->compliance_in && c->L->comp.wall_valid};
     cpl_total_force(c->L->f_dem, c->L->n3 / 3, rec.contact_force);
     if (c->obs->on_iteration(c->obs->ctx, &rec, c->err)) return fail(c, NULL, call, "history");
     return 0;
@@ -1588,9 +1588,11 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
             if (wall_moved && k > 1 && !converged &&
                 t->residual >= CPL_COMPLIANCE_STALL * residual_before) {
                 /* no progress with the structure's linearisation: the rest of this try
-                 * without it, the plain interface-Jacobian iteration. The map changes with
-                 * it, so the relaxation forgets its pair: eq. (34)'s secant across the
-                 * change gave α at alpha_min, and the next iterate repeated its input */
+                 * without it, the plain interface-Jacobian iteration. The relaxation
+                 * forgets the stalled pair: eq. (34)'s secant over it gave α at alpha_min,
+                 * and the next iterate repeated its input. (Forgetting the next pair too,
+                 * which spans the change of map, cost more rejected tries in the study:
+                 * docs/notes/interface_jacobian.md item 11.) */
                 compliance_on = 0;
                 L->timing.compliance_dropped++;
                 cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);

@@ -89,12 +89,13 @@ grep -q "^coupler: step control: no step rejected" "$NC_TMP/onset/coupler.log" \
 # The relaxation after the stall rule: cases/angled_net (a 97 kg rock sliding through a net of
 # 0.03 kg nodes) at restitution 0.1 and 5× its Δt with the compliance, its predictor, the
 # proximity and newton_estimate, 0.2 s. Its tries drop the compliance by the stall rule
-# several times. Aitken's secant across the drop compared two different maps: α came out at
-# alpha_min (1e-6) and the next iterate repeated its input. The relaxation now forgets its
-# pair there. Checked: /iterations/compliance marks the iterations with it (none in the run
-# without it); at least one stall drop (an iteration with the compliance, its residual at
-# least 0.9 of the last, followed in the same try by one without); at each, the α applied
-# is a step (above 1e-3), not alpha_min.
+# several times. Aitken's secant over the stalled pair gave α at alpha_min (1e-6), and the
+# next iterate repeated its input. The relaxation now forgets that pair. Checked:
+# /iterations/compliance marks the iterations whose DEM solve was against the compliance
+# (none in the run without it); at least one stall drop (an iteration with the compliance
+# after one in the same try, its residual at least 0.9 of the last, followed by one without:
+# exactly the stall rule's condition, as an iteration that converged ends its try); at each,
+# the α applied there is a step (above 1e-3), not alpha_min.
 [ -d cases/angled_net ] || { echo "SKIP: cases/angled_net missing"; exit 77; }
 run_case stall cases/angled_net --set coupler.interface_compliance=true \
   --set coupler.newton_estimate=0.1 --set coupler.work_tolerance=0 \
