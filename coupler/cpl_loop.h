@@ -269,7 +269,8 @@ typedef struct cpl_iteration_record {
                                        linearisation of this iteration along the step to the
                                        next input (NAN: not checked) */
     int compliance;                 /* 1: the DEM's solve that the iteration kept was against
-                                       the structure's compliance (interface_compliance) */
+                                       the structure's compliance (interface_compliance: it
+                                       answered where its wall ended) */
 } cpl_iteration_record;
 
 typedef enum {
