@@ -2,7 +2,8 @@
  *   DIR/coupling.h5   /steps/{time, dt, iterations, residual, converged, contact_force (×3),
  *                     in_contact, near_interface, min_gap, rejected}
  *                     /iterations/{step, iteration, residual, alpha, contact_force (×3),
- *                     fem_solved, attempt, dt, jacobian_miss (NAN where not checked)}
+ *                     fem_solved, attempt, dt, jacobian_miss (NAN where not checked),
+ *                     compliance (1: the DEM solved against the structure's compliance)}
  *                     /rejections/{step, attempt, time, dt, next_dt, iterations, residual,
  *                     reason}
  *                     /energy/{fem_kinetic, fem_elastic, fem_potential, dem_kinetic,
