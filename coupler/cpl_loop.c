@@ -19,17 +19,6 @@
                                  interface_compliance, structure_predictor,
                                  compliance_proximity */
 
-/* interface_compliance: a try goes on without the structure's compliance once an iteration
- * with it ends with a residual above this share of the last one. At a contact's onset the
- * step's force jumps within the structure's linearised yield; the DEM's search then cannot
- * close it and answers with the same contact-free step each iteration: the residual stays
- * constant until reject_slow gives the try up, and Δt is halved until the rock arrives within
- * a step. Over the 64 runs of scripts/study.py compliance the iteration counts are the same
- * with and without the rule (28 within the target, 3.15 per contact step counting every try),
- * but without it 82 tries are rejected instead of 38 and rest_position's peaks at 5× Δt move
- * 4-9 % from eq. (35)'s (docs/notes/interface_jacobian.md "The structure's compliance in the
- * DEM", item 6). */
-#define CPL_COMPLIANCE_STALL 0.9
 /* contact backtracking on a partial loss: the least share of the last iterate's resultant
  * that the nodes whose force ended must have carried (lost_contact) */
 #define CPL_LOST_SHARE 0.25
@@ -1443,11 +1432,10 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
     double rv_prev = NAN;                   /* r_u̇ of the last iteration when this
                                                iteration's input is that iteration's FEM
                                                answer unchanged (α = 1), else NAN */
-    int compliance_on = L->use_compliance;  /* off for the rest of the try once an iteration
-                                               with it made no progress or ended a contact
-                                               the structure still carried */
+    int compliance_on = L->use_compliance;  /* off for the rest of the try once the DEM's
+                                               search with it ended a contact the structure
+                                               still carried */
     L->timing.compliance_tries += compliance_on;
-    double residual_before = INFINITY;
     int compliance_asked = 0;               /* the FEM gave its compliance in this try */
     const int check_due = L->use_jacobian && !force_mode && L->s.jacobian_check_interval > 0 &&
                           call->step % L->s.jacobian_check_interval == 0;
@@ -1585,19 +1573,6 @@ static int run_step(run_ctx *c, cpl_call *call, try_result *t)
                                       &t->by_work_test, &t->by_estimate,
                                       &ratios[k % (CPL_SLOW_WINDOW + 1)], &rv);
                                                                /* eqs. (28), (29), (35) */
-            if (wall_moved && k > 1 && !converged &&
-                t->residual >= CPL_COMPLIANCE_STALL * residual_before) {
-                /* no progress with the structure's linearisation: the rest of this try
-                 * without it, the plain interface-Jacobian iteration. The relaxation
-                 * forgets the stalled pair: eq. (34)'s secant over it gave α at alpha_min,
-                 * and the next iterate repeated its input. (Forgetting the next pair too,
-                 * which spans the change of map, cost more rejected tries in the study:
-                 * docs/notes/interface_jacobian.md item 11.) */
-                compliance_on = 0;
-                L->timing.compliance_dropped++;
-                cpl_relax_forget(L->relax, CPL_RELAX_FORGET_PAIR);
-            }
-            residual_before = t->residual;
             slow = strong && !converged && too_slow(L, ratios, k, call->dt_s);
             if (!strong || converged || k == max_it || slow) {
                 if (report_iteration(c, call, t->residual, NAN, solved, NAN)) return -1;

@@ -351,8 +351,8 @@ typedef struct cpl_timing {
                                        linearisation */
     long compliance_tries;          /* tries with the structure's compliance at the start
                                        (interface_compliance) ... */
-    long compliance_dropped;        /* ... that went on without it after an iteration with it
-                                       made no progress or ended a contact the structure's
+    long compliance_dropped;        /* ... that went on without it after the DEM's search
+                                       with it ended a contact the structure's
                                        linearisation still carried */
     double min_dt_s;                /* smallest Δt of an accepted step, not counting a last
                                        step shortened to end on end_time (INFINITY: none) */

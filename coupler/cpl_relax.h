@@ -88,9 +88,8 @@ typedef enum {
     /* the last pair was not an evaluation of the fixed-point map (algorithm 3's first
      * iteration starts from the DEM at the predicted position, not from the relaxed force),
      * the map changed (contact backtracking moved the iterate; the DEM's search ended every
-     * contact and the try goes on without the structure's compliance), or the pair stalled
-     * (the stall rule: eq. (34) over it gave α at alpha_min): no secant information from it
-     * (Aitken's r^{k-1}, IQN's next column) */
+     * contact and the try goes on without the structure's compliance): no secant
+     * information from it (Aitken's r^{k-1}, IQN's next column) */
     CPL_RELAX_FORGET_PAIR = 0,
     /* also everything learnt in earlier steps (IQN columns, Aitken's last α): after a step
      * that did not converge, whose information would mislead the next steps */

@@ -555,8 +555,8 @@ static void print_timing(app *a)
                 "that lost a contact\n", t->backtracks);
     if (cpl_loop_uses_compliance(a->loop))
         fprintf(o, "coupler: interface compliance: the DEM solved with the structure's "
-                "compliance; %ld of %ld tries went on without it after an iteration with it "
-                "made no progress or ended a contact the structure still carried\n",
+                "compliance; %ld of %ld tries went on without it after its search ended a "
+                "contact the structure still carried\n",
                 t->compliance_dropped, t->compliance_tries);
     if (t->structure_predictions > 0)
         fprintf(o, "coupler: structure predictor: %ld of the %ld FEM solves were the structure's "

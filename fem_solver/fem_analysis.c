@@ -995,16 +995,24 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     double dfull = INFINITY;   /* max-norm of the last full Newton increment */
     double coord_max_m = 0.0;  /* largest nodal coordinate: the scale of its rounding */
     for (int d = 0; d < s->ndof; d++) coord_max_m = fmax(coord_max_m, fabs(m->X[d] + s->cur.u[d]));
+    /* the residual's rounding under the interface linearisation: a few ulps of a position
+     * times its stiffest entry (a dashpot of eq. (A.5) at a graze: 1e13-1e16 N/m, a residual
+     * of 1e-3-1 N that no increment can change) */
+    const double lin_floor_n = s->lin.active
+        ? FEM_ROUNDOFF_ULPS * DBL_EPSILON * coord_max_m *
+          fem_ijac_largest_entry(&s->lin, sw.l_k, sw.l_c)
+        : 0.0;
     for (it = 1; it <= set->max_iterations + 1 && isfinite(rnorm); it++) {
         /* At the rounding floor: a full Newton increment that cannot change the nodal
          * positions any more (a few ulps of the largest coordinate) leaves a residual that
          * no iteration can reduce. With a stiff interface linearisation or a large inertia
          * term that floor can lie above the tolerance (the tolerance's force scale counts
          * the loads, the inertia and the linearised forces, not the products K u that
-         * cancel in them); within FEM_ROUNDOFF_TOL_FACTOR of the tolerance such a state is
-         * converged as far as double precision allows, and counted. */
+         * cancel in them); within FEM_ROUNDOFF_TOL_FACTOR of the tolerance, or within the
+         * rounding of the interface linearisation's stiffest entry (lin_floor_n), such a
+         * state is converged as far as double precision allows, and counted. */
         const int at_floor = it > 1 && dfull <= FEM_ROUNDOFF_ULPS * DBL_EPSILON * coord_max_m &&
-                             rnorm <= FEM_ROUNDOFF_TOL_FACTOR * tol;
+                             rnorm <= fmax(FEM_ROUNDOFF_TOL_FACTOR * tol, lin_floor_n);
         if ((rnorm <= tol && (it == 1 || dunorm <= set->displacement_tol_m)) || at_floor) {
             s->stats.iterations = it - 1;
             s->stats.residual_norm = rnorm;

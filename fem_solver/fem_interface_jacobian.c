@@ -192,6 +192,16 @@ void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x)
     }
 }
 
+double fem_ijac_largest_entry(const fem_ijac *j, double c_k, double c_c)
+{
+    double largest = 0.0;
+    const int n = 9 * j->n_blocks;
+    for (int e = 0; e < n; e++)
+        if (j->row_eq[e] >= 0 && j->col_eq[e] >= 0)
+            largest = fmax(largest, fabs(c_k * j->K[e] + c_c * j->C[e]));
+    return largest;
+}
+
 void fem_ijac_skew_apply(const fem_ijac *j, double c_k, double c_c, const double *x, double *y)
 {
     if (!j->has_skew) return;

@@ -23,6 +23,7 @@ import signal
 import statistics
 import subprocess
 import sys
+import textwrap
 import time
 
 import matplotlib
@@ -865,6 +866,11 @@ def jacobian_status(r):
     return str(r["rc"])
 
 
+def run_reliable(r):
+    """Exit 0, no step accepted unconverged, the energy guard silent."""
+    return jacobian_status(r) == "0" and r["unconverged"] == 0 and not r["energy_fired"]
+
+
 def meets_iterations(r):
     """The iteration target, counted over every try of a contact step (a rejected try's
     iterations are work the step cost)."""
@@ -1063,26 +1069,32 @@ def jacobian_tables(out, rows, refs, speed_results):
     print("  wrote", os.path.join(out, "jacobian_table.md"))
 
 
-def jacobian_figures(out, rows, refs):
-    """Targets map: one panel per variant, a cell per case x (COR, Δt) coloured by what it meets,
-    with the average / max iterations per contact step written in."""
+def targets_map(path, variants, rows, refs, title):
+    """One panel per variant, a cell per case x (COR, Δt) coloured by the targets it meets,
+    with the average / max iterations per contact step written in. refs: the fine-step
+    references of the peak at the case's Δt, or None where the peak is not a target of the map."""
     cols = [(cor, f) for f in (1, 5) for cor in JACOBIAN_CORS]
-    fig, axes = plt.subplots(1, len(JACOBIAN_VARIANTS), figsize=(18, 5.4), sharey=True)
-    colours = {"all": "#4caf50", "noref": "#c5e1a5", "reliable": "#ffd54f", "its": "#90caf9", "none": "#ef9a9a", "missing": "#eeeeee"}
-    for ax, (name, title, _) in zip(axes, JACOBIAN_VARIANTS):
+    width = max(3.0 * len(variants), 10.0)
+    fig, axes = plt.subplots(1, len(variants), figsize=(width, 5.4), sharey=True)
+    colours = {"all": "#4caf50", "noref": "#c5e1a5", "reliable": "#ffd54f", "its": "#90caf9",
+               "none": "#ef9a9a", "missing": "#eeeeee"}
+    for ax, (name, label, _) in zip(np.atleast_1d(axes), variants):
         for i, case in enumerate(c[0] for c in JACOBIAN_CASES):
             for j, (cor, factor) in enumerate(cols):
                 r = rows.get((case, "%s_cor%s_dt%dx" % (name, cor, factor)))
                 if r is None or "error" in r:
                     colour, text = colours["missing"], "not run" if r is None else "-"
                 else:
-                    ref = refs.get((case, cor)) if factor == 1 else None
-                    its, reliable, peak = jacobian_meets(r, ref["peak"] if ref else None)
+                    if refs is None:
+                        its, reliable, peak = meets_iterations(r), run_reliable(r), True
+                    else:
+                        ref = refs.get((case, cor)) if factor == 1 else None
+                        its, reliable, peak = jacobian_meets(r, ref["peak"] if ref else None)
                     kind = ("all" if its and reliable and (peak is True or factor != 1) else
                             "noref" if its and reliable and peak is None else
                             "reliable" if reliable else "its" if its else "none")
                     colour = colours[kind]
-                    text = "%s\n%d" % ("%.1f" % r["all_avg"] if np.isfinite(r["all_avg"]) else "-", r["all_max"])
+                    text = "%s\n%d" % ("%.2f" % r["all_avg"] if np.isfinite(r["all_avg"]) else "-", r["all_max"])
                     if r["timed_out"]:
                         text += "\ncap"
                     elif r["rc"] not in (0, 3):
@@ -1097,17 +1109,32 @@ def jacobian_figures(out, rows, refs):
         ax.set_xticklabels(["%s\n%s" % (cor, "Δt" if f == 1 else "5Δt") for cor, f in cols], fontsize=7)
         ax.set_yticks(np.arange(len(JACOBIAN_CASES)) + 0.5)
         ax.set_yticklabels([c[0] for c in JACOBIAN_CASES], fontsize=8)
-        ax.set_title(title, fontsize=10)
+        ax.set_title(textwrap.fill(label, 34), fontsize=9)
         ax.set_xlabel("rock–net COR, coupling step")
-    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=colours[k]) for k in ("all", "noref", "reliable", "its", "none", "missing")]
-    fig.legend(handles, ["all targets met", "iterations and reliability met, no reference for the peak", "reliable, iterations above target", "iterations met, not reliable",
-                         "neither", "not run (5Δt dropped: time budget)"], loc="lower center", ncol=6, fontsize=8)
-    fig.suptitle("interface iterations per contact step, every try counted (average / max; u: unconverged steps accepted, cap: "
-                 "stopped at the wall-time cap) and the targets (≤ 3 / ≤ 10, reliable, peak within 3 %)", fontsize=10)
+    if refs is None:
+        kinds = ("all", "reliable", "its", "none", "missing")
+        names = ["iterations met, reliable", "reliable, iterations above target",
+                 "iterations met, not reliable", "neither", "not run"]
+    else:
+        kinds = ("all", "noref", "reliable", "its", "none", "missing")
+        names = ["all targets met", "iterations and reliability met, no reference for the peak",
+                 "reliable, iterations above target", "iterations met, not reliable", "neither",
+                 "not run (5Δt dropped: time budget)"]
+    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=colours[k]) for k in kinds]
+    fig.legend(handles, names, loc="lower center", ncol=len(kinds), fontsize=8)
+    fig.suptitle(textwrap.fill(title, int(12 * width)), fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 0.95))
-    fig.savefig(os.path.join(out, "jacobian_targets.png"), dpi=120)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
-    print("  wrote", os.path.join(out, "jacobian_targets.png"))
+    print("  wrote", path)
+
+
+def jacobian_figures(out, rows, refs):
+    """The targets map of the Jacobian study, and the iterations over time of three cases."""
+    targets_map(os.path.join(out, "jacobian_targets.png"), JACOBIAN_VARIANTS, rows, refs,
+                "interface iterations per contact step, every try counted (average / max; u: unconverged "
+                "steps accepted, cap: stopped at the wall-time cap) and the targets (≤ 3 / ≤ 10, reliable, "
+                "peak within 3 %)")
     # iterations over time at the case's Δt, COR 0.3, for the two light cases and one net case
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ax, case in zip(axes, ("rest_position", "cable_impact", "net_sieve")):
@@ -1144,7 +1171,8 @@ def interface_mismatch_pct(run_dir):
 def compare_variants(out, jobs, end_time, variants, table_name):
     """Jacobian + Aitken as in the Jacobian study, each of `variants` (name, label, --set list)
     on top, 8 cases x COR x dt; a table of the iteration counts, the interface mismatch and
-    each variant's peak against the first's, written to out/table_name."""
+    each variant's peak against the first's, written to out/table_name, and the targets map
+    to out/NAME_targets.png (table_name NAME_table.md or NAME.md)."""
     rows = {}
     for case, end, node, comp, cor_keys, cap, five, extra in JACOBIAN_CASES:
         end = end_time or end
@@ -1174,7 +1202,7 @@ def compare_variants(out, jobs, end_time, variants, table_name):
                         continue
                     ok = meets_iterations(r)
                     meets[name] += ok
-                    reliable[name] += jacobian_status(r) == "0" and r["unconverged"] == 0 and not r["energy_fired"]
+                    reliable[name] += run_reliable(r)
                     averages[name].append(r["it_avg"])
                     all_averages[name].append(r["all_avg"])
                     cell = "%s %.2f/%d r%d%s mismatch %+.2f %%" % (jacobian_status(r), r["it_avg"], r["it_max"],
@@ -1205,6 +1233,12 @@ def compare_variants(out, jobs, end_time, variants, table_name):
     with open(os.path.join(out, table_name), "w") as f:
         f.write(text)
     print("  wrote", os.path.join(out, table_name))
+    stem = os.path.splitext(table_name)[0]
+    stem = stem[:-len("_table")] if stem.endswith("_table") else stem
+    targets_map(os.path.join(out, stem + "_targets.png"), variants, rows, None,
+                "interface iterations per contact step, every try counted (average / max; u: unconverged "
+                "steps accepted, cap: stopped at the wall-time cap) against the targets ≤ %g / ≤ %d, "
+                "and reliability" % (TARGET_AVG, TARGET_MAX))
 
 
 def study_work(out, jobs, end_time):

@@ -14,11 +14,13 @@
 # search with the structure's compliance found no contact consistent there, and once the
 # compliance was dropped, halving back to the first point with contact crept towards the
 # converged force from the deep side (−28.8 kN, −16.4 kN, −6.4 kN, … −127 N): 17 and 13
-# iterations. Now such a contact-free answer ends the compliance for the try at once, and
-# contact backtracking searches along the step for the contact's end (cpl_contact_search.c).
-# Checks (measured: at most 5 iterations in a step, counting every try; 17 before):
-#  - reliable, exit 0; contact backtracking made DEM solves; at least one try went on without
-#    the compliance;
+# iterations. Such a contact-free answer then ended the compliance for the try, and contact
+# backtracking searched along the step for the contact's end (cpl_contact_search.c): at most
+# 5 iterations in a step, 93 in all, with two tries gone on without the compliance and 37
+# backtracking solves. With up to 60 evaluations instead of 12 the DEM's search finds the
+# contact's end itself (dem_compliance.h): 88 iterations, at most 3 in a step, no try without
+# the compliance, no backtracking. Checks:
+#  - reliable, exit 0; no try went on without the compliance;
 #  - no step needs more than 10 interface iterations, its rejected tries counted too;
 #  - the DEM's log notes, once, that its dashpot of eq. (A.5) makes the Jacobian unbounded
 #    where a contact begins or ends (dem_solver/README.md "Contact model"), naming the
@@ -41,7 +43,11 @@
 # steps accepted (opted in): the steps accepted unconverged leave the run's share far above
 # the limit, and a check against the run's share alone then failed every later step too (112
 # of 200 unconverged); a step within the limit of its own force still converges (measured 25
-# of 200 unconverged). Checks: at most 50 unconverged steps; the opt-ins named in the verdict.
+# of 200 unconverged; 3 now). At its graze in step 135 the DEM's K reaches 1e13 N/m or more,
+# and the FEM's Newton sits at its rounding floor, 1.6e-3 N against a tolerance of 2e-8 N;
+# with no smaller step allowed, the run stopped there until the floor counted the
+# linearisation's stiffest entry (fem_solver/fem_analysis.c). Checks: it runs to its end; at
+# most 50 unconverged steps; the opt-ins named in the verdict.
 . tests/e2e_lib.sh
 for c in cable_impact angled_net; do
   [ -d cases/$c ] || { echo "SKIP: cases/$c missing"; exit 77; }
@@ -77,10 +83,8 @@ grep -q "^coupler: results are NOT reliable: [0-9]* of [0-9]* steps were accepte
   "$NC_TMP/capped/coupler.log" || fail "capped: the verdict does not say the steps were accepted unconverged"
 [ "$(grep -c '^dem_solver: note: dem.json: damping "fit" on net contacts (material "rock", restitution 0.3): ' \
      "$NC_TMP/leaves/dem.log")" = 1 ] || fail "leaves: the DEM did not note its dashpot once"
-grep -Eq "^coupler: contact backtracking: [1-9][0-9]* extra DEM solves" "$NC_TMP/leaves/coupler.log" \
-  || fail "leaves: no contact backtracking"
-grep -Eq "^coupler: interface compliance: .*; [1-9][0-9]* of [0-9]+ tries went on without it" \
-  "$NC_TMP/leaves/coupler.log" || fail "leaves: no try went on without the compliance"
+grep -Eq "^coupler: interface compliance: .*; 0 of [0-9]+ tries went on without it" \
+  "$NC_TMP/leaves/coupler.log" || fail "leaves: a try went on without the compliance: $(grep "interface compliance:" "$NC_TMP/leaves/coupler.log")"
 
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np

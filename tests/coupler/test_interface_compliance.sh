@@ -20,14 +20,9 @@
 # And a contact onset at a large step: cases/rest_position (a 253 kg rock on a light cable) at
 # rock–cable restitution 0.1 and 5× its Δt (0.05 s), 1.5 s. There the DEM's search starts
 # where the rock does not reach the wall, and the full Newton step puts it millimetres deep.
-# A search that only halved back cycled between the two, and without the coupler's rule below
-# the run accepted a step unconverged at dt_min (exit 3). The search now brackets the onset
-# (dem_solver/dem_compliance.c) but cannot close it: the step's force jumps there within the
-# structure's linearised yield, and iterating with the compliance got the same contact-free
-# answer, the residual constant, until reject_slow gave the try up, four times down to Δt/16.
-# A try goes on without the compliance once an iteration with it made no progress
-# (CPL_COMPLIANCE_STALL, coupler/cpl_loop.c): reliable, exit 0, no step rejected, at least
-# one try counted as gone on without it.
+# A search that only halved back cycled between the two; the search now brackets the onset
+# and closes it (dem_solver/dem_compliance.c). Checked: reliable, exit 0, no step rejected,
+# and no try went on without the compliance (with 12 evaluations per search, one did).
 . tests/e2e_lib.sh
 [ -d cases/steel_net ] || { echo "SKIP: cases/steel_net missing"; exit 77; }
 common=(--set coupler.end_time=0.15 --set fem.analysis.end_time_s=0.15)
@@ -80,46 +75,49 @@ run_case onset cases/rest_position --set coupler.interface_compliance=true \
   --set fem.analysis.end_time_s=1.5 --set dem.materials.0.restitution=0.1
 grep -v '^$' "$NC_TMP/onset/coupler.log" | tail -n 1 | grep -q "^coupler: results are reliable" \
   || fail "onset: not reliable: $(tail -n 1 "$NC_TMP/onset/coupler.log")"
-grep -Eq "^coupler: interface compliance: .*; [1-9][0-9]* of [0-9]+ tries went on without it" \
+grep -Eq "^coupler: interface compliance: .*; 0 of [0-9]+ tries went on without it" \
   "$NC_TMP/onset/coupler.log" \
-  || fail "onset: no try went on without the compliance: $(grep "interface compliance:" "$NC_TMP/onset/coupler.log")"
+  || fail "onset: a try went on without the compliance: $(grep "interface compliance:" "$NC_TMP/onset/coupler.log")"
 grep -q "^coupler: step control: no step rejected" "$NC_TMP/onset/coupler.log" \
   || fail "onset: tries rejected: $(grep "step control:" "$NC_TMP/onset/coupler.log")"
 
-# The relaxation after the stall rule: cases/angled_net (a 97 kg rock sliding through a net of
-# 0.03 kg nodes) at restitution 0.1 and 5× its Δt with the compliance, its predictor, the
-# proximity and newton_estimate, 0.2 s. Its tries drop the compliance by the stall rule
-# several times. Aitken's secant over the stalled pair gave α at alpha_min (1e-6), and the
-# next iterate repeated its input. The relaxation now forgets that pair. Checked:
-# /iterations/compliance marks the iterations whose DEM solve was against the compliance
-# (none in the run without it); at least one stall drop (an iteration with the compliance
-# after one in the same try, its residual at least 0.9 of the last, followed by one without:
-# exactly the stall rule's condition, as an iteration that converged ends its try); at each,
-# the α applied there is a step (above 1e-3), not alpha_min.
+# A rock sliding through a net, its contacts changing within the step: cases/angled_net (a
+# 97 kg rock through a net of 0.03 kg nodes) at restitution 0.1 and 5× its Δt with the
+# compliance, its predictor, the proximity and newton_estimate, 0.2 s, one BLAS thread as
+# scripts/study.py runs it: the study's hardest run. The DEM's searches there take up to 50
+# evaluations. With at most 12 a quarter stopped unsolved, their tries stalled, and the run
+# took 3.9 iterations per contact step counting every try, 14 at most, with a rejected try
+# (with 30: 2.67 and 11). Checked, counted as the study counts them (measured: 2.28 and 3
+# over 46 contact steps): reliable, no step rejected, no try without the compliance, at most
+# 3 per contact step on average and 10 in a step; /iterations/compliance marks the
+# iterations whose DEM solve was against the compliance (none in the run without it).
 [ -d cases/angled_net ] || { echo "SKIP: cases/angled_net missing"; exit 77; }
-run_case stall cases/angled_net --set coupler.interface_compliance=true \
+OPENBLAS_NUM_THREADS=1 run_case sliding cases/angled_net --set coupler.interface_compliance=true \
   --set coupler.newton_estimate=0.1 --set coupler.work_tolerance=0 \
-  --set coupler.dt=1e-3 --set fem.analysis.dt_s=1e-3 --set coupler.end_time=0.2 \
-  --set fem.analysis.end_time_s=0.2 --set dem.materials.0.restitution=0.1 \
+  --set coupler.dt=1e-3 --set fem.analysis.dt_s=1e-3 --set dem.materials.0.restitution=0.1 \
   --set dem.net_wall.restitution=0.1
-expect_reliable stall
+expect_reliable sliding
+grep -q "^coupler: step control: no step rejected" "$NC_TMP/sliding/coupler.log" \
+  || fail "sliding: tries rejected: $(grep "step control:" "$NC_TMP/sliding/coupler.log")"
+grep -Eq "^coupler: interface compliance: .*; 0 of [0-9]+ tries went on without it" \
+  "$NC_TMP/sliding/coupler.log" \
+  || fail "sliding: a try went on without the compliance: $(grep "interface compliance:" "$NC_TMP/sliding/coupler.log")"
 "$PY" - "$NC_TMP" <<'PY' || exit 1
 import sys, h5py, numpy as np
+sys.path.insert(0, "scripts")
+import study
 tmp = sys.argv[1]
 with h5py.File(tmp + "/plain/coupling.h5", "r") as f:
     assert not np.array(f["/iterations/compliance"]).any(), "plain: an iteration marked with the compliance"
-with h5py.File(tmp + "/stall/coupling.h5", "r") as f:
-    it = f["/iterations"]
-    step, attempt, res, alpha, comp = (np.array(it[k]).ravel() for k in
-                                       ("step", "attempt", "residual", "alpha", "compliance"))
-assert comp.any(), "stall: no iteration marked with the compliance"
-drops = [i for i in range(1, len(step) - 1)
-         if step[i - 1] == step[i] == step[i + 1] and attempt[i - 1] == attempt[i] == attempt[i + 1]
-         and comp[i] == 1 and comp[i + 1] == 0 and res[i] >= 0.9 * res[i - 1]]
-print("stall: %d iterations, %d with the compliance, %d stall drops, alpha there %s"
-      % (len(step), comp.sum(), len(drops), [float("%.3g" % alpha[i]) for i in drops]))
-assert drops, "stall: no try dropped the compliance by the stall rule (the check needs one)"
-bad = [(int(step[i]), float(alpha[i])) for i in drops if not alpha[i] > 1e-3]
-assert not bad, "stall: the iterate after a stall drop repeats its input (step, alpha): %s" % bad
+with h5py.File(tmp + "/sliding/coupling.h5", "r") as f:
+    comp = np.array(f["/iterations/compliance"]).ravel()
+r = study.jacobian_metrics(tmp + "/sliding", 0.0, 220, 2)
+print("sliding: %d contact steps, %.2f iterations per contact step counting every try, at most %d; "
+      "%d of %d iterations with the compliance" % (r["contact_steps"], r["all_avg"], r["all_max"],
+                                                   comp.sum(), len(comp)))
+assert comp.any(), "sliding: no iteration marked with the compliance"
+assert r["contact_steps"] >= 30, "sliding: %d contact steps (46 measured), the rock did not slide through" % r["contact_steps"]
+assert study.meets_iterations(r), "sliding: %.2f per contact step, at most %d (target <= %g and <= %d)" \
+    % (r["all_avg"], r["all_max"], study.TARGET_AVG, study.TARGET_MAX)
 PY
 echo "PASS: test_interface_compliance"

@@ -6,8 +6,8 @@
  * consistent tangent needs no more iterations than without the linearisation (+1) and the
  * solution satisfies F at the final iterate; K = C = 0 is bit-identical to the plain
  * coupling force; the step tangent with edge blocks (a, b) against finite differences of
- * the residual; save/restore bit-identity; an unsymmetric K; statics; rejection of blocks
- * the fixed pattern cannot hold. */
+ * the residual; save/restore bit-identity; an unsymmetric K; statics; the rounding floor
+ * under a stiff K; rejection of blocks the fixed pattern cannot hold. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -722,6 +722,46 @@ static void test_compliance(void **state)
 /* ---- statics and rejected blocks ----------------------------------------------------- */
 
 /* statics: F = F^k - K (u - u^k); the solution is the plain static solution under F(u) */
+/* The Newton iteration's rounding floor under a stiff linearisation: eq. (A.5)'s dashpot at
+ * a graze gives K of 1e13-1e16 N/m (docs/notes/interface_jacobian.md item 10). The line
+ * model's node starts 0.3 m down, where its two half-metre elements pull with about 17 kN
+ * each, held there by a contact of 1e15 N/m across and along: one ulp of its displacement
+ * (5.6e-17 m) moves K (u - u^k) by 0.06 N, far above the tolerance of 1e-11 N and its
+ * factor 1e3, so no increment reaches either, and Newton failed. The floor now also counts
+ * the linearisation's stiffest entry: each step converges at the floor, counted, with the
+ * node held at u^k to within its other forces over K (the cable's pull and the node's
+ * inertia, below 1e5 N: 1e-10 m). */
+static void test_stiff_linearisation_floor(void **state)
+{
+    (void)state;
+    static const double held[3] = {0.01, 0.02, -0.3};
+    fem_model m;
+    line_model(&m, FEM_NEWMARK, 0);
+    fem_analysis s;
+    nc_error err;
+    assert_int_equal(fem_analysis_init(&s, &m, &err), 0);
+    double uref[9] = {0}, vref[9] = {0}, K[9] = {0}, C[9] = {0};
+    for (int c = 0; c < 3; c++) {
+        s.cur.u[3 + c] = uref[3 + c] = held[c];
+        K[4 * c] = 1e15;
+    }
+    const int nodes[2] = {1, 1};
+    assert_int_equal(fem_analysis_set_linearisation(&s, uref, vref, 1, nodes, K, C, &err), 0);
+    assert_int_equal(fem_analysis_initial_acceleration(&s, &err), 0);
+    for (int n = 0; n < 3; n++) {
+        int rc = fem_analysis_step(&s, LN_DT, &err);
+        print_message("step %d: rc %d, residual %.3g N, %ld solves at the floor, u - u^k %.3g %.3g %.3g m%s%s\n",
+                      n, rc, s.stats.residual_norm, s.stats.roundoff_converged,
+                      s.cur.u[3] - held[0], s.cur.u[4] - held[1], s.cur.u[5] - held[2],
+                      rc ? ": " : "", rc ? err.message : "");
+        assert_int_equal(rc, 0);
+        for (int c = 0; c < 3; c++) assert_near(s.cur.u[3 + c], held[c], 1e-10);
+    }
+    assert_true(s.stats.roundoff_converged > 0);
+    fem_analysis_free(&s);
+    fem_model_free(&m);
+}
+
 static void test_static(void **state)
 {
     (void)state;
@@ -836,6 +876,7 @@ int main(void)
         cmocka_unit_test(test_unsymmetric),
         cmocka_unit_test(test_compliance),
         cmocka_unit_test(test_static),
+        cmocka_unit_test(test_stiff_linearisation_floor),
         cmocka_unit_test(test_grows_pattern_for_unconnected_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
