@@ -105,7 +105,8 @@ static double max_body_speed(const dem_sim *s)
 /* The Hertz law's dashpot of eq. (A.5), 2 ζ sqrt(m* kn') δ̇ ("fit" or "a7"), grows like
  * δ^(1/4) from the first touch: its dF/dδ, and with it the Jacobian the coupler asks for, is
  * unbounded there (1.2e16 N/m measured on cases/cable_impact at restitution 0.1 and 5x its
- * dt, where the structure's Newton then stalled at its rounding floor). Said once, in the
+ * dt, where the structure's Newton then stalled at its rounding floor, which the FEM now
+ * takes from the linearisation). Said once, in the
  * log. Returns the material of the particles whose net contacts have the largest damping
  * ratio (the pair's, as dem_net_wall_pair takes it), or -1 when none is damped. */
 static int damped_net_material(const dem_sim *s)

@@ -782,9 +782,11 @@ static int linear_solve(fem_analysis *s, int reuse, nc_error *err)
 #define FEM_PCG_TOL 1e-4    /* forcing term of the inexact Newton step */
 #define FEM_PCG_MAX_IT 25
 /* rounding floor of the Newton iteration (see newton()): a full increment below this many
- * ulps of the largest coordinate, a residual within this factor of the tolerance */
+ * ulps of the largest coordinate, a residual within this factor of the tolerance or within
+ * this many ulps of the displacements in the interface linearisation's K (u - u^k) */
 #define FEM_ROUNDOFF_ULPS 64.0
 #define FEM_ROUNDOFF_TOL_FACTOR 1e3
+#define FEM_ROUNDOFF_LIN_ULPS 8.0
 #define FEM_PCG_CHEAP 6     /* more CG iterations than this: refactorise next time (measured
                                on the 81x81 benchmark: 6 balances CG cost and factorisations) */
 
@@ -995,24 +997,22 @@ static int newton(fem_analysis *s, const newton_setup *ns, nc_error *err)
     double dfull = INFINITY;   /* max-norm of the last full Newton increment */
     double coord_max_m = 0.0;  /* largest nodal coordinate: the scale of its rounding */
     for (int d = 0; d < s->ndof; d++) coord_max_m = fmax(coord_max_m, fabs(m->X[d] + s->cur.u[d]));
-    /* the residual's rounding under the interface linearisation: a few ulps of a position
-     * times its stiffest entry (a dashpot of eq. (A.5) at a graze: 1e13-1e16 N/m, a residual
-     * of 1e-3-1 N that no increment can change) */
-    const double lin_floor_n = s->lin.active
-        ? FEM_ROUNDOFF_ULPS * DBL_EPSILON * coord_max_m *
-          fem_ijac_largest_entry(&s->lin, sw.l_k, sw.l_c)
-        : 0.0;
     for (it = 1; it <= set->max_iterations + 1 && isfinite(rnorm); it++) {
         /* At the rounding floor: a full Newton increment that cannot change the nodal
          * positions any more (a few ulps of the largest coordinate) leaves a residual that
          * no iteration can reduce. With a stiff interface linearisation or a large inertia
          * term that floor can lie above the tolerance (the tolerance's force scale counts
          * the loads, the inertia and the linearised forces, not the products K u that
-         * cancel in them); within FEM_ROUNDOFF_TOL_FACTOR of the tolerance, or within the
-         * rounding of the interface linearisation's stiffest entry (lin_floor_n), such a
-         * state is converged as far as double precision allows, and counted. */
-        const int at_floor = it > 1 && dfull <= FEM_ROUNDOFF_ULPS * DBL_EPSILON * coord_max_m &&
-                             rnorm <= fmax(FEM_ROUNDOFF_TOL_FACTOR * tol, lin_floor_n);
+         * cancel in them); within FEM_ROUNDOFF_TOL_FACTOR of the tolerance, or within
+         * FEM_ROUNDOFF_LIN_ULPS ulps of the displacements in the interface linearisation's
+         * K (u - u^k) (a dashpot of eq. (A.5) at a graze: K of 1e13-1e16 N/m, a residual of
+         * 1e-3-1 N), such a state is converged as far as double precision allows, and
+         * counted. */
+        const int small_step = it > 1 && dfull <= FEM_ROUNDOFF_ULPS * DBL_EPSILON * coord_max_m;
+        const int at_floor = small_step &&
+            (rnorm <= FEM_ROUNDOFF_TOL_FACTOR * tol ||
+             (s->lin.active && rnorm <= FEM_ROUNDOFF_LIN_ULPS *
+                                        fem_ijac_rounding_n(&s->lin, sw.l_k, sw.l_c, s->cur.u)));
         if ((rnorm <= tol && (it == 1 || dunorm <= set->displacement_tol_m)) || at_floor) {
             s->stats.iterations = it - 1;
             s->stats.residual_norm = rnorm;

@@ -58,7 +58,8 @@ typedef struct fem_stats {
     long ldlt_switch_step;     /* step at which an indefinite matrix turned the "auto"
                                   factorisation to LDL^T (-1: never) */
     long roundoff_converged;   /* solves ended at the rounding floor above the tolerance
-                                  (within FEM_ROUNDOFF_TOL_FACTOR of it) */
+                                  (within FEM_ROUNDOFF_TOL_FACTOR of it, or within the
+                                  rounding of the interface linearisation's K (u - u^k)) */
     double assembly_s, factor_s, solve_s;  /* accumulated wall time */
 } fem_stats;
 

@@ -2,6 +2,7 @@
  * linearisation (see fem_interface_jacobian.h). */
 #include "fem_interface_jacobian.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -192,14 +193,23 @@ void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x)
     }
 }
 
-double fem_ijac_largest_entry(const fem_ijac *j, double c_k, double c_c)
+double fem_ijac_rounding_n(const fem_ijac *j, double c_k, double c_c, const double *u)
 {
-    double largest = 0.0;
-    const int n = 9 * j->n_blocks;
-    for (int e = 0; e < n; e++)
-        if (j->row_eq[e] >= 0 && j->col_eq[e] >= 0)
-            largest = fmax(largest, fabs(c_k * j->K[e] + c_c * j->C[e]));
-    return largest;
+    double sum2 = 0.0;
+    for (int b = 0; b < j->n_blocks; b++) {
+        const int mj = 3 * j->nodes[2 * b + 1];
+        for (int r = 0; r < 3; r++) {
+            if (j->row_eq[9 * b + 3 * r] < 0) continue;   /* a supported row */
+            double row = 0.0;
+            for (int c = 0; c < 3; c++) {
+                const int e = 9 * b + 3 * r + c;
+                row += fabs(c_k * j->K[e] + c_c * j->C[e]) *
+                       (fabs(u[mj + c]) + fabs(j->u_ref[mj + c]));
+            }
+            sum2 += row * row;
+        }
+    }
+    return DBL_EPSILON * sqrt(sum2);
 }
 
 void fem_ijac_skew_apply(const fem_ijac *j, double c_k, double c_c, const double *x, double *y)

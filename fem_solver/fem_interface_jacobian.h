@@ -64,9 +64,10 @@ void fem_ijac_scatter(const fem_ijac *j, double c_k, double c_c, double *x);
 /* y[eq] += skew(c_k K + c_c C) x[eq] on the free equations: the part of the tangent that
  * fem_ijac_scatter leaves out (nothing when has_skew is 0). */
 void fem_ijac_skew_apply(const fem_ijac *j, double c_k, double c_c, const double *x, double *y);
-/* The largest |c_k K + c_c C| entry on a free equation (N/m): the tangent stiffness at which
- * one ulp of a displacement moves the residual most. */
-double fem_ijac_largest_entry(const fem_ijac *j, double c_k, double c_c);
+/* How far one ulp of each displacement in K (u - u^k) moves the free equations' residual
+ * (N, 2-norm): |c_k K + c_c C| (|u| + |u^k|) eps, block row by block row, the size below which no
+ * increment can bring the linearised force (a contact's dashpot at a graze: 1e13-1e16 N/m). */
+double fem_ijac_rounding_n(const fem_ijac *j, double c_k, double c_c, const double *u);
 void fem_ijac_free(fem_ijac *j);
 
 #endif

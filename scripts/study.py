@@ -1069,12 +1069,13 @@ def jacobian_tables(out, rows, refs, speed_results):
     print("  wrote", os.path.join(out, "jacobian_table.md"))
 
 
-def targets_map(path, variants, rows, refs, title):
+def targets_map(path, variants, rows, refs, title, width=None, decimals=2):
     """One panel per variant, a cell per case x (COR, Δt) coloured by the targets it meets,
-    with the average / max iterations per contact step written in. refs: the fine-step
-    references of the peak at the case's Δt, or None where the peak is not a target of the map."""
+    with the average (to `decimals`) / max iterations per contact step written in. refs: the
+    fine-step references of the peak at the case's Δt, or None where the peak is not a
+    target of the map. width: of the figure in inches (default 3 per panel, at least 10)."""
     cols = [(cor, f) for f in (1, 5) for cor in JACOBIAN_CORS]
-    width = max(3.0 * len(variants), 10.0)
+    width = width or max(3.0 * len(variants), 10.0)
     fig, axes = plt.subplots(1, len(variants), figsize=(width, 5.4), sharey=True)
     colours = {"all": "#4caf50", "noref": "#c5e1a5", "reliable": "#ffd54f", "its": "#90caf9",
                "none": "#ef9a9a", "missing": "#eeeeee"}
@@ -1094,7 +1095,8 @@ def targets_map(path, variants, rows, refs, title):
                             "noref" if its and reliable and peak is None else
                             "reliable" if reliable else "its" if its else "none")
                     colour = colours[kind]
-                    text = "%s\n%d" % ("%.2f" % r["all_avg"] if np.isfinite(r["all_avg"]) else "-", r["all_max"])
+                    text = "%s\n%d" % ("%.*f" % (decimals, r["all_avg"]) if np.isfinite(r["all_avg"]) else "-",
+                                        r["all_max"])
                     if r["timed_out"]:
                         text += "\ncap"
                     elif r["rc"] not in (0, 3):
@@ -1134,7 +1136,7 @@ def jacobian_figures(out, rows, refs):
     targets_map(os.path.join(out, "jacobian_targets.png"), JACOBIAN_VARIANTS, rows, refs,
                 "interface iterations per contact step, every try counted (average / max; u: unconverged "
                 "steps accepted, cap: stopped at the wall-time cap) and the targets (≤ 3 / ≤ 10, reliable, "
-                "peak within 3 %)")
+                "peak within 3 %)", width=18.0, decimals=1)
     # iterations over time at the case's Δt, COR 0.3, for the two light cases and one net case
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ax, case in zip(axes, ("rest_position", "cable_impact", "net_sieve")):

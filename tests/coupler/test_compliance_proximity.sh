@@ -8,7 +8,8 @@
 #  - eq. (35) without the compliance (the reference for the peak deflection);
 #  - compliance_proximity false: the compliance covers the nodes of the DEM's last Jacobian
 #    only, and where the rock reaches new nodes the DEM holds them where the coupler put
-#    them (measured 2.51 iterations per contact step, at most 12);
+#    them (measured 2.43 iterations per contact step, at most 6; 2.51 and 12 when the DEM's
+#    search took at most 12 evaluations);
 #  - compliance_proximity true (the default): the DEM names the nodes the rock may reach by
 #    zero Jacobian blocks, the FEM's compliance covers them (measured 2.04, at most 4; eq. (35)
 #    without the compliance: 7.69, at most 24).
