@@ -45,8 +45,9 @@
 # of 200 unconverged); a step within the limit of its own force still converges (measured 25
 # of 200 unconverged; 3 now). At its graze in step 135 the DEM's K reaches 3e13 N/m or more,
 # and the FEM's Newton sits at its rounding floor, 1.6e-3 N against a tolerance of 2.1e-8 N;
-# with no smaller step allowed, the run stopped there until the floor counted the
-# linearisation's stiffest entry (fem_solver/fem_analysis.c). Checks: it runs to its end; at
+# with no smaller step allowed, the run stopped there until the FEM's rounding floor counted
+# the rounding of the linearisation's K (u - u^k) (fem_solver/fem_analysis.c). Checks: it runs
+# to its end; at
 # most 50 unconverged steps; the opt-ins named in the verdict.
 . tests/e2e_lib.sh
 for c in cable_impact angled_net; do
